@@ -1,0 +1,20 @@
+//! # cota-core
+//!
+//! The I/O-free heart of cota, a terrain level-of-detail engine implementing the
+//! system of the five papers in `../shared/seeds/` (summarised in
+//! `../shared/design/PAPERS.md`).
+//!
+//! * [`HeightGrid`]: a W×H grid of heights in metres with per-sample validity
+//!   (voids are NaN) and its georeference ([`GeoRef`]).
+//! * [`Mesh`]: an indexed triangle mesh whose vertices sit on grid samples.
+//!
+//! Nothing in this crate opens a file; readers and writers live in `cota-io`.
+#![warn(missing_docs)]
+
+pub mod grid;
+pub mod mesh;
+pub mod mosaic;
+pub mod voids;
+
+pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
+pub use mesh::{Mesh, MeshVertex};

@@ -1,0 +1,1 @@
+//! Mosaics of adjacent tiles: being written.

@@ -1,0 +1,1 @@
+//! Void filling: being written.

@@ -1,0 +1,81 @@
+//! Errors of the readers and writers. Every message names the file.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A failure to read a DEM: the file and what went wrong.
+///
+/// Displays on one line as `FILE: what was expected, what was found`.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {kind}", path.display())]
+pub struct ReadError {
+    /// The file being read.
+    pub path: PathBuf,
+    /// What went wrong.
+    pub kind: ReadErrorKind,
+}
+
+impl ReadError {
+    /// Wraps `kind` with the file's path.
+    pub fn new(path: &Path, kind: ReadErrorKind) -> Self {
+        ReadError {
+            path: path.to_path_buf(),
+            kind,
+        }
+    }
+}
+
+/// What went wrong while reading a DEM.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReadErrorKind {
+    /// The OS refused (missing file, permission, ...).
+    #[error("cannot read the file: {0}")]
+    Io(#[from] std::io::Error),
+    /// The file has no bytes.
+    #[error("expected a DEM, found an empty file (0 bytes)")]
+    Empty,
+    /// The content matches no supported format.
+    #[error("expected an SRTM .hgt, .hgt.zip, GeoTIFF, PNG or ESRI ASCII grid, found {found}")]
+    UnknownFormat {
+        /// A description of what the first bytes look like.
+        found: String,
+    },
+    /// The content is not what its format requires.
+    #[error("expected {expected}, found {found}")]
+    Malformed {
+        /// What the format requires.
+        expected: String,
+        /// What the file holds.
+        found: String,
+    },
+    /// A valid file using a feature cota does not read.
+    #[error("unsupported {what}: {detail}")]
+    Unsupported {
+        /// The feature (e.g. "GeoTIFF compression").
+        what: String,
+        /// Which value and what is supported instead.
+        detail: String,
+    },
+    /// The header promises a grid too large to allocate.
+    #[error("expected at most {max} samples, found a header of {width}x{height}")]
+    TooLarge {
+        /// Width from the header.
+        width: u64,
+        /// Height from the header.
+        height: u64,
+        /// The limit.
+        max: u64,
+    },
+    /// The grid could not be built from what was read.
+    #[error(transparent)]
+    Grid(#[from] cota_core::GridError),
+}
+
+/// Shorthand for [`ReadErrorKind::Malformed`].
+pub(crate) fn malformed(expected: impl fmt::Display, found: impl fmt::Display) -> ReadErrorKind {
+    ReadErrorKind::Malformed {
+        expected: expected.to_string(),
+        found: found.to_string(),
+    }
+}

@@ -1,0 +1,1 @@
+//! Mesh writers (OBJ, PLY, STL, GLB): being written.

@@ -1,0 +1,255 @@
+//! Reading a DEM file into a [`HeightGrid`]: format detection and dispatch.
+//!
+//! Detection looks at the content first (magic bytes of ZIP, TIFF, PNG; the
+//! keywords of an ESRI ASCII header; the exact byte size of an SRTM tile) and
+//! uses the file name only where content cannot decide (a raw `.hgt` has no
+//! header, so its size and name are all there is).
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use cota_core::HeightGrid;
+
+use crate::error::{ReadError, ReadErrorKind};
+
+/// How to turn PNG pixels into heights.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PngEncoding {
+    /// Mapbox terrain-RGB: h = -10000 + (R·65536 + G·256 + B)·0.1 m.
+    TerrainRgb,
+    /// Mapzen/AWS Terrarium: h = R·256 + G + B/256 − 32768 m.
+    Terrarium,
+    /// 16-bit (or 8-bit) grayscale: h = value · scale + offset (see [`ReadOptions`]).
+    Gray16,
+}
+
+impl fmt::Display for PngEncoding {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            PngEncoding::TerrainRgb => "terrain-rgb",
+            PngEncoding::Terrarium => "terrarium",
+            PngEncoding::Gray16 => "gray16",
+        })
+    }
+}
+
+/// Options for [`read_dem`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct ReadOptions {
+    /// PNG encoding. `None` picks by the image: RGB/RGBA images are read as
+    /// terrain-RGB, grayscale images as gray16. Default: `None`.
+    pub png_encoding: Option<PngEncoding>,
+    /// Metres per gray level for [`PngEncoding::Gray16`]. Default: 1.0.
+    pub gray_scale_m: f64,
+    /// Metres added after scaling for [`PngEncoding::Gray16`]. Default: 0.0.
+    pub gray_offset_m: f64,
+    /// Cell size in metres for formats that carry no georeference (PNG).
+    /// Default: 1.0.
+    pub cell_size_m: f64,
+}
+
+impl ReadOptions {
+    /// The defaults, as documented on each field.
+    pub const DEFAULT: ReadOptions = ReadOptions {
+        png_encoding: None,
+        gray_scale_m: 1.0,
+        gray_offset_m: 0.0,
+        cell_size_m: 1.0,
+    };
+
+    /// Sets [`ReadOptions::png_encoding`].
+    pub const fn with_png_encoding(mut self, e: Option<PngEncoding>) -> Self {
+        self.png_encoding = e;
+        self
+    }
+
+    /// Sets [`ReadOptions::gray_scale_m`] and [`ReadOptions::gray_offset_m`].
+    pub const fn with_gray(mut self, scale_m: f64, offset_m: f64) -> Self {
+        self.gray_scale_m = scale_m;
+        self.gray_offset_m = offset_m;
+        self
+    }
+
+    /// Sets [`ReadOptions::cell_size_m`].
+    pub const fn with_cell_size_m(mut self, cell_size_m: f64) -> Self {
+        self.cell_size_m = cell_size_m;
+        self
+    }
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The file formats cota reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// SRTM `.hgt`: raw big-endian i16, n×n.
+    SrtmHgt,
+    /// SRTM `.hgt` inside a ZIP archive.
+    SrtmHgtZip,
+    /// GeoTIFF (or plain TIFF).
+    GeoTiff,
+    /// PNG with a height encoding.
+    Png(PngEncoding),
+    /// ESRI ASCII grid (`.asc`).
+    EsriAscii,
+}
+
+impl fmt::Display for Format {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Format::SrtmHgt => f.write_str("SRTM .hgt"),
+            Format::SrtmHgtZip => f.write_str("SRTM .hgt.zip"),
+            Format::GeoTiff => f.write_str("GeoTIFF"),
+            Format::Png(e) => write!(f, "PNG ({e})"),
+            Format::EsriAscii => f.write_str("ESRI ASCII grid"),
+        }
+    }
+}
+
+/// The sample type stored in the file, before conversion to f32 metres.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DataType {
+    /// 8-bit unsigned.
+    U8,
+    /// 16-bit signed.
+    I16,
+    /// 16-bit unsigned.
+    U16,
+    /// 32-bit signed.
+    I32,
+    /// 32-bit unsigned.
+    U32,
+    /// 32-bit float.
+    F32,
+    /// 64-bit float.
+    F64,
+    /// 8-bit RGB(A) pixels decoded by a PNG encoding.
+    Rgb8,
+    /// Decimal text (ESRI ASCII).
+    Text,
+}
+
+impl fmt::Display for DataType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            DataType::U8 => "UInt8",
+            DataType::I16 => "Int16",
+            DataType::U16 => "UInt16",
+            DataType::I32 => "Int32",
+            DataType::U32 => "UInt32",
+            DataType::F32 => "Float32",
+            DataType::F64 => "Float64",
+            DataType::Rgb8 => "RGB8",
+            DataType::Text => "text",
+        })
+    }
+}
+
+/// A DEM as read from one file: the grid (voids as NaN, not yet filled) and
+/// what the file said about itself.
+#[derive(Debug, Clone)]
+pub struct Dem {
+    /// The heights and georeference. Voids are NaN.
+    pub grid: HeightGrid,
+    /// The detected format.
+    pub format: Format,
+    /// The sample type in the file.
+    pub data_type: DataType,
+    /// The nodata value the file declared, if any.
+    pub nodata: Option<f64>,
+    /// The file read.
+    pub path: PathBuf,
+}
+
+/// What the first bytes of a file look like.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Sniffed {
+    Zip,
+    Tiff,
+    Png,
+    Ascii,
+    Unknown,
+}
+
+/// Classifies content by its magic bytes and, for text, its first keyword.
+pub(crate) fn sniff(bytes: &[u8]) -> Sniffed {
+    if bytes.starts_with(b"PK\x03\x04") || bytes.starts_with(b"PK\x05\x06") {
+        Sniffed::Zip
+    } else if bytes.starts_with(b"II*\0")
+        || bytes.starts_with(b"MM\0*")
+        || bytes.starts_with(b"II+\0")
+        || bytes.starts_with(b"MM\0+")
+    {
+        Sniffed::Tiff
+    } else if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+        Sniffed::Png
+    } else {
+        let head = &bytes[..bytes.len().min(64)];
+        let text = String::from_utf8_lossy(head).to_ascii_lowercase();
+        let t = text.trim_start();
+        if t.starts_with("ncols") || t.starts_with("nrows") {
+            Sniffed::Ascii
+        } else {
+            Sniffed::Unknown
+        }
+    }
+}
+
+/// Describes unrecognised content for an error message.
+pub(crate) fn describe_bytes(bytes: &[u8]) -> String {
+    let n = bytes.len().min(8);
+    let printable = bytes[..n]
+        .iter()
+        .all(|b| b.is_ascii_graphic() || *b == b' ' || *b == b'\n' || *b == b'\r' || *b == b'\t');
+    if printable {
+        let s = String::from_utf8_lossy(&bytes[..bytes.len().min(24)]);
+        format!(
+            "text starting {:?} ({} bytes)",
+            s.lines().next().unwrap_or(""),
+            bytes.len()
+        )
+    } else {
+        let hex: Vec<String> = bytes[..n].iter().map(|b| format!("{b:02x}")).collect();
+        format!("bytes {} ({} bytes)", hex.join(" "), bytes.len())
+    }
+}
+
+/// Reads one DEM file.
+///
+/// # Errors
+/// A [`ReadError`] naming `path` and saying what was expected and found.
+pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Dem, ReadError> {
+    let wrap = |kind| ReadError::new(path, kind);
+    let bytes = std::fs::read(path).map_err(|e| wrap(ReadErrorKind::Io(e)))?;
+    if bytes.is_empty() {
+        return Err(wrap(ReadErrorKind::Empty));
+    }
+    decode_bytes(&bytes, path, opts).map_err(wrap)
+}
+
+/// Decodes DEM content; `path` supplies the name (SRTM position, extension).
+pub(crate) fn decode_bytes(
+    bytes: &[u8],
+    path: &Path,
+    opts: &ReadOptions,
+) -> Result<Dem, ReadErrorKind> {
+    match sniff(bytes) {
+        // A ZIP is read as a zipped SRTM tile (the only zipped format cota knows).
+        Sniffed::Zip => crate::srtm::decode(bytes, path, opts),
+        Sniffed::Tiff => crate::geotiff::decode(bytes, path, opts),
+        Sniffed::Png => crate::png::decode(bytes, path, opts),
+        Sniffed::Ascii => crate::asc::decode(bytes, path, opts),
+        // A raw .hgt has no magic: the SRTM reader decides by size and name.
+        Sniffed::Unknown if crate::srtm::looks_like_hgt(bytes, path) => {
+            crate::srtm::decode(bytes, path, opts)
+        }
+        Sniffed::Unknown => Err(ReadErrorKind::UnknownFormat {
+            found: describe_bytes(bytes),
+        }),
+    }
+}
