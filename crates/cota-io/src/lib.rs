@@ -21,4 +21,4 @@ mod srtm;
 pub mod export;
 
 pub use error::{ReadError, ReadErrorKind};
-pub use read::{read_dem, DataType, Dem, Format, PngEncoding, ReadOptions};
+pub use read::{read_dem, read_dem_bytes, DataType, Dem, Format, PngEncoding, ReadOptions};

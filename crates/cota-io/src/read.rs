@@ -47,6 +47,9 @@ pub struct ReadOptions {
     /// Cell size in metres for formats that carry no georeference (PNG).
     /// Default: 1.0.
     pub cell_size_m: f64,
+    /// 1-based band to read from a multi-band raster. `None` reads single-band
+    /// files and refuses multi-band ones as ambiguous. Default: `None`.
+    pub band: Option<u16>,
 }
 
 impl ReadOptions {
@@ -56,6 +59,7 @@ impl ReadOptions {
         gray_scale_m: 1.0,
         gray_offset_m: 0.0,
         cell_size_m: 1.0,
+        band: None,
     };
 
     /// Sets [`ReadOptions::png_encoding`].
@@ -68,6 +72,12 @@ impl ReadOptions {
     pub const fn with_gray(mut self, scale_m: f64, offset_m: f64) -> Self {
         self.gray_scale_m = scale_m;
         self.gray_offset_m = offset_m;
+        self
+    }
+
+    /// Sets [`ReadOptions::band`].
+    pub const fn with_band(mut self, band: Option<u16>) -> Self {
+        self.band = band;
         self
     }
 
@@ -230,6 +240,18 @@ pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Dem, ReadError> {
         return Err(wrap(ReadErrorKind::Empty));
     }
     decode_bytes(&bytes, path, opts).map_err(wrap)
+}
+
+/// Decodes DEM content already in memory; `path` supplies the name (SRTM
+/// position, extension) and is used in no other way. This is what the fuzzers call.
+///
+/// # Errors
+/// A [`ReadError`] naming `path`.
+pub fn read_dem_bytes(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadError> {
+    if bytes.is_empty() {
+        return Err(ReadError::new(path, ReadErrorKind::Empty));
+    }
+    decode_bytes(bytes, path, opts).map_err(|k| ReadError::new(path, k))
 }
 
 /// Decodes DEM content; `path` supplies the name (SRTM position, extension).
