@@ -11,10 +11,20 @@
 //! Nothing in this crate opens a file; readers and writers live in `cota-io`.
 #![warn(missing_docs)]
 
+pub mod bitree;
+pub mod check;
+pub mod extract;
 pub mod grid;
+pub mod hierarchy;
 pub mod mesh;
+pub mod metrics;
 pub mod mosaic;
+pub mod raster;
 pub mod voids;
 
+pub use bitree::{Bitree, MeshError};
+pub use check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
+pub use extract::{ExtractOptions, Extraction, Target};
 pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
 pub use mesh::{Mesh, MeshVertex};
+pub use metrics::{measure, Metrics};

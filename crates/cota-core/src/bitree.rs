@@ -1,0 +1,534 @@
+//! The prepared bitree: exact error per split point, built once, extracted many
+//! times.
+//!
+//! Papers `000_ebf7e3a88dffd361.txt` §2 (the bitree) and `001_49f2c365e8c41172.txt`
+//! (refinement of the frontier, O(n log n)). The error measure is the one the
+//! papers' tests use, made exact: for every triangle `T` of the hierarchy, `e(T)`
+//! is the largest `|plane_T − h|` over **every** grid sample inside or on `T`
+//! (Martini, after Evans et al. 1997, looks at the hypotenuse midpoint only,
+//! which is why its "max error" is not a bound).
+//!
+//! # What is stored
+//! One `f32` per grid sample: for the sample `m` that is the split point of a
+//! diamond (see [`crate::hierarchy`]), `err[m]` is the maximum of
+//! 1. `e(T)` for each triangle `T` of the diamond that lies inside the grid
+//!    (`+∞` when one of them straddles the grid's border, so it is always split),
+//! 2. `err` of the split points of those triangles' children.
+//!
+//! Rule 2 makes `err` monotone up the tree and rule 1 makes both triangles of a
+//! diamond decide alike, so the extraction "split `T` iff `err[mid(T)] > E`" is
+//! crack-free without any forced-split bookkeeping, and every unsplit triangle
+//! meets `e(T) ≤ E`. Errors are computed in `f64` and rounded **up** to `f32`,
+//! so the bound is never understated.
+//!
+//! # Build
+//! Fine to coarse, one level at a time (`B(2), A(2), B(4), A(4), …`), each level
+//! in parallel over rows of split points (rayon). A triangle's samples are
+//! visited row by row: every edge is horizontal, vertical or at 45°, so each row
+//! is one span found without division, and the plane is evaluated with exact
+//! power-of-two arithmetic. Each level touches every sample about once, so the
+//! build is `O(n log n)` for `n` samples, about `2·log2(N)` streaming passes.
+//! The two finest levels have one interior sample per triangle and take a
+//! shortcut.
+//!
+//! # Runtime
+//! About `2·log2(max(W, H))` passes over the grid; see `bench/README.md`.
+
+use rayon::prelude::*;
+
+use crate::grid::HeightGrid;
+use crate::hierarchy::{Hierarchy, Placement, Pt, Tri};
+
+/// Errors from building or extracting a mesh.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum MeshError {
+    /// The grid is narrower or shorter than 2 samples.
+    #[error("expected a grid of at least 2x2 samples to mesh, found {width}x{height}")]
+    GridTooSmall {
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
+    },
+    /// The grid is too large for 32-bit vertex positions.
+    #[error("expected a grid of at most 2^30 samples per side to mesh, found {width}x{height}")]
+    GridTooLarge {
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
+    },
+    /// The grid has voids; fill them first.
+    #[error(transparent)]
+    Voids(#[from] crate::grid::GridError),
+    /// A negative or NaN error bound.
+    #[error("expected a maximum error of 0 m or more, found {0} m")]
+    BadMaxError(f64),
+    /// A triangle budget below what the grid needs.
+    #[error(
+        "expected a triangle budget of at least {min} for this {width}x{height} grid, found {got}"
+    )]
+    BudgetTooSmall {
+        /// The budget asked for.
+        got: usize,
+        /// The smallest mesh this grid allows.
+        min: usize,
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
+    },
+}
+
+/// A bitree with the exact error of every split point, ready for extraction.
+///
+/// "Prepare once, extract many": [`Bitree::build`] costs `O(n log n)`;
+/// each [`Bitree::extract`] costs time proportional to the mesh it returns.
+///
+/// ```
+/// use cota_core::{GeoRef, HeightGrid, Bitree, ExtractOptions, check_mesh, CheckOptions};
+/// // A small real-looking grid: a ridge with noise.
+/// let (w, h) = (37, 23);
+/// let heights: Vec<f32> = (0..w * h)
+///     .map(|i| {
+///         let (x, y) = ((i % w) as f32, (i / w) as f32);
+///         100.0 + 20.0 * (x * 0.3).sin() * (y * 0.2).cos() + ((i * 7919) % 13) as f32 * 0.1
+///     })
+///     .collect();
+/// let grid = HeightGrid::new(w, h, heights, GeoRef::unreferenced(30.0)).unwrap();
+/// let tin = Bitree::build(&grid).unwrap();
+/// for e in [0.0, 0.5, 2.0, 10.0] {
+///     let mesh = tin.extract(&ExtractOptions::max_error_m(e)).unwrap().mesh;
+///     let report = check_mesh(&grid, &mesh, &CheckOptions::conforming(e)).unwrap();
+///     assert!(report.metrics.max_error_m <= e);
+/// }
+/// ```
+#[derive(Debug, Clone)]
+pub struct Bitree<'g> {
+    grid: &'g HeightGrid,
+    hier: Hierarchy,
+    errors: Vec<f32>,
+}
+
+/// A callback told `(levels_done, levels_total)` as the build progresses.
+pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
+
+impl<'g> Bitree<'g> {
+    /// Builds the exact error of every split point of `grid`.
+    ///
+    /// # Errors
+    /// [`MeshError::GridTooSmall`], [`MeshError::GridTooLarge`], or
+    /// [`MeshError::Voids`] when a sample is NaN (fill voids first).
+    ///
+    /// # Runtime
+    /// `O(n log n)`, about `2·log2(max(W, H))` passes over the samples, in parallel.
+    pub fn build(grid: &'g HeightGrid) -> Result<Self, MeshError> {
+        Self::build_with_progress(grid, &|_, _| {})
+    }
+
+    /// [`Bitree::build`], calling `progress(levels_done, levels_total)` after each level.
+    ///
+    /// # Errors
+    /// As [`Bitree::build`].
+    pub fn build_with_progress(
+        grid: &'g HeightGrid,
+        progress: Progress<'_>,
+    ) -> Result<Self, MeshError> {
+        let (w, h) = (grid.width(), grid.height());
+        if w < 2 || h < 2 {
+            return Err(MeshError::GridTooSmall {
+                width: w,
+                height: h,
+            });
+        }
+        if w > (1 << 30) || h > (1 << 30) {
+            return Err(MeshError::GridTooLarge {
+                width: w,
+                height: h,
+            });
+        }
+        grid.require_no_voids()?;
+        let hier = Hierarchy::new(w as u32, h as u32);
+        let mut errors = vec![0f32; w * h];
+        let levels = levels(hier.size());
+        for (k, level) in levels.iter().enumerate() {
+            build_level(grid.heights(), &hier, *level, &mut errors);
+            progress(k + 1, levels.len());
+        }
+        Ok(Bitree { grid, hier, errors })
+    }
+
+    /// The grid this bitree was built on.
+    pub fn grid(&self) -> &'g HeightGrid {
+        self.grid
+    }
+
+    /// The hierarchy's shape.
+    pub fn hierarchy(&self) -> &Hierarchy {
+        &self.hier
+    }
+
+    /// The monotone error of every split point, indexed like the grid's samples
+    /// (0 at samples that split nothing). `+∞` marks split points that must always
+    /// split because a triangle there straddles the grid's border.
+    pub fn errors(&self) -> &[f32] {
+        &self.errors
+    }
+
+    /// Error of the split point `m`.
+    #[inline]
+    pub(crate) fn err_at(&self, m: Pt) -> f32 {
+        self.errors[self.hier.index(m)]
+    }
+}
+
+/// One level of the hierarchy: `A(s)` or `B(s)` (see [`crate::hierarchy`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Level {
+    /// Square halves of side `s`; split points at square centres.
+    A(u32),
+    /// Triangles on a side of length `s`; split points at side midpoints.
+    B(u32),
+}
+
+/// The splittable levels of a padded square of side `n`, fine to coarse.
+pub(crate) fn levels(n: u32) -> Vec<Level> {
+    let mut v = Vec::new();
+    let mut s = 2;
+    while s <= n {
+        v.push(Level::B(s));
+        v.push(Level::A(s));
+        s *= 2;
+    }
+    v
+}
+
+/// The rows holding split points of `level`: `(first_row, row_step, x_of_row)`
+/// where `x_of_row(y)` gives the first column and all columns step by `s`.
+fn first_col(level: Level, y: u32) -> u32 {
+    match level {
+        Level::A(s) => s / 2,
+        Level::B(s) if y % s == 0 => s / 2,
+        Level::B(_) => 0,
+    }
+}
+
+/// The triangles of the diamond whose split point is `m` at `level`.
+pub(crate) fn diamond(level: Level, m: Pt, n: u32) -> [Option<Tri>; 2] {
+    let [x, y] = m;
+    match level {
+        Level::A(s) => {
+            let h = s / 2;
+            let (x0, y0) = (x - h, y - h);
+            let even = ((x0 / s) + (y0 / s)) % 2 == 0;
+            if even {
+                let (a, b) = ([x0, y0], [x0 + s, y0 + s]);
+                [
+                    Some(Tri {
+                        a,
+                        b,
+                        c: [x0 + s, y0],
+                    }),
+                    Some(Tri {
+                        a: b,
+                        b: a,
+                        c: [x0, y0 + s],
+                    }),
+                ]
+            } else {
+                let (a, b) = ([x0 + s, y0], [x0, y0 + s]);
+                [
+                    Some(Tri {
+                        a,
+                        b,
+                        c: [x0 + s, y0 + s],
+                    }),
+                    Some(Tri {
+                        a: b,
+                        b: a,
+                        c: [x0, y0],
+                    }),
+                ]
+            }
+        }
+        Level::B(s) => {
+            let h = s / 2;
+            if y % s == 0 {
+                let (a, b) = ([x - h, y], [x + h, y]);
+                [
+                    (y >= h).then(|| Tri {
+                        a,
+                        b,
+                        c: [x, y - h],
+                    }),
+                    (y + h <= n).then(|| Tri {
+                        a: b,
+                        b: a,
+                        c: [x, y + h],
+                    }),
+                ]
+            } else {
+                let (a, b) = ([x, y - h], [x, y + h]);
+                [
+                    (x >= h).then(|| Tri {
+                        a,
+                        b,
+                        c: [x - h, y],
+                    }),
+                    (x + h <= n).then(|| Tri {
+                        a: b,
+                        b: a,
+                        c: [x + h, y],
+                    }),
+                ]
+            }
+        }
+    }
+}
+
+/// Computes `err` for every split point of `level` and writes it into `errors`.
+fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, errors: &mut [f32]) {
+    let (w, h) = (hier.width(), hier.height());
+    let s = match level {
+        Level::A(s) | Level::B(s) => s,
+    };
+    let half = s / 2;
+    let rows: Vec<u32> = (0..h)
+        .filter(|y| match level {
+            Level::A(_) => y % s == half,
+            Level::B(_) => y % half == 0,
+        })
+        .collect();
+    let computed: Vec<Vec<f32>> = {
+        let errors: &[f32] = errors;
+        rows.par_iter()
+            .map(|&y| {
+                let mut out = Vec::with_capacity((w / s + 1) as usize);
+                let mut x = first_col(level, y);
+                while x < w {
+                    out.push(diamond_error(heights, hier, level, [x, y], errors));
+                    x += s;
+                }
+                out
+            })
+            .collect()
+    };
+    for (&y, row) in rows.iter().zip(computed) {
+        let base = y as usize * w as usize;
+        let x0 = first_col(level, y) as usize;
+        for (k, e) in row.into_iter().enumerate() {
+            errors[base + x0 + k * s as usize] = e;
+        }
+    }
+}
+
+/// `err` of the split point `m` (see the module docs), rounded up to `f32`.
+fn diamond_error(heights: &[f32], hier: &Hierarchy, level: Level, m: Pt, errors: &[f32]) -> f32 {
+    let mut e = 0f64;
+    for t in diamond(level, m, hier.size()).into_iter().flatten() {
+        match hier.place(&t) {
+            Placement::Outside => continue,
+            Placement::Straddling => return f32::INFINITY,
+            Placement::Inside => {}
+        }
+        e = e.max(triangle_error(heights, hier, level, &t));
+        let (c0, c1) = t.children();
+        if !c0.is_unit() {
+            e = e.max(errors[hier.index(c0.mid())] as f64);
+            e = e.max(errors[hier.index(c1.mid())] as f64);
+        }
+    }
+    round_up_f32(e)
+}
+
+/// The smallest `f32` not below `e`.
+pub(crate) fn round_up_f32(e: f64) -> f32 {
+    let f = e as f32;
+    if (f as f64) < e {
+        f.next_up()
+    } else {
+        f
+    }
+}
+
+/// Exact `e(T)`: the largest |plane − height| over the samples in or on `t`.
+fn triangle_error(heights: &[f32], hier: &Hierarchy, level: Level, t: &Tri) -> f64 {
+    let w = hier.width() as usize;
+    let hv = |p: Pt| heights[p[1] as usize * w + p[0] as usize] as f64;
+    match level {
+        // The only sample off the vertices is the split point (B(2)), or the
+        // split point and the two leg midpoints, which are the children's split
+        // points and are accounted for by their own errors (A(2)).
+        Level::B(2) | Level::A(2) => {
+            let m = t.mid();
+            (hv(m) - 0.5 * (hv(t.a) + hv(t.b))).abs()
+        }
+        _ => span_error(heights, w, t, hv(t.a), hv(t.b), hv(t.c)),
+    }
+}
+
+/// A span bound contributed by a non-horizontal edge: `x = slope·y + intercept`.
+#[derive(Clone, Copy)]
+struct EdgeBound {
+    slope: i64,
+    intercept: i64,
+    is_left: bool,
+}
+
+/// Largest |plane − h| over the samples of `t`, visited row by row.
+fn span_error(heights: &[f32], w: usize, t: &Tri, ha: f64, hb: f64, hc: f64) -> f64 {
+    let p = [t.a, t.b, t.c];
+    let hs = [ha, hb, hc];
+    let (x0, y0) = (p[0][0] as i64, p[0][1] as i64);
+    let (dx1, dy1) = (p[1][0] as i64 - x0, p[1][1] as i64 - y0);
+    let (dx2, dy2) = (p[2][0] as i64 - x0, p[2][1] as i64 - y0);
+    let det = (dx1 * dy2 - dx2 * dy1) as f64; // ±power of two: exact division
+    let (dh1, dh2) = (hs[1] - hs[0], hs[2] - hs[0]);
+    let gx = (dh1 * dy2 as f64 - dh2 * dy1 as f64) / det;
+    let gy = (dx1 as f64 * dh2 - dx2 as f64 * dh1) / det;
+
+    let mut bounds = [EdgeBound {
+        slope: 0,
+        intercept: 0,
+        is_left: true,
+    }; 3];
+    let mut nb = 0;
+    for k in 0..3 {
+        let (q, r, o) = (p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
+        let (qx, qy) = (q[0] as i64, q[1] as i64);
+        let (ex, ey) = (r[0] as i64 - qx, r[1] as i64 - qy);
+        if ey == 0 {
+            continue;
+        }
+        let slope = ex / ey; // 0 or ±1 in this hierarchy
+        let intercept = qx - slope * qy;
+        let x_at_o = slope * o[1] as i64 + intercept;
+        bounds[nb] = EdgeBound {
+            slope,
+            intercept,
+            is_left: (o[0] as i64) > x_at_o,
+        };
+        nb += 1;
+    }
+    let ymin = p.iter().map(|q| q[1]).min().unwrap_or(0) as i64;
+    let ymax = p.iter().map(|q| q[1]).max().unwrap_or(0) as i64;
+    let mut e = 0f64;
+    for y in ymin..=ymax {
+        let (mut xl, mut xr) = (i64::MIN, i64::MAX);
+        for b in &bounds[..nb] {
+            let x = b.slope * y + b.intercept;
+            if b.is_left {
+                xl = xl.max(x);
+            } else {
+                xr = xr.min(x);
+            }
+        }
+        if xl > xr {
+            continue;
+        }
+        let base = hs[0] + gx * (xl - x0) as f64 + gy * (y - y0) as f64;
+        let start = y as usize * w + xl as usize;
+        let row = &heights[start..=start + (xr - xl) as usize];
+        e = e.max(row_max_dev(row, base, gx));
+    }
+    e
+}
+
+/// max_k |base + gx·k − row[k]|.
+#[inline]
+fn row_max_dev(row: &[f32], base: f64, gx: f64) -> f64 {
+    let mut m = 0f64;
+    for (k, &h) in row.iter().enumerate() {
+        let d = (base + gx * (k as i32) as f64 - h as f64).abs();
+        m = if d > m { d } else { m };
+    }
+    m
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+    use crate::grid::GeoRef;
+
+    fn grid(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> HeightGrid {
+        let v = (0..w * h).map(|i| f(i % w, i / w)).collect();
+        HeightGrid::new(w, h, v, GeoRef::unreferenced(1.0)).unwrap()
+    }
+
+    /// Brute force e(T) by testing every sample of the bounding box.
+    fn brute(g: &HeightGrid, t: &Tri) -> f64 {
+        let p = [t.a, t.b, t.c];
+        let f = |q: Pt| g.get(q[0] as usize, q[1] as usize) as f64;
+        let (x0, y0) = (p[0][0] as f64, p[0][1] as f64);
+        let (x1, y1, x2, y2) = (
+            p[1][0] as f64 - x0,
+            p[1][1] as f64 - y0,
+            p[2][0] as f64 - x0,
+            p[2][1] as f64 - y0,
+        );
+        let det = x1 * y2 - x2 * y1;
+        let mut e = 0f64;
+        for y in 0..g.height() {
+            for x in 0..g.width() {
+                let (px, py) = (x as f64 - x0, y as f64 - y0);
+                let l1 = (px * y2 - x2 * py) / det;
+                let l2 = (x1 * py - px * y1) / det;
+                if l1 >= -1e-12 && l2 >= -1e-12 && l1 + l2 <= 1.0 + 1e-12 {
+                    let z = f(p[0]) * (1.0 - l1 - l2) + f(p[1]) * l1 + f(p[2]) * l2;
+                    e = e.max((z - g.get(x, y) as f64).abs());
+                }
+            }
+        }
+        e
+    }
+
+    #[test]
+    fn span_error_matches_brute_force_on_every_level() {
+        let g = grid(17, 17, |x, y| {
+            ((x * 31 + y * 17) % 11) as f32 + (x * y) as f32 * 0.01
+        });
+        let hier = Hierarchy::new(17, 17);
+        for level in levels(hier.size()) {
+            let s = match level {
+                Level::A(s) | Level::B(s) => s,
+            };
+            for y in 0..17u32 {
+                let mut x = first_col(level, y);
+                let on_row = match level {
+                    Level::A(_) => y % s == s / 2,
+                    Level::B(_) => y % (s / 2) == 0,
+                };
+                while on_row && x < 17 {
+                    for t in diamond(level, [x, y], hier.size()).into_iter().flatten() {
+                        if hier.place(&t) == Placement::Inside && s > 2 {
+                            let fast = triangle_error(g.heights(), &hier, level, &t);
+                            let slow = brute(&g, &t);
+                            assert!((fast - slow).abs() < 1e-9, "{level:?} {t:?} {fast} {slow}");
+                        }
+                    }
+                    x += s;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn errors_are_monotone_and_planes_are_exact() {
+        let g = grid(33, 20, |x, y| 3.0 * x as f32 - 0.5 * y as f32 + 100.0);
+        let t = Bitree::build(&g).unwrap();
+        // A plane has zero error everywhere except where the border forces splits.
+        assert!(t.errors().iter().all(|&e| e == 0.0 || e == f32::INFINITY));
+    }
+
+    #[test]
+    fn rejects_voids_and_tiny_grids() {
+        let g = grid(1, 5, |_, _| 0.0);
+        assert!(matches!(
+            Bitree::build(&g),
+            Err(MeshError::GridTooSmall { .. })
+        ));
+        let g = grid(4, 4, |x, y| if x == 2 && y == 1 { f32::NAN } else { 1.0 });
+        assert!(matches!(Bitree::build(&g), Err(MeshError::Voids(_))));
+    }
+}

@@ -1,0 +1,385 @@
+//! The one invariant checker: tests, fuzzers and `cota mesh --check` all call
+//! [`check_mesh`].
+//!
+//! It proves, for a mesh over a W×H grid:
+//! 1. **vertices on samples**: every index is in range, every vertex sits on a
+//!    grid sample, no two vertices share a sample, and each vertex carries the
+//!    sample's true height (or, where allowed, a height interpolated between two
+//!    other vertices on a grid line through it: a *fictitious point*, paper
+//!    `000_ebf7e3a88dffd361.txt` §2.2);
+//! 2. **no degenerate or flipped triangle**: every triangle has positive area
+//!    counter-clockwise seen from above;
+//! 3. **conformity**: no directed edge appears twice (no overlap, no edge used by
+//!    more than two triangles) and every edge without its reverse lies on the
+//!    grid's border, so there is no T-junction and no crack inside;
+//! 4. **exact coverage**: the triangles' areas add up to the rectangle's area.
+//!    With (2) and (3) the mesh's boundary is the rectangle's boundary and its
+//!    winding number is 1 everywhere inside: the triangles tile the rectangle
+//!    exactly. Every sample is also checked to be covered.
+//! 5. **the error bound**: the true |Δz| at **every** sample is at most the bound
+//!    ([`crate::metrics::measure`]), with a slack of `1e-9·max(1, |h|max)` for
+//!    floating-point rounding only.
+//!
+//! In non-conforming mode (the papers' faithful fictitious points, which leave
+//! hanging vertices on their neighbour's edge) check 3 only forbids repeated
+//! directed edges, and coverage rests on (4) plus the per-sample coverage test.
+
+use crate::grid::HeightGrid;
+use crate::mesh::Mesh;
+use crate::metrics::{measure, Metrics};
+
+/// What [`check_mesh`] requires.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct CheckOptions {
+    /// Required bound on |Δz| at every sample, metres. `None`: not checked.
+    /// Default: `None`.
+    pub max_error_m: Option<f64>,
+    /// Require a conforming mesh (no T-junction). Default: true.
+    pub conforming: bool,
+    /// Accept vertices whose height is interpolated on a grid line between two
+    /// other vertices (fictitious points). Default: false.
+    pub allow_fictitious: bool,
+}
+
+impl CheckOptions {
+    /// The defaults: conforming, true heights, no error bound.
+    pub const DEFAULT: CheckOptions = CheckOptions {
+        max_error_m: None,
+        conforming: true,
+        allow_fictitious: false,
+    };
+
+    /// Conforming, true heights, and `|Δz| ≤ max_error_m` everywhere.
+    pub const fn conforming(max_error_m: f64) -> Self {
+        CheckOptions {
+            max_error_m: Some(max_error_m),
+            conforming: true,
+            allow_fictitious: false,
+        }
+    }
+
+    /// Sets [`CheckOptions::max_error_m`].
+    pub const fn with_max_error_m(mut self, e: Option<f64>) -> Self {
+        self.max_error_m = e;
+        self
+    }
+
+    /// Sets [`CheckOptions::conforming`].
+    pub const fn with_conforming(mut self, yes: bool) -> Self {
+        self.conforming = yes;
+        self
+    }
+
+    /// Sets [`CheckOptions::allow_fictitious`].
+    pub const fn with_allow_fictitious(mut self, yes: bool) -> Self {
+        self.allow_fictitious = yes;
+        self
+    }
+}
+
+impl Default for CheckOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// One broken invariant.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Violation {
+    /// A triangle refers to a vertex that does not exist.
+    #[error("triangle {tri} refers to vertex {index}, but there are {count} vertices")]
+    IndexOutOfRange {
+        /// Triangle index.
+        tri: usize,
+        /// The bad vertex index.
+        index: u32,
+        /// Number of vertices.
+        count: usize,
+    },
+    /// A vertex lies outside the grid.
+    #[error("vertex {vertex} at column {col}, row {row} is outside the {width}x{height} grid")]
+    VertexOffGrid {
+        /// Vertex index.
+        vertex: usize,
+        /// Its column.
+        col: u32,
+        /// Its row.
+        row: u32,
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
+    },
+    /// Two vertices on one sample.
+    #[error("vertices {first} and {second} both sit on column {col}, row {row}")]
+    DuplicateVertex {
+        /// First vertex.
+        first: usize,
+        /// Second vertex.
+        second: usize,
+        /// Column.
+        col: u32,
+        /// Row.
+        row: u32,
+    },
+    /// A vertex height differs from the sample's.
+    #[error("vertex {vertex} at column {col}, row {row} has height {got} m, the sample has {expected} m")]
+    WrongHeight {
+        /// Vertex index.
+        vertex: usize,
+        /// Column.
+        col: u32,
+        /// Row.
+        row: u32,
+        /// Height in the mesh.
+        got: f32,
+        /// Height in the grid.
+        expected: f32,
+    },
+    /// A zero-area triangle.
+    #[error("triangle {tri} is degenerate (zero area)")]
+    Degenerate {
+        /// Triangle index.
+        tri: usize,
+    },
+    /// A clockwise triangle.
+    #[error("triangle {tri} is clockwise seen from above")]
+    Flipped {
+        /// Triangle index.
+        tri: usize,
+    },
+    /// A directed edge used twice: overlap or an edge in more than two triangles.
+    #[error("edge {from}->{to} is used twice in the same direction (overlap or more than two triangles on one edge)")]
+    EdgeOveruse {
+        /// Edge start vertex.
+        from: u32,
+        /// Edge end vertex.
+        to: u32,
+    },
+    /// An interior edge with a single triangle: a T-junction or a crack.
+    #[error("edge between ({ac},{ar}) and ({bc},{br}) has one triangle but is not on the grid border (T-junction or crack)")]
+    OpenEdge {
+        /// Column of one end.
+        ac: u32,
+        /// Row of one end.
+        ar: u32,
+        /// Column of the other end.
+        bc: u32,
+        /// Row of the other end.
+        br: u32,
+    },
+    /// Triangle areas do not add up to the grid's.
+    #[error("triangles cover {got} half-cells, the grid has {expected}")]
+    AreaMismatch {
+        /// Twice the covered area, in cells.
+        got: i64,
+        /// Twice the grid's area, in cells.
+        expected: i64,
+    },
+    /// Samples no triangle covers.
+    #[error("{count} samples are not covered by any triangle")]
+    Uncovered {
+        /// How many.
+        count: usize,
+    },
+    /// The error bound is exceeded.
+    #[error("error {got} m at column {col}, row {row} exceeds the bound {bound} m")]
+    ErrorBound {
+        /// The true error there.
+        got: f64,
+        /// The bound.
+        bound: f64,
+        /// Column.
+        col: u32,
+        /// Row.
+        row: u32,
+    },
+}
+
+/// The checker found problems: the first few, and how many there were.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("mesh check failed with {total} violation(s); first: {}", .violations.first().map(|v| v.to_string()).unwrap_or_default())]
+pub struct CheckError {
+    /// Up to [`MAX_REPORTED`] violations.
+    pub violations: Vec<Violation>,
+    /// Total number of violations found.
+    pub total: usize,
+}
+
+/// How many violations a [`CheckError`] keeps.
+pub const MAX_REPORTED: usize = 20;
+
+/// A passed check: the exact metrics of the mesh.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CheckReport {
+    /// Exact metrics over every sample.
+    pub metrics: Metrics,
+}
+
+struct Found {
+    list: Vec<Violation>,
+    total: usize,
+}
+
+impl Found {
+    fn push(&mut self, v: Violation) {
+        self.total += 1;
+        if self.list.len() < MAX_REPORTED {
+            self.list.push(v);
+        }
+    }
+}
+
+/// Checks every invariant listed in the module docs.
+///
+/// # Errors
+/// A [`CheckError`] listing the violations.
+///
+/// # Runtime
+/// `O(W·H + T log T)` for `T` triangles.
+pub fn check_mesh(
+    grid: &HeightGrid,
+    mesh: &Mesh,
+    opts: &CheckOptions,
+) -> Result<CheckReport, CheckError> {
+    let mut found = Found {
+        list: Vec::new(),
+        total: 0,
+    };
+    check_vertices(grid, mesh, opts, &mut found);
+    if found.total == 0 {
+        check_triangles(grid, mesh, opts, &mut found);
+    }
+    let metrics = measure(grid, mesh);
+    if found.total == 0 {
+        if metrics.uncovered > 0 {
+            found.push(Violation::Uncovered {
+                count: metrics.uncovered,
+            });
+        }
+        if let Some(bound) = opts.max_error_m {
+            let scale = grid
+                .valid_range()
+                .map(|(lo, hi)| (lo.abs().max(hi.abs()) as f64).max(1.0))
+                .unwrap_or(1.0);
+            if metrics.max_error_m > bound + 1e-9 * scale {
+                found.push(Violation::ErrorBound {
+                    got: metrics.max_error_m,
+                    bound,
+                    col: metrics.max_error_at[0],
+                    row: metrics.max_error_at[1],
+                });
+            }
+        }
+    }
+    if found.total > 0 {
+        return Err(CheckError {
+            violations: found.list,
+            total: found.total,
+        });
+    }
+    Ok(CheckReport { metrics })
+}
+
+fn check_vertices(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &mut Found) {
+    let (w, h) = (grid.width(), grid.height());
+    let mut owner = vec![u32::MAX; w * h];
+    for (k, v) in mesh.vertices.iter().enumerate() {
+        if v.col as usize >= w || v.row as usize >= h {
+            found.push(Violation::VertexOffGrid {
+                vertex: k,
+                col: v.col,
+                row: v.row,
+                width: w,
+                height: h,
+            });
+            continue;
+        }
+        let i = v.row as usize * w + v.col as usize;
+        if owner[i] != u32::MAX {
+            found.push(Violation::DuplicateVertex {
+                first: owner[i] as usize,
+                second: k,
+                col: v.col,
+                row: v.row,
+            });
+        }
+        owner[i] = k as u32;
+        let truth = grid.heights()[i];
+        if v.z_m.to_bits() != truth.to_bits() && !opts.allow_fictitious {
+            found.push(Violation::WrongHeight {
+                vertex: k,
+                col: v.col,
+                row: v.row,
+                got: v.z_m,
+                expected: truth,
+            });
+        }
+    }
+}
+
+fn check_triangles(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &mut Found) {
+    let n = mesh.vertices.len();
+    let mut area2 = 0i64;
+    let mut edges: Vec<u64> = Vec::with_capacity(mesh.triangles.len() * 3);
+    for (k, t) in mesh.triangles.iter().enumerate() {
+        if let Some(&bad) = t.iter().find(|&&i| i as usize >= n) {
+            found.push(Violation::IndexOutOfRange {
+                tri: k,
+                index: bad,
+                count: n,
+            });
+            continue;
+        }
+        let a = mesh.signed_area2(*t);
+        if a == 0 {
+            found.push(Violation::Degenerate { tri: k });
+        } else if a < 0 {
+            found.push(Violation::Flipped { tri: k });
+        }
+        area2 += a;
+        for e in 0..3 {
+            edges.push(((t[e] as u64) << 32) | t[(e + 1) % 3] as u64);
+        }
+    }
+    edges.sort_unstable();
+    for pair in edges.windows(2) {
+        if pair[0] == pair[1] {
+            found.push(Violation::EdgeOveruse {
+                from: (pair[0] >> 32) as u32,
+                to: pair[0] as u32,
+            });
+        }
+    }
+    if opts.conforming {
+        let (w, h) = (grid.width() as u32, grid.height() as u32);
+        for &e in &edges {
+            let (i, j) = ((e >> 32) as u32, e as u32);
+            let rev = ((j as u64) << 32) | i as u64;
+            if edges.binary_search(&rev).is_err() {
+                let (a, b) = (mesh.vertices[i as usize], mesh.vertices[j as usize]);
+                let on_border = (a.col == 0 && b.col == 0)
+                    || (a.col == w - 1 && b.col == w - 1)
+                    || (a.row == 0 && b.row == 0)
+                    || (a.row == h - 1 && b.row == h - 1);
+                if !on_border {
+                    found.push(Violation::OpenEdge {
+                        ac: a.col,
+                        ar: a.row,
+                        bc: b.col,
+                        br: b.row,
+                    });
+                }
+            }
+        }
+    }
+    let expected = 2 * (grid.width() as i64 - 1) * (grid.height() as i64 - 1);
+    if area2 != expected {
+        found.push(Violation::AreaMismatch {
+            got: area2,
+            expected,
+        });
+    }
+}
