@@ -1,5 +1,15 @@
 //! `cota`: terrain level of detail from real DEMs.
+//!
+//! `main` stays boring: parse flags, call [`run`], print an error once.
 use std::process::ExitCode;
+
+use clap::Parser;
+
+mod args;
+mod info;
+mod input;
+mod mesh;
+mod progress;
 
 fn main() -> ExitCode {
     match run() {
@@ -12,5 +22,9 @@ fn main() -> ExitCode {
 }
 
 fn run() -> anyhow::Result<ExitCode> {
-    Ok(ExitCode::SUCCESS)
+    let cli = args::Cli::parse();
+    match cli.command {
+        args::Command::Info(a) => info::run(&a),
+        args::Command::Mesh(a) => mesh::run(&a),
+    }
 }

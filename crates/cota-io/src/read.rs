@@ -124,6 +124,8 @@ impl fmt::Display for Format {
 /// The sample type stored in the file, before conversion to f32 metres.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DataType {
+    /// 8-bit signed.
+    I8,
     /// 8-bit unsigned.
     U8,
     /// 16-bit signed.
@@ -147,6 +149,7 @@ pub enum DataType {
 impl fmt::Display for DataType {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
+            DataType::I8 => "Int8",
             DataType::U8 => "UInt8",
             DataType::I16 => "Int16",
             DataType::U16 => "UInt16",
@@ -186,6 +189,16 @@ pub(crate) enum Sniffed {
     Unknown,
 }
 
+/// Keys that may open an ESRI ASCII grid header (lower case).
+const ASCII_HEADER_KEYS: [&str; 6] = [
+    "ncols",
+    "nrows",
+    "xllcorner",
+    "xllcenter",
+    "yllcorner",
+    "yllcenter",
+];
+
 /// Classifies content by its magic bytes and, for text, its first keyword.
 pub(crate) fn sniff(bytes: &[u8]) -> Sniffed {
     if bytes.starts_with(b"PK\x03\x04") || bytes.starts_with(b"PK\x05\x06") {
@@ -202,7 +215,7 @@ pub(crate) fn sniff(bytes: &[u8]) -> Sniffed {
         let head = &bytes[..bytes.len().min(64)];
         let text = String::from_utf8_lossy(head).to_ascii_lowercase();
         let t = text.trim_start();
-        if t.starts_with("ncols") || t.starts_with("nrows") {
+        if ASCII_HEADER_KEYS.iter().any(|k| t.starts_with(k)) {
             Sniffed::Ascii
         } else {
             Sniffed::Unknown
@@ -271,7 +284,25 @@ pub(crate) fn decode_bytes(
             crate::srtm::decode(bytes, path, opts)
         }
         Sniffed::Unknown => Err(ReadErrorKind::UnknownFormat {
-            found: describe_bytes(bytes),
+            found: format!("{}{}", describe_bytes(bytes), name_hint(path)),
         }),
     }
+}
+
+/// For unrecognised content, what the file's extension promised and lacks
+/// (e.g. ", not a PNG despite the .png name: no PNG signature 89 50 4e 47");
+/// empty when the extension says nothing.
+fn name_hint(path: &Path) -> String {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let lacks = match ext.as_str() {
+        "png" => "a PNG: no PNG signature 89 50 4e 47 0d 0a 1a 0a",
+        "tif" | "tiff" => "a TIFF: no TIFF header II*\\0 or MM\\0*",
+        "asc" => "an ESRI ASCII grid: no header key such as ncols",
+        "zip" => "a ZIP archive: no PK\\x03\\x04 signature",
+        _ => return String::new(),
+    };
+    format!(", not {lacks} despite the .{ext} name")
 }

@@ -1,0 +1,147 @@
+//! `cota info`: what the inputs hold, as read (before any void fill).
+
+use std::process::ExitCode;
+
+use cota_core::{GeoRef, PixelIs};
+use serde_json::{json, Value};
+
+use crate::args::InfoArgs;
+use crate::input::{load, FileInfo, Input};
+
+pub fn run(a: &InfoArgs) -> anyhow::Result<ExitCode> {
+    let input = load(&a.input)?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&to_json(&input))?);
+    } else {
+        print_text(&input);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn units(g: &GeoRef) -> &'static str {
+    if !g.known {
+        "assumed metres (no georeference)"
+    } else if g.crs.is_geographic() {
+        "degrees"
+    } else {
+        "CRS units"
+    }
+}
+
+fn pixel_is(p: PixelIs) -> &'static str {
+    match p {
+        PixelIs::Area => "area",
+        PixelIs::Point => "point",
+    }
+}
+
+fn file_json(f: &FileInfo) -> Value {
+    let g = &f.grid_georef;
+    json!({
+        "path": f.path.display().to_string(),
+        "format": f.format.to_string(),
+        "data_type": f.data_type.to_string(),
+        "width": f.width,
+        "height": f.height,
+        "min_m": f.range.map(|r| r.0),
+        "max_m": f.range.map(|r| r.1),
+        "nodata_count": f.nodata_count,
+        "nodata_value": f.nodata,
+        "crs": g.crs.to_string(),
+        "georeferenced": g.known,
+        "pixel_is": pixel_is(g.pixel_is),
+        "origin": [g.origin_x, g.origin_y],
+        "cell_size": [g.pixel_x.abs(), g.pixel_y.abs()],
+        "cell_size_units": units(g),
+        "cell_size_m": f.cell_size_m,
+    })
+}
+
+fn to_json(input: &Input) -> Value {
+    let g = &input.grid;
+    let geo = g.georef();
+    let range = g.valid_range();
+    let first = input.files.first();
+    let mut v = json!({
+        "format": first.map(|f| f.format.to_string()),
+        "data_type": first.map(|f| f.data_type.to_string()),
+        "width": g.width(),
+        "height": g.height(),
+        "min_m": range.map(|r| r.0),
+        "max_m": range.map(|r| r.1),
+        "nodata_count": g.void_count(),
+        "crs": geo.crs.to_string(),
+        "georeferenced": geo.known,
+        "pixel_is": pixel_is(geo.pixel_is),
+        "origin": [geo.origin_x, geo.origin_y],
+        "cell_size": [geo.pixel_x.abs(), geo.pixel_y.abs()],
+        "cell_size_units": units(geo),
+        "cell_size_m": g.cell_size_m(),
+        "files": input.files.iter().map(file_json).collect::<Vec<_>>(),
+    });
+    if let Some(s) = &input.seams {
+        v["seams"] = json!({
+            "overlap_samples": s.overlap_samples,
+            "compared": s.compared,
+            "max_abs_diff_m": s.max_abs_diff_m,
+            "mean_abs_diff_m": s.mean_abs_diff_m,
+            "max_diff_at": s.max_diff_at.map(|p| json!({
+                "col": p.col, "row": p.row, "x": p.x, "y": p.y, "tiles": p.tiles,
+            })),
+        });
+        v["hole_samples"] = json!(input.hole_samples);
+    }
+    v
+}
+
+fn print_text(input: &Input) {
+    for f in &input.files {
+        let g = &f.grid_georef;
+        println!("{}", f.path.display());
+        println!("  format      {} ({})", f.format, f.data_type);
+        println!("  size        {} x {}", f.width, f.height);
+        println!("  crs         {}", g.crs);
+        println!(
+            "  cell size   {} x {} {}  =  {:.3} x {:.3} m",
+            g.pixel_x.abs(),
+            g.pixel_y.abs(),
+            units(g),
+            f.cell_size_m[0],
+            f.cell_size_m[1]
+        );
+        let (ox, oy) = g.sample_xy(0.0, 0.0);
+        println!(
+            "  first sample ({ox}, {oy}), pixel is {}",
+            pixel_is(g.pixel_is)
+        );
+        match f.range {
+            Some((lo, hi)) => println!("  heights     {lo} .. {hi} m"),
+            None => println!("  heights     none (every sample is void)"),
+        }
+        let nd = f
+            .nodata
+            .map(|v| format!(" (nodata value {v})"))
+            .unwrap_or_default();
+        println!("  voids       {}{nd}", f.nodata_count);
+    }
+    if let Some(s) = &input.seams {
+        let g = &input.grid;
+        println!("mosaic");
+        println!("  size        {} x {}", g.width(), g.height());
+        println!(
+            "  voids       {} ({} in coverage holes)",
+            g.void_count(),
+            input.hole_samples
+        );
+        println!(
+            "  seams       {} overlapping samples, largest difference {} m, mean {:.3} m",
+            s.overlap_samples, s.max_abs_diff_m, s.mean_abs_diff_m
+        );
+        if let Some(p) = s.max_diff_at {
+            println!(
+                "              largest at ({}, {}) between files {} and {}",
+                p.x, p.y, p.tiles[0], p.tiles[1]
+            );
+        }
+    }
+}

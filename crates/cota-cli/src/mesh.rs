@@ -1,0 +1,206 @@
+//! `cota mesh`: read, fill voids, build the exact-error bitree, extract a
+//! conforming mesh by error or budget, measure it exactly, optionally check it,
+//! and write it atomically.
+
+use std::path::Path;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::Context;
+use cota_core::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
+use cota_core::{check_mesh, measure, Bitree, CheckOptions, ExtractOptions, Metrics};
+use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
+use serde_json::json;
+
+use crate::args::{CoordsArg, MeshArgs, Voids};
+use crate::input::load;
+use crate::progress;
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// Fails early, before any long work, on output paths that cannot be written.
+fn check_output(out: &Path, base_m: Option<f64>) -> anyhow::Result<MeshFormat> {
+    let format = MeshFormat::from_path(out)?;
+    if base_m.is_some() && format != MeshFormat::Stl {
+        anyhow::bail!(
+            "{}: --base-m makes a closed solid for 3D printing and applies to .stl output only, found .{format}",
+            out.display()
+        );
+    }
+    let dir = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        anyhow::bail!(
+            "cannot write {}: expected an existing directory {}, found none",
+            out.display(),
+            dir.display()
+        );
+    }
+    if out.is_dir() {
+        anyhow::bail!("cannot write {}: it is a directory", out.display());
+    }
+    Ok(format)
+}
+
+pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
+    if let Some(out) = &a.output {
+        check_output(out, a.base_m)?;
+    }
+    if let Some(e) = a.max_error {
+        if e.is_nan() || e < 0.0 {
+            anyhow::bail!("--max-error: expected 0 m or more, found {e} m");
+        }
+    }
+    if a.max_triangles == Some(0) {
+        anyhow::bail!("--max-triangles: expected at least 2 triangles, found 0");
+    }
+    let opts = match (a.max_error, a.max_triangles) {
+        (_, Some(n)) => ExtractOptions::max_triangles(n),
+        (Some(e), None) => ExtractOptions::max_error_m(e),
+        (None, None) => ExtractOptions::max_error_m(1.0),
+    };
+
+    let input = load(&a.input)?;
+    let mut grid = input.grid;
+    let nodata = grid.void_count();
+    let policy = match a.voids {
+        Voids::Fill => VoidPolicy::Fill(FillMethod::Harmonic),
+        Voids::Idw => VoidPolicy::Fill(FillMethod::InverseDistance),
+        Voids::Refuse => VoidPolicy::Refuse,
+    };
+    let t = Instant::now();
+    let fill: FillReport =
+        fill_voids(&mut grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")?;
+    let fill_ms = ms(t);
+
+    let t = Instant::now();
+    let pb = progress::bar(0, "building");
+    let tin = Bitree::build_with_progress(&grid, &|done, total| {
+        pb.set_length(total as u64);
+        pb.set_position(done as u64);
+    })?;
+    pb.finish_and_clear();
+    let build_ms = ms(t);
+
+    let t = Instant::now();
+    let x = tin.extract(&opts)?;
+    let extract_ms = ms(t);
+    let mesh = x.mesh;
+
+    let t = Instant::now();
+    let metrics: Metrics = if a.check {
+        check_mesh(&grid, &mesh, &CheckOptions::conforming(x.threshold_m))
+            .context("the invariant checker rejected the mesh (this is a bug in cota)")?
+            .metrics
+    } else {
+        measure(&grid, &mesh)
+    };
+    let measure_ms = ms(t);
+
+    let mut write_ms = 0.0;
+    if let Some(out) = &a.output {
+        let coords = match a.coords {
+            CoordsArg::Local => Coords::LocalMetres,
+            CoordsArg::Grid => Coords::Grid,
+        };
+        let eo = ExportOptions::DEFAULT
+            .with_coords(coords)
+            .with_base_m(a.base_m);
+        let t = Instant::now();
+        write_mesh(out, &mesh, &grid, &eo)?;
+        write_ms = ms(t);
+    }
+
+    let name = input
+        .files
+        .iter()
+        .map(|f| f.path.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" + ");
+    let report = json!({
+        "input": name,
+        "width": grid.width(),
+        "height": grid.height(),
+        "voids_filled": fill.filled,
+        "nodata_count": nodata,
+        "threshold_m": x.threshold_m,
+        "vertices": mesh.vertex_count(),
+        "triangles": mesh.triangle_count(),
+        "full_triangles": 2 * (grid.width() - 1) * (grid.height() - 1),
+        "max_error_m": metrics.max_error_m,
+        "rmse_m": metrics.rmse_m,
+        "mean_abs_error_m": metrics.mean_abs_error_m,
+        "sse_m2": metrics.sse_m2,
+        "volume_m3": metrics.volume_m3,
+        "checked": a.check,
+        "read_ms": input.read_ms,
+        "fill_ms": fill_ms,
+        "build_ms": build_ms,
+        "extract_ms": extract_ms,
+        "measure_ms": measure_ms,
+        "write_ms": write_ms,
+        "output": a.output.as_ref().map(|p| p.display().to_string()),
+    });
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_text(&report, &input.seams);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_text(r: &serde_json::Value, seams: &Option<cota_core::mosaic::SeamReport>) {
+    let f = |k: &str| r[k].as_f64().unwrap_or(0.0);
+    println!(
+        "input       {} ({} x {})",
+        r["input"].as_str().unwrap_or(""),
+        r["width"],
+        r["height"]
+    );
+    if let Some(s) = seams {
+        println!(
+            "seams       largest difference {} m over {} samples",
+            s.max_abs_diff_m, s.compared
+        );
+    }
+    if f("nodata_count") > 0.0 {
+        println!("voids       {} filled", r["voids_filled"]);
+    }
+    println!(
+        "mesh        {} vertices, {} triangles ({:.2}% of {})",
+        r["vertices"],
+        r["triangles"],
+        100.0 * f("triangles") / f("full_triangles").max(1.0),
+        r["full_triangles"]
+    );
+    println!(
+        "error       max {:.3} m (bound {} m), RMSE {:.3} m, mean {:.3} m",
+        f("max_error_m"),
+        f("threshold_m"),
+        f("rmse_m"),
+        f("mean_abs_error_m")
+    );
+    println!(
+        "volume      {:.4e} m3 between mesh and grid",
+        f("volume_m3")
+    );
+    if r["checked"].as_bool() == Some(true) {
+        println!("check       passed: covers the grid exactly, no T-junction, bound holds at every sample");
+    }
+    println!(
+        "time        read {:.1} ms, fill {:.1} ms, build {:.1} ms, extract {:.2} ms, measure {:.1} ms, write {:.1} ms",
+        f("read_ms"),
+        f("fill_ms"),
+        f("build_ms"),
+        f("extract_ms"),
+        f("measure_ms"),
+        f("write_ms")
+    );
+    if let Some(out) = r["output"].as_str() {
+        println!("wrote       {out}");
+    }
+}

@@ -1,0 +1,351 @@
+//! Binary glTF 2.0 (GLB) writer; the JSON is built with the `gltf-json` crate.
+//!
+//! Container (glTF 2.0 spec, "GLB File Format Specification"): a 12-byte
+//! header (magic `glTF`, version 2, total length), a JSON chunk (type `JSON`,
+//! padded with spaces to a multiple of 4 bytes) and a BIN chunk (type `BIN\0`,
+//! padded with zeros to a multiple of 4), all little-endian.
+//!
+//! Content: one scene, one node, one mesh with one primitive, mode TRIANGLES
+//! (the default, so not spelled out), one material (grey, non-metallic,
+//! rough). The single buffer is the BIN chunk, holding three tightly packed
+//! buffer views, each starting on a 4-byte boundary:
+//! 1. POSITION: f32 VEC3, target ARRAY_BUFFER, with the accessor `min`/`max`
+//!    the spec requires (computed from the f32 values written);
+//! 2. NORMAL: f32 VEC3 of unit length, target ARRAY_BUFFER: area-weighted
+//!    vertex normals in the output frame;
+//! 3. indices: SCALAR u16 or u32 per [`IndexWidth`], target
+//!    ELEMENT_ARRAY_BUFFER, triangles counter-clockwise seen from their front
+//!    (glTF's front-face convention).
+//!
+//! Frames: the accessor data is in the frame chosen by
+//! [`Coords`](super::Coords), z up — in local metres relative to the grid's
+//! south-west sample, which keeps coordinates small (≤ the grid's extent) and
+//! so f32-precise. glTF itself is y-up, so the node carries a rotation of −90°
+//! about x, mapping (x, y, z) to (x, z, −y): viewers show the terrain upright
+//! with east along +x and north along −z, while the data stays as documented.
+//!
+//! Georeference: `asset.extras` holds the CRS, the affine from samples to CRS
+//! coordinates, the grid's own transform, the CRS coordinates of the
+//! south-west sample (the local origin), the cell size in metres and the
+//! coordinate mode; `asset.generator` is `cota`.
+
+use std::collections::BTreeMap;
+use std::io::Write;
+
+use cota_core::{HeightGrid, Mesh};
+use gltf_json as json;
+use json::accessor::{ComponentType, GenericComponentType, Type};
+use json::buffer::Target;
+use json::material::{PbrBaseColorFactor, PbrMetallicRoughness, StrengthFactor};
+use json::mesh::{Mode, Primitive, Semantic};
+use json::scene::UnitQuaternion;
+use json::validation::{Checked, USize64};
+use json::{Accessor, Index};
+
+use super::coords::{Frame, GeoInfo};
+use super::error::ExportError;
+use super::geometry::{check_mesh, to_f32, vertex_normals, write_f32s};
+use super::options::{ExportOptions, IndexWidth};
+
+/// `glTF` as a little-endian u32.
+const MAGIC: u32 = 0x4654_6C67;
+/// Container version.
+const VERSION: u32 = 2;
+/// Chunk type `JSON`.
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+/// Chunk type `BIN\0`.
+const CHUNK_BIN: u32 = 0x004E_4942;
+/// Bytes of the file header and of a chunk header.
+const HEADER_BYTES: u64 = 12;
+/// Bytes of a chunk header (length and type).
+const CHUNK_HEADER_BYTES: u64 = 8;
+/// Largest vertex count with u16 indices (65 535 is the primitive restart value).
+const MAX_U16_VERTICES: usize = 65_535;
+/// Largest vertex count with u32 indices (u32::MAX is the restart value).
+const MAX_U32_VERTICES: usize = u32::MAX as usize;
+
+/// Writes `mesh` as a GLB to `w` (wrap files in a `BufWriter`, as
+/// [`write_mesh`](super::write_mesh) does).
+///
+/// # Errors
+/// [`ExportError::Io`] from `w`; the mesh checks of [`ExportError`];
+/// [`ExportError::TooLarge`] when the indices do not fit the chosen
+/// [`IndexWidth`] or the file would exceed 4 GiB; [`ExportError::Json`].
+pub fn write_glb<W: Write>(
+    mut w: W,
+    mesh: &Mesh,
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+) -> Result<(), ExportError> {
+    check_mesh(mesh)?;
+    let frame = Frame::new(grid, opts.coords);
+    let positions: Vec<[f32; 3]> = mesh
+        .vertices
+        .iter()
+        .map(|v| to_f32(frame.vertex(v)))
+        .collect();
+    let normals = vertex_normals(mesh, &frame);
+    let layout = Layout::new(mesh, index_type(mesh.vertices.len(), opts.index_width)?);
+    let root = build_root(&positions, &layout, &GeoInfo::new(grid, opts.coords))?;
+    let json = json::serialize::to_vec(&root).map_err(|e| ExportError::Json(e.to_string()))?;
+    let json_padded = pad4(json.len() as u64);
+    let bin_padded = pad4(layout.buffer_bytes);
+    let total = HEADER_BYTES + 2 * CHUNK_HEADER_BYTES + json_padded + bin_padded;
+    let total = u32::try_from(total).map_err(|_| ExportError::TooLarge {
+        what: "bytes in a GLB",
+        count: total,
+        max: u64::from(u32::MAX),
+    })?;
+    write_u32s(&mut w, &[MAGIC, VERSION, total])?;
+    write_chunk_header(&mut w, json_padded, CHUNK_JSON)?;
+    w.write_all(&json)?;
+    write_padding(&mut w, json.len() as u64, b' ')?;
+    write_chunk_header(&mut w, bin_padded, CHUNK_BIN)?;
+    write_bin(&mut w, mesh, &frame, &positions, &normals, layout.index)?;
+    write_padding(&mut w, layout.buffer_bytes, 0)?;
+    w.flush()?;
+    Ok(())
+}
+
+/// The index component type for `vertices` vertices.
+fn index_type(vertices: usize, width: IndexWidth) -> Result<ComponentType, ExportError> {
+    let (ty, max) = match width {
+        IndexWidth::Auto if vertices <= MAX_U16_VERTICES => (ComponentType::U16, MAX_U16_VERTICES),
+        IndexWidth::U16 => (ComponentType::U16, MAX_U16_VERTICES),
+        IndexWidth::Auto | IndexWidth::U32 => (ComponentType::U32, MAX_U32_VERTICES),
+    };
+    if vertices > max {
+        return Err(ExportError::TooLarge {
+            what: if ty == ComponentType::U16 {
+                "vertices for 16-bit glTF indices"
+            } else {
+                "vertices for 32-bit glTF indices"
+            },
+            count: vertices as u64,
+            max: max as u64,
+        });
+    }
+    Ok(ty)
+}
+
+/// Byte layout of the BIN chunk.
+#[derive(Debug, Clone, Copy)]
+struct Layout {
+    vertices: u64,
+    triangles: u64,
+    index: ComponentType,
+    /// Bytes of the positions view, and of the normals view.
+    vec3_bytes: u64,
+    /// Bytes of the index view.
+    index_bytes: u64,
+    /// Bytes of the buffer (all views, before the chunk's padding).
+    buffer_bytes: u64,
+}
+
+impl Layout {
+    /// Positions, normals, indices, back to back (each a multiple of 4 bytes
+    /// from the start, since 12·n is).
+    fn new(mesh: &Mesh, index: ComponentType) -> Self {
+        let vertices = mesh.vertices.len() as u64;
+        let triangles = mesh.triangles.len() as u64;
+        let vec3_bytes = 12 * vertices;
+        let index_bytes = 3 * triangles * index.size() as u64;
+        Layout {
+            vertices,
+            triangles,
+            index,
+            vec3_bytes,
+            index_bytes,
+            buffer_bytes: 2 * vec3_bytes + index_bytes,
+        }
+    }
+}
+
+/// The glTF JSON document.
+fn build_root(
+    positions: &[[f32; 3]],
+    layout: &Layout,
+    info: &GeoInfo,
+) -> Result<json::Root, ExportError> {
+    let (min, max) = bounds(positions);
+    let extras = json::extras::RawValue::from_string(info.json().to_string())
+        .map_err(|e| ExportError::Json(e.to_string()))?;
+    let view = |offset: u64, bytes: u64, target: Target| json::buffer::View {
+        buffer: Index::new(0),
+        byte_length: USize64(bytes),
+        byte_offset: Some(USize64(offset)),
+        byte_stride: None,
+        target: Some(Checked::Valid(target)),
+        extensions: None,
+        extras: None,
+    };
+    let mut attributes = BTreeMap::new();
+    attributes.insert(Checked::Valid(Semantic::Positions), Index::new(0));
+    attributes.insert(Checked::Valid(Semantic::Normals), Index::new(1));
+    let half_turn = std::f32::consts::FRAC_1_SQRT_2;
+    Ok(json::Root {
+        asset: json::Asset {
+            generator: Some("cota".to_string()),
+            extras: Some(extras),
+            ..json::Asset::default()
+        },
+        buffers: vec![json::Buffer {
+            byte_length: USize64(layout.buffer_bytes),
+            uri: None,
+            extensions: None,
+            extras: None,
+        }],
+        buffer_views: vec![
+            view(0, layout.vec3_bytes, Target::ArrayBuffer),
+            view(layout.vec3_bytes, layout.vec3_bytes, Target::ArrayBuffer),
+            view(
+                2 * layout.vec3_bytes,
+                layout.index_bytes,
+                Target::ElementArrayBuffer,
+            ),
+        ],
+        accessors: vec![
+            accessor(0, layout.vertices, ComponentType::F32, Type::Vec3).with_bounds(&min, &max),
+            accessor(1, layout.vertices, ComponentType::F32, Type::Vec3),
+            accessor(2, 3 * layout.triangles, layout.index, Type::Scalar),
+        ],
+        materials: vec![terrain_material()],
+        meshes: vec![json::Mesh {
+            extensions: None,
+            extras: None,
+            primitives: vec![Primitive {
+                attributes,
+                extensions: None,
+                extras: None,
+                indices: Some(Index::new(2)),
+                material: Some(Index::new(0)),
+                mode: Checked::Valid(Mode::Triangles),
+                targets: None,
+            }],
+            weights: None,
+        }],
+        nodes: vec![json::Node {
+            mesh: Some(Index::new(0)),
+            rotation: Some(UnitQuaternion([-half_turn, 0.0, 0.0, half_turn])),
+            ..json::Node::default()
+        }],
+        scenes: vec![json::Scene {
+            extensions: None,
+            extras: None,
+            nodes: vec![Index::new(0)],
+        }],
+        scene: Some(Index::new(0)),
+        ..json::Root::default()
+    })
+}
+
+/// An accessor over the whole of buffer view `view`.
+fn accessor(view: u32, count: u64, component: ComponentType, ty: Type) -> Accessor {
+    Accessor {
+        buffer_view: Some(Index::new(view)),
+        byte_offset: None,
+        count: USize64(count),
+        component_type: Checked::Valid(GenericComponentType(component)),
+        extensions: None,
+        extras: None,
+        type_: Checked::Valid(ty),
+        min: None,
+        max: None,
+        normalized: false,
+        sparse: None,
+    }
+}
+
+/// Sets an accessor's `min` and `max`.
+trait WithBounds {
+    /// The accessor with `min` and `max` set.
+    fn with_bounds(self, min: &[f32; 3], max: &[f32; 3]) -> Self;
+}
+
+impl WithBounds for Accessor {
+    fn with_bounds(mut self, min: &[f32; 3], max: &[f32; 3]) -> Self {
+        self.min = Some(serde_json::json!(min));
+        self.max = Some(serde_json::json!(max));
+        self
+    }
+}
+
+/// Component-wise minimum and maximum (the mesh has at least one vertex).
+fn bounds(positions: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
+    let init = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    positions.iter().fold(init, |(mut lo, mut hi), p| {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+        (lo, hi)
+    })
+}
+
+/// Light grey, non-metallic, fully rough: reads as terrain under any light
+/// (glTF's default material is fully metallic, which renders dark).
+fn terrain_material() -> json::Material {
+    json::Material {
+        pbr_metallic_roughness: PbrMetallicRoughness {
+            base_color_factor: PbrBaseColorFactor([0.8, 0.8, 0.8, 1.0]),
+            metallic_factor: StrengthFactor(0.0),
+            roughness_factor: StrengthFactor(1.0),
+            ..PbrMetallicRoughness::default()
+        },
+        ..json::Material::default()
+    }
+}
+
+/// `n` rounded up to a multiple of 4.
+fn pad4(n: u64) -> u64 {
+    n.div_ceil(4) * 4
+}
+
+/// Little-endian u32s.
+fn write_u32s<W: Write>(w: &mut W, v: &[u32]) -> Result<(), ExportError> {
+    for x in v {
+        w.write_all(&x.to_le_bytes())?;
+    }
+    Ok(())
+}
+
+/// A chunk header: padded length and type. The length fits: the total was checked.
+fn write_chunk_header<W: Write>(w: &mut W, length: u64, ty: u32) -> Result<(), ExportError> {
+    write_u32s(w, &[length as u32, ty])
+}
+
+/// The bytes that pad `len` to a multiple of 4.
+fn write_padding<W: Write>(w: &mut W, len: u64, byte: u8) -> Result<(), ExportError> {
+    let n = (pad4(len) - len) as usize;
+    w.write_all(&[byte; 3][..n])?;
+    Ok(())
+}
+
+/// The BIN chunk's content: positions, normals, indices.
+fn write_bin<W: Write>(
+    w: &mut W,
+    mesh: &Mesh,
+    frame: &Frame,
+    positions: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    index: ComponentType,
+) -> Result<(), ExportError> {
+    for p in positions {
+        write_f32s(w, p)?;
+    }
+    for n in normals {
+        write_f32s(w, n)?;
+    }
+    for &t in &mesh.triangles {
+        let t = frame.orient(t);
+        if index == ComponentType::U16 {
+            // Fits: index_type allowed u16 only for at most 65 535 vertices.
+            let b = t.map(|i| (i as u16).to_le_bytes());
+            w.write_all(&[b[0][0], b[0][1], b[1][0], b[1][1], b[2][0], b[2][1]])?;
+        } else {
+            let b = t.map(u32::to_le_bytes);
+            w.write_all(b.as_flattened())?;
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,81 @@
+//! Binary STL writer, optionally closing the terrain into a printable solid.
+//!
+//! Binary STL: an 80-byte header (here a short ASCII note with the coordinate
+//! mode, CRS and the CRS coordinates of the south-west sample, zero-padded,
+//! never starting with `solid`, which readers take for ASCII STL), a
+//! little-endian u32 triangle count, then 50 bytes per triangle: the facet
+//! normal and the three vertices as little-endian f32 triples, and a u16
+//! attribute byte count of 0. Vertices are counter-clockwise seen from
+//! outside and the facet normal is the unit right-hand normal of the written
+//! (f64) vertices — zero for a degenerate facet — so terrain facets point up
+//! (+z) in either coordinate mode. STL has no units: the numbers are metres in
+//! local metres, grid units horizontally in grid coordinates.
+//!
+//! With [`ExportOptions::base_m`] the surface is closed with side walls and a
+//! flat base into a watertight solid (walls from the boundary edges, the base a
+//! fan from an added centre vertex): every edge
+//! is shared by exactly two facets, with outward normals.
+
+use std::io::Write;
+
+use cota_core::{HeightGrid, Mesh};
+
+use super::coords::{Frame, GeoInfo};
+use super::error::ExportError;
+use super::geometry::{check_mesh, to_f32, triangle_points, unit_face_normal_f32};
+use super::options::ExportOptions;
+use super::solid::{closing_triangles, GridPoint};
+
+/// Writes `mesh` as binary STL to `w` (wrap files in a `BufWriter`, as
+/// [`write_mesh`](super::write_mesh) does).
+///
+/// # Errors
+/// [`ExportError::Io`] from `w`; the mesh checks of [`ExportError`];
+/// [`ExportError::BaseNotBelow`] or [`ExportError::NotClosable`] with
+/// [`ExportOptions::base_m`]; [`ExportError::TooLarge`] beyond 2^32−1 facets.
+pub fn write_stl<W: Write>(
+    mut w: W,
+    mesh: &Mesh,
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+) -> Result<(), ExportError> {
+    check_mesh(mesh)?;
+    let closing = match opts.base_m {
+        Some(base_m) => closing_triangles(mesh, base_m)?,
+        None => Vec::new(),
+    };
+    let count = facet_count(mesh.triangles.len() + closing.len())?;
+    let frame = Frame::new(grid, opts.coords);
+    w.write_all(&GeoInfo::new(grid, opts.coords).stl_header())?;
+    w.write_all(&count.to_le_bytes())?;
+    for &t in &mesh.triangles {
+        write_facet(&mut w, triangle_points(mesh, &frame, frame.orient(t)))?;
+    }
+    for t in closing {
+        let p = t.map(|g: GridPoint| frame.point(g[0], g[1], g[2]));
+        write_facet(&mut w, frame.orient(p))?;
+    }
+    w.flush()?;
+    Ok(())
+}
+
+/// The facet count as the header's u32.
+fn facet_count(n: usize) -> Result<u32, ExportError> {
+    u32::try_from(n).map_err(|_| ExportError::TooLarge {
+        what: "facets in a binary STL",
+        count: n as u64,
+        max: u64::from(u32::MAX),
+    })
+}
+
+/// One 50-byte facet record.
+fn write_facet<W: Write>(w: &mut W, p: [[f64; 3]; 3]) -> Result<(), ExportError> {
+    let mut rec = [0u8; 50];
+    let n = unit_face_normal_f32(p);
+    let vectors = [n, to_f32(p[0]), to_f32(p[1]), to_f32(p[2])];
+    for (k, x) in vectors.iter().flatten().enumerate() {
+        rec[4 * k..4 * k + 4].copy_from_slice(&x.to_le_bytes());
+    }
+    w.write_all(&rec)?;
+    Ok(())
+}
