@@ -8,5 +8,9 @@ use std::path::Path;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let _ = cota_io::read_dem_bytes(data, Path::new("N10E010.hgt"), &cota_io::ReadOptions::DEFAULT);
+    let _ = cota_io::read_dem_bytes(
+        data,
+        Path::new("N10E010.hgt"),
+        &cota_io::ReadOptions::DEFAULT,
+    );
 });

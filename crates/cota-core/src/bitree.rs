@@ -209,7 +209,7 @@ pub(crate) fn levels(n: u32) -> Vec<Level> {
 fn first_col(level: Level, y: u32) -> u32 {
     match level {
         Level::A(s) => s / 2,
-        Level::B(s) if y % s == 0 => s / 2,
+        Level::B(s) if y.is_multiple_of(s) => s / 2,
         Level::B(_) => 0,
     }
 }
@@ -254,7 +254,7 @@ pub(crate) fn diamond(level: Level, m: Pt, n: u32) -> [Option<Tri>; 2] {
         }
         Level::B(s) => {
             let h = s / 2;
-            if y % s == 0 {
+            if y.is_multiple_of(s) {
                 let (a, b) = ([x - h, y], [x + h, y]);
                 [
                     (y >= h).then(|| Tri {
@@ -297,7 +297,7 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, errors: &mut [f3
     let rows: Vec<u32> = (0..h)
         .filter(|y| match level {
             Level::A(_) => y % s == half,
-            Level::B(_) => y % half == 0,
+            Level::B(_) => y.is_multiple_of(half),
         })
         .collect();
     let computed: Vec<Vec<f32>> = {

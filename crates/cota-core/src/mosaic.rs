@@ -471,8 +471,9 @@ fn lattice_offset(index: usize, g: &GeoRef, g0: &GeoRef) -> Result<(i64, i64), M
     {
         return Err(MosaicError::NotAligned {
             index,
-            offset_cols: dc,
-            offset_rows: dr,
+            // + 0.0 turns a -0 into 0 for the message.
+            offset_cols: dc + 0.0,
+            offset_rows: dr + 0.0,
         });
     }
     if rc.abs() > MAX_OFFSET_PX || rr.abs() > MAX_OFFSET_PX {

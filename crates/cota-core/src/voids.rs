@@ -292,11 +292,25 @@ const UNKNOWN: u8 = 1;
 const ABSENT: u8 = 2;
 
 /// Levels with at most this many unknowns are not coarsened further.
-const COARSEST_UNKNOWNS: usize = 64;
+const COARSEST_UNKNOWNS: usize = 16;
 /// Gauss–Seidel sweeps before and after each coarse-grid correction.
 const SMOOTHING_SWEEPS: usize = 2;
 /// Above this many (void, border) pairs the inverse-distance border is subsampled.
 const IDW_MAX_PAIRS: usize = 100_000_000;
+
+/// An unknown cell of a [`Level`].
+#[derive(Clone, Copy)]
+struct Unknown {
+    /// Index in the level's (padded) arrays.
+    at: usize,
+    /// Column and row inside the level (without the padding).
+    x: u32,
+    y: u32,
+    /// Sum of the weights of its non-absent neighbours.
+    wsum: f64,
+    /// Right-hand side of its equation.
+    rhs: f64,
+}
 
 /// A rectangular problem on one level of the multigrid hierarchy: known cells
 /// (Dirichlet values), unknown cells, and absent cells that take no part
@@ -305,20 +319,253 @@ const IDW_MAX_PAIRS: usize = 100_000_000;
 /// At unknown cell i the equation is Σⱼ wᵢⱼ (uᵢ − uⱼ) = fᵢ over its non-absent
 /// 4-neighbours j, with wᵢⱼ = `wx` across columns and `wy` across rows. On the
 /// finest level f = 0 and the known cells hold the border heights; on coarser
-/// levels it is the error equation: known cells hold 0 and f is the restricted residual.
+/// levels it is the error equation: known cells hold 0 and f is the restricted
+/// residual.
+///
+/// The arrays have a frame of absent cells around the `width`×`height` box so
+/// that every unknown has four neighbours in range, and absent cells hold 0, so
+/// a sweep needs no bounds checks and no branches.
 struct Level {
     width: usize,
     height: usize,
+    /// Row length of the padded arrays, `width + 2`.
+    stride: usize,
     state: Vec<u8>,
     value: Vec<f64>,
-    /// Right-hand side per cell; empty means zero (the finest level).
-    rhs: Vec<f64>,
-    /// Indices of the unknown cells, in raster order (the Gauss–Seidel order).
-    unknowns: Vec<usize>,
+    /// The unknowns, red cells ((x + y) even) first, each colour in raster order:
+    /// one pass in this order is a red–black Gauss–Seidel sweep.
+    unknowns: Vec<Unknown>,
     /// Weight of the west and east neighbours, 1/dx².
     wx: f64,
     /// Weight of the north and south neighbours, 1/dy².
     wy: f64,
+}
+
+impl Level {
+    /// An all-absent level of `width`×`height` cells.
+    fn new(width: usize, height: usize, wx: f64, wy: f64) -> Level {
+        let stride = width + 2;
+        Level {
+            width,
+            height,
+            stride,
+            state: vec![ABSENT; stride * (height + 2)],
+            value: vec![0.0; stride * (height + 2)],
+            unknowns: Vec::new(),
+            wx,
+            wy,
+        }
+    }
+
+    /// Index of cell (`x`, `y`) in the padded arrays.
+    #[inline]
+    fn at(&self, x: usize, y: usize) -> usize {
+        (y + 1) * self.stride + x + 1
+    }
+
+    /// Marks (`x`, `y`) known with value `v`.
+    fn set_known(&mut self, x: usize, y: usize, v: f64) {
+        let i = self.at(x, y);
+        self.state[i] = KNOWN;
+        self.value[i] = v;
+    }
+
+    /// Marks (`x`, `y`) unknown (call [`Level::finish`] once all cells are set).
+    fn set_unknown(&mut self, x: usize, y: usize) {
+        let i = self.at(x, y);
+        self.state[i] = UNKNOWN;
+        self.unknowns.push(Unknown {
+            at: i,
+            x: x as u32,
+            y: y as u32,
+            wsum: 0.0,
+            rhs: 0.0,
+        });
+    }
+
+    /// Computes each unknown's weight sum and puts the unknowns in red–black order.
+    fn finish(&mut self) {
+        let present = |s: u8| if s == ABSENT { 0.0 } else { 1.0 };
+        for u in &mut self.unknowns {
+            let i = u.at;
+            u.wsum = self.wx * (present(self.state[i - 1]) + present(self.state[i + 1]))
+                + self.wy
+                    * (present(self.state[i - self.stride]) + present(self.state[i + self.stride]));
+        }
+        self.unknowns
+            .sort_unstable_by_key(|u| ((u.x + u.y) % 2, u.y, u.x));
+    }
+
+    /// One red–black Gauss–Seidel sweep with over-relaxation `omega`; returns
+    /// the largest difference between an unknown and the value its equation asks for.
+    fn sweep(&mut self, omega: f64) -> f64 {
+        let (s, wx, wy) = (self.stride, self.wx, self.wy);
+        let v = &mut self.value;
+        let mut max_change = 0.0f64;
+        for u in &self.unknowns {
+            let i = u.at;
+            if u.wsum <= 0.0 {
+                continue;
+            }
+            let sum = u.rhs + wx * (v[i - 1] + v[i + 1]) + wy * (v[i - s] + v[i + s]);
+            let d = sum / u.wsum - v[i];
+            v[i] += omega * d;
+            max_change = max_change.max(d.abs());
+        }
+        max_change
+    }
+
+    /// The residual fᵢ − Σⱼ wᵢⱼ (uᵢ − uⱼ) of unknown `u`.
+    #[inline]
+    fn residual(&self, u: &Unknown) -> f64 {
+        let (i, s, v) = (u.at, self.stride, &self.value);
+        u.rhs + self.wx * (v[i - 1] + v[i + 1]) + self.wy * (v[i - s] + v[i + s]) - u.wsum * v[i]
+    }
+
+    /// The over-relaxation factor for sweeps alone on this level: the optimum
+    /// 2 / (1 + sin(π / (d + 1))) of a square of side d, d being the unknowns'
+    /// mean width (their count over the longer side of the box without its
+    /// margin), so that thin voids, which Gauss–Seidel already solves fast, are
+    /// not over-relaxed.
+    fn sor_omega(&self) -> f64 {
+        let side = self.width.max(self.height).saturating_sub(2).max(1);
+        let d = self.unknowns.len() as f64 / side as f64;
+        2.0 / (1.0 + (std::f64::consts::PI / (d + 1.0)).sin())
+    }
+
+    /// Counts of known and unknown cells in the 2×2 block of coarse cell
+    /// (`cx`, `cy`), and the sum of the known values.
+    fn block(&self, cx: usize, cy: usize) -> (u32, u32, f64) {
+        let (mut known, mut unknown, mut sum) = (0, 0, 0.0);
+        for (fx, fy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            let (x, y) = (2 * cx + fx, 2 * cy + fy);
+            if x < self.width && y < self.height {
+                let i = self.at(x, y);
+                match self.state[i] {
+                    KNOWN => {
+                        known += 1;
+                        sum += self.value[i];
+                    }
+                    UNKNOWN => unknown += 1,
+                    _ => {}
+                }
+            }
+        }
+        (known, unknown, sum)
+    }
+
+    /// A coarse level of half the size (weights for twice the spacing) where a
+    /// block with any known cell is known (with their mean when `values`, else
+    /// 0), else unknown if it holds unknowns, else absent. Known cells win so
+    /// that no part of the boundary is lost and no coarse problem is singular.
+    fn coarsen(&self, values: bool) -> Level {
+        let mut coarse = Level::new(
+            self.width.div_ceil(2),
+            self.height.div_ceil(2),
+            self.wx / 4.0,
+            self.wy / 4.0,
+        );
+        for cy in 0..coarse.height {
+            for cx in 0..coarse.width {
+                match self.block(cx, cy) {
+                    (0, 0, _) => {}
+                    (0, _, _) => coarse.set_unknown(cx, cy),
+                    (known, _, sum) => {
+                        let v = if values { sum / f64::from(known) } else { 0.0 };
+                        coarse.set_known(cx, cy, v);
+                    }
+                }
+            }
+        }
+        coarse.finish();
+        coarse
+    }
+
+    /// The coarse level of the error equation, or `None` when this level is
+    /// small enough to solve directly or the coarse level has no unknowns.
+    fn coarsen_error(&self) -> Option<Level> {
+        if self.unknowns.len() <= COARSEST_UNKNOWNS {
+            return None;
+        }
+        let coarse = self.coarsen(false);
+        (!coarse.unknowns.is_empty()).then_some(coarse)
+    }
+
+    /// Sets (`add` false) or corrects (`add` true) every unknown with the
+    /// bilinear interpolation of the coarser level's non-absent cells (a cell's
+    /// own block always takes part).
+    fn interpolate_from(&mut self, coarse: &Level, add: bool) {
+        for k in 0..self.unknowns.len() {
+            let u = self.unknowns[k];
+            // Fine cell x lies at coarse coordinate (x − 0.5) / 2: between the
+            // centres of blocks x/2 − 1 and x/2 (weights 1/4, 3/4) when x is
+            // even, x/2 and x/2 + 1 (3/4, 1/4) when odd. Coarse index −1 and
+            // width are the padding frame, absent.
+            let (x, y) = (u.x as usize, u.y as usize);
+            let (x0, tx) = if x % 2 == 0 {
+                (x / 2, 0.75)
+            } else {
+                (x / 2 + 1, 0.25)
+            };
+            let (y0, ty) = if y % 2 == 0 {
+                (y / 2, 0.75)
+            } else {
+                (y / 2 + 1, 0.25)
+            };
+            // Padded indices of coarse cells (x0 − 1, y0 − 1) .. (x0, y0), i.e.
+            // unpadded x0 − 1 and x0.
+            let base = y0 * coarse.stride + x0;
+            let (mut sum, mut wsum) = (0.0, 0.0);
+            for (off, w) in [
+                (0, (1.0 - tx) * (1.0 - ty)),
+                (1, tx * (1.0 - ty)),
+                (coarse.stride, (1.0 - tx) * ty),
+                (coarse.stride + 1, tx * ty),
+            ] {
+                let ci = base + off;
+                if coarse.state[ci] != ABSENT {
+                    sum += w * coarse.value[ci];
+                    wsum += w;
+                }
+            }
+            if wsum > 0.0 {
+                let v = sum / wsum;
+                self.value[u.at] = if add { self.value[u.at] + v } else { v };
+            }
+        }
+    }
+
+    /// Sets `coarse` to the error equation of this level: zero values, and as
+    /// right-hand side the mean residual of each block (cell-centred restriction).
+    fn restrict_residual(&self, coarse: &mut Level) {
+        // Accumulate in coarse.value (then cleared): it is indexed by cell.
+        coarse.value.fill(0.0);
+        for u in &self.unknowns {
+            let ci = coarse.at(u.x as usize / 2, u.y as usize / 2);
+            coarse.value[ci] += 0.25 * self.residual(u);
+        }
+        for cu in &mut coarse.unknowns {
+            cu.rhs = coarse.value[cu.at];
+        }
+        coarse.value.fill(0.0);
+    }
+
+    /// Solves the (small) coarsest level by over-relaxed sweeps until its
+    /// changes are negligible next to the first; returns the sweeps done.
+    fn solve_coarsest(&mut self) -> usize {
+        let omega = self.sor_omega();
+        let cap = 50 + 10 * (self.unknowns.len() as f64).sqrt() as usize;
+        let first = self.sweep(omega);
+        let mut sweeps = 1;
+        while sweeps < cap {
+            let change = self.sweep(omega);
+            sweeps += 1;
+            if change <= 1e-6 * first {
+                break;
+            }
+        }
+        sweeps
+    }
 }
 
 /// How a component's solve went.
@@ -366,7 +613,7 @@ fn solve_component(
         .cells
         .iter()
         .map(|&(col, row)| {
-            let i = (row - origin.1) * level.width + (col - origin.0);
+            let i = level.at(col - origin.0, row - origin.1);
             level.value[i].clamp(range.0, range.1) as f32
         })
         .collect();
@@ -387,29 +634,17 @@ fn fine_level(
     let y0 = c.rows.0.saturating_sub(1);
     let x1 = (c.cols.1 + 1).min(grid.width() - 1);
     let y1 = (c.rows.1 + 1).min(grid.height() - 1);
-    let (w, h) = (x1 - x0 + 1, y1 - y0 + 1);
-    let mut level = Level {
-        width: w,
-        height: h,
-        state: vec![ABSENT; w * h],
-        value: vec![0.0; w * h],
-        rhs: Vec::new(),
-        unknowns: Vec::with_capacity(c.cells.len()),
-        wx,
-        wy,
-    };
+    let mut level = Level::new(x1 - x0 + 1, y1 - y0 + 1, wx, wy);
+    level.unknowns.reserve_exact(c.cells.len());
     let mut range = (f64::INFINITY, f64::NEG_INFINITY);
     for &(col, row) in &c.cells {
-        let i = (row - y0) * w + (col - x0);
-        level.state[i] = UNKNOWN;
-        level.unknowns.push(i);
+        level.set_unknown(col - x0, row - y0);
         let mut border = |nc: usize, nr: usize| {
             let v = grid.get(nc, nr);
             if !v.is_nan() {
-                let j = (nr - y0) * w + (nc - x0);
-                level.state[j] = KNOWN;
-                level.value[j] = f64::from(v);
-                range = (range.0.min(f64::from(v)), range.1.max(f64::from(v)));
+                let v = f64::from(v);
+                level.set_known(nc - x0, nr - y0, v);
+                range = (range.0.min(v), range.1.max(v));
             }
         };
         if col > 0 {
@@ -425,12 +660,13 @@ fn fine_level(
             border(col, row + 1);
         }
     }
+    level.finish();
     (level, (x0, y0), range)
 }
 
 /// The harmonic fill of one component: a pull–push starting estimate, then
 /// multigrid V-cycles (or, for a level too small to coarsen, over-relaxed
-/// sweeps) until the largest change of a cycle is below the tolerance.
+/// sweeps) until the estimated remaining error is below the tolerance.
 fn harmonic(mut fine: Level, opts: &FillOptions) -> (Level, Solved) {
     start_estimate(&mut fine);
     let mut levels = vec![fine];
@@ -439,35 +675,55 @@ fn harmonic(mut fine: Level, opts: &FillOptions) -> (Level, Solved) {
     }
     let mut s = Solved::default();
     let mut previous = Vec::new();
-    let mut change = f64::INFINITY;
-    while s.finest_sweeps < opts.max_iterations && change >= opts.tolerance_m {
-        change = if levels.len() == 1 {
+    let omega = levels[0].sor_omega();
+    // Changes of the last three cycles, newest first.
+    let mut changes = [f64::INFINITY; 3];
+    while s.finest_sweeps < opts.max_iterations && remaining_error(&changes) >= opts.tolerance_m {
+        let change = if levels.len() == 1 {
             s.total_sweeps += 1;
-            let omega = optimal_omega(levels[0].unknowns.len());
             levels[0].sweep(omega)
         } else {
             let fine = &levels[0];
             previous.clear();
-            previous.extend(fine.unknowns.iter().map(|&i| fine.value[i]));
+            previous.extend(fine.unknowns.iter().map(|u| fine.value[u.at]));
             s.total_sweeps += v_cycle(&mut levels);
             let fine = &levels[0];
             fine.unknowns
                 .iter()
                 .zip(&previous)
-                .map(|(&i, p)| (fine.value[i] - p).abs())
+                .map(|(u, p)| (fine.value[u.at] - p).abs())
                 .fold(0.0, f64::max)
         };
+        changes = [change, changes[0], changes[1]];
         s.finest_sweeps += 1;
     }
-    s.last_change_m = if s.finest_sweeps == 0 { 0.0 } else { change };
-    s.converged = change < opts.tolerance_m;
+    s.last_change_m = if s.finest_sweeps == 0 {
+        0.0
+    } else {
+        changes[0]
+    };
+    s.converged = remaining_error(&changes) < opts.tolerance_m;
     let fine = levels.swap_remove(0);
     (fine, s)
 }
 
-/// SOR factor for a box of about `n` unknowns: 2 / (1 + sin(π / √n)).
-fn optimal_omega(n: usize) -> f64 {
-    2.0 / (1.0 + (std::f64::consts::PI / ((n as f64).sqrt() + 1.0)).sin())
+/// Estimated distance of the current iterate from the solution, from the last
+/// changes (newest first) of a linearly converging iteration: change × ρ / (1 −
+/// ρ), with the contraction ρ the larger of the last two ratios of successive
+/// changes kept within [0.5, 0.99], doubled because early ratios underestimate
+/// ρ. It is never below twice the last change. Infinite until three changes are known.
+fn remaining_error(changes: &[f64; 3]) -> f64 {
+    if changes[0] == 0.0 {
+        return 0.0;
+    }
+    if !changes.iter().all(|c| c.is_finite()) {
+        return f64::INFINITY;
+    }
+    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { 1.0 };
+    let rho = ratio(changes[0], changes[1])
+        .max(ratio(changes[1], changes[2]))
+        .clamp(0.5, 0.99);
+    2.0 * changes[0] * rho / (1.0 - rho)
 }
 
 /// One V-cycle from `levels[0]` down; returns the sweeps done on all levels.
@@ -482,9 +738,9 @@ fn v_cycle(levels: &mut [Level]) -> usize {
         fine.sweep(1.0);
     }
     fine.restrict_residual(coarse);
-    let mut sweeps = v_cycle(rest) + 2 * SMOOTHING_SWEEPS;
+    let sweeps = v_cycle(rest) + 2 * SMOOTHING_SWEEPS;
     if let Some(coarse) = rest.first() {
-        fine.add_correction(coarse);
+        fine.interpolate_from(coarse, true);
     }
     for _ in 0..SMOOTHING_SWEEPS {
         fine.sweep(1.0);
@@ -496,8 +752,8 @@ fn v_cycle(levels: &mut [Level]) -> usize {
 /// blocks (a block with any known cell is known) until few unknowns remain,
 /// which start at the mean of the known cells, then interpolated back up.
 fn start_estimate(level: &mut Level) {
-    if level.unknowns.len() > COARSEST_UNKNOWNS && level.width * level.height > 1 {
-        let mut coarse = level.coarsen_values();
+    if level.unknowns.len() > COARSEST_UNKNOWNS {
+        let mut coarse = level.coarsen(true);
         if !coarse.unknowns.is_empty() {
             start_estimate(&mut coarse);
         }
@@ -511,240 +767,35 @@ fn start_estimate(level: &mut Level) {
             }
         }
         let mean = if n > 0 { sum / n as f64 } else { 0.0 };
-        for &i in &level.unknowns {
-            level.value[i] = mean;
+        for u in &level.unknowns {
+            level.value[u.at] = mean;
         }
-    }
-}
-
-impl Level {
-    /// An empty coarse level of half the size with the weights for twice the spacing.
-    fn half(&self) -> Level {
-        let (cw, ch) = (self.width.div_ceil(2), self.height.div_ceil(2));
-        Level {
-            width: cw,
-            height: ch,
-            state: vec![ABSENT; cw * ch],
-            value: vec![0.0; cw * ch],
-            rhs: Vec::new(),
-            unknowns: Vec::new(),
-            wx: self.wx / 4.0,
-            wy: self.wy / 4.0,
-        }
-    }
-
-    /// Counts of known and unknown cells in the 2×2 block of coarse cell
-    /// (`cx`, `cy`), and the sum of the known values.
-    fn block(&self, cx: usize, cy: usize) -> (u32, u32, f64) {
-        let (mut known, mut unknown, mut sum) = (0, 0, 0.0);
-        for (fx, fy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-            let (x, y) = (2 * cx + fx, 2 * cy + fy);
-            if x < self.width && y < self.height {
-                let i = y * self.width + x;
-                match self.state[i] {
-                    KNOWN => {
-                        known += 1;
-                        sum += self.value[i];
-                    }
-                    UNKNOWN => unknown += 1,
-                    _ => {}
-                }
-            }
-        }
-        (known, unknown, sum)
-    }
-
-    /// The pull step: a block with known cells is known with their mean, else
-    /// unknown if it holds unknowns, else absent.
-    fn coarsen_values(&self) -> Level {
-        let mut coarse = self.half();
-        for cy in 0..coarse.height {
-            for cx in 0..coarse.width {
-                let ci = cy * coarse.width + cx;
-                match self.block(cx, cy) {
-                    (0, 0, _) => {}
-                    (0, _, _) => {
-                        coarse.state[ci] = UNKNOWN;
-                        coarse.unknowns.push(ci);
-                    }
-                    (known, _, sum) => {
-                        coarse.state[ci] = KNOWN;
-                        coarse.value[ci] = sum / f64::from(known);
-                    }
-                }
-            }
-        }
-        coarse
-    }
-
-    /// The coarse level of the error equation: a block with any unknown cell is
-    /// unknown, else known (error 0) if it holds known cells, else absent.
-    /// `None` when this level is small enough to solve directly, or when the
-    /// coarse level would lose its last known cell next to an unknown (it would
-    /// be singular).
-    fn coarsen_error(&self) -> Option<Level> {
-        if self.unknowns.len() <= COARSEST_UNKNOWNS || self.width * self.height <= 1 {
-            return None;
-        }
-        let mut coarse = self.half();
-        for cy in 0..coarse.height {
-            for cx in 0..coarse.width {
-                let ci = cy * coarse.width + cx;
-                match self.block(cx, cy) {
-                    (0, 0, _) => {}
-                    (_, 0, _) => coarse.state[ci] = KNOWN,
-                    _ => {
-                        coarse.state[ci] = UNKNOWN;
-                        coarse.unknowns.push(ci);
-                    }
-                }
-            }
-        }
-        coarse.rhs = vec![0.0; coarse.width * coarse.height];
-        let anchored = coarse
-            .unknowns
-            .iter()
-            .any(|&i| coarse.neighbours(i).any(|(j, _)| coarse.state[j] == KNOWN));
-        anchored.then_some(coarse)
-    }
-
-    /// The non-absent 4-neighbours of cell `i` with their weights.
-    fn neighbours(&self, i: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
-        let (w, h) = (self.width, self.height);
-        let (x, y) = (i % w, i / w);
-        let west = (x > 0).then(|| (i - 1, self.wx));
-        let east = (x + 1 < w).then(|| (i + 1, self.wx));
-        let north = (y > 0).then(|| (i - w, self.wy));
-        let south = (y + 1 < h).then(|| (i + w, self.wy));
-        [west, east, north, south]
-            .into_iter()
-            .flatten()
-            .filter(|&(j, _)| self.state[j] != ABSENT)
-    }
-
-    /// Sets (`add` false) or corrects (`add` true) every unknown with the
-    /// bilinear interpolation of the coarser level's non-absent cells (a cell's
-    /// own block always takes part).
-    fn interpolate_from(&mut self, coarse: &Level, add: bool) {
-        for &i in &self.unknowns {
-            let (x, y) = (i % self.width, i / self.width);
-            // Fine cell x lies at coarse coordinate (x − 0.5) / 2 between block centres.
-            let (ux, uy) = ((x as f64 - 0.5) / 2.0, (y as f64 - 0.5) / 2.0);
-            let (bx, by) = (ux.floor(), uy.floor());
-            let (tx, ty) = (ux - bx, uy - by);
-            let (mut sum, mut wsum) = (0.0, 0.0);
-            for (ox, wx) in [(0.0, 1.0 - tx), (1.0, tx)] {
-                for (oy, wy) in [(0.0, 1.0 - ty), (1.0, ty)] {
-                    let (cx, cy) = (bx + ox, by + oy);
-                    if cx < 0.0
-                        || cy < 0.0
-                        || cx >= coarse.width as f64
-                        || cy >= coarse.height as f64
-                    {
-                        continue;
-                    }
-                    let ci = cy as usize * coarse.width + cx as usize;
-                    if coarse.state[ci] != ABSENT && wx * wy > 0.0 {
-                        sum += wx * wy * coarse.value[ci];
-                        wsum += wx * wy;
-                    }
-                }
-            }
-            if wsum > 0.0 {
-                let v = sum / wsum;
-                self.value[i] = if add { self.value[i] + v } else { v };
-            }
-        }
-    }
-
-    /// The residual fᵢ − Σⱼ wᵢⱼ (uᵢ − uⱼ) at unknown cell `i`.
-    fn residual(&self, i: usize) -> f64 {
-        let mut r = self.rhs.get(i).copied().unwrap_or(0.0);
-        for (j, w) in self.neighbours(i) {
-            r += w * (self.value[j] - self.value[i]);
-        }
-        r
-    }
-
-    /// Sets `coarse` to the error equation of this level: zero values, and as
-    /// right-hand side the mean residual of each block (a cell-centred restriction).
-    fn restrict_residual(&self, coarse: &mut Level) {
-        coarse.value.fill(0.0);
-        coarse.rhs.fill(0.0);
-        for &i in &self.unknowns {
-            let (x, y) = (i % self.width, i / self.width);
-            let ci = (y / 2) * coarse.width + x / 2;
-            coarse.rhs[ci] += 0.25 * self.residual(i);
-        }
-    }
-
-    /// Adds the interpolated coarse error to the unknowns.
-    fn add_correction(&mut self, coarse: &Level) {
-        self.interpolate_from(coarse, true);
-    }
-
-    /// Solves the (small) coarsest level by over-relaxed sweeps until its
-    /// changes are negligible next to the first; returns the sweeps done.
-    fn solve_coarsest(&mut self) -> usize {
-        let omega = optimal_omega(self.unknowns.len());
-        let cap = 50 + 10 * (self.unknowns.len() as f64).sqrt() as usize;
-        let first = self.sweep(omega);
-        let mut sweeps = 1;
-        while sweeps < cap {
-            let change = self.sweep(omega);
-            sweeps += 1;
-            if change <= 1e-6 * first {
-                break;
-            }
-        }
-        sweeps
-    }
-
-    /// One Gauss–Seidel sweep with over-relaxation `omega`; returns the largest
-    /// difference between an unknown and the value its equation asks for.
-    fn sweep(&mut self, omega: f64) -> f64 {
-        let mut max_change = 0.0f64;
-        for k in 0..self.unknowns.len() {
-            let i = self.unknowns[k];
-            let (mut sum, mut wsum) = (self.rhs.get(i).copied().unwrap_or(0.0), 0.0);
-            for (j, w) in self.neighbours(i) {
-                sum += w * self.value[j];
-                wsum += w;
-            }
-            if wsum > 0.0 {
-                let d = sum / wsum - self.value[i];
-                self.value[i] += omega * d;
-                max_change = max_change.max(d.abs());
-            }
-        }
-        max_change
     }
 }
 
 /// Sets every unknown to the 1/d²-weighted mean of the known cells (the
 /// component's border), d in metres; subsamples the border above [`IDW_MAX_PAIRS`].
 fn inverse_distance(level: &mut Level, dx: f64, dy: f64) {
-    let w = level.width;
+    let s = level.stride;
     let border: Vec<(f64, f64, f64)> = level
         .state
         .iter()
         .enumerate()
-        .filter(|(_, s)| **s == KNOWN)
-        .map(|(i, _)| ((i % w) as f64 * dx, (i / w) as f64 * dy, level.value[i]))
+        .filter(|(_, st)| **st == KNOWN)
+        .map(|(i, _)| ((i % s) as f64 * dx, (i / s) as f64 * dy, level.value[i]))
         .collect();
     let pairs = border.len().saturating_mul(level.unknowns.len());
     let step = pairs.div_ceil(IDW_MAX_PAIRS).max(1);
-    for &i in &level.unknowns {
-        let (x, y) = ((i % w) as f64 * dx, (i / w) as f64 * dy);
+    for u in &level.unknowns {
+        let (x, y) = ((u.at % s) as f64 * dx, (u.at / s) as f64 * dy);
         let (mut sum, mut wsum) = (0.0, 0.0);
         for &(bx, by, v) in border.iter().step_by(step) {
-            let d2 = (bx - x) * (bx - x) + (by - y) * (by - y);
-            let weight = 1.0 / d2;
+            let weight = 1.0 / ((bx - x) * (bx - x) + (by - y) * (by - y));
             sum += weight * v;
             wsum += weight;
         }
         if wsum > 0.0 {
-            level.value[i] = sum / wsum;
+            level.value[u.at] = sum / wsum;
         }
     }
 }
@@ -793,7 +844,8 @@ mod test {
         for (w, h, cols, rows) in [
             (64, 48, 10..50, 5..40),
             (300, 300, 20..280, 30..290),
-            (40, 40, 18..19, 0..40),
+            (40, 40, 18..19, 1..39),
+            (40, 40, 3..37, 17..19),
         ] {
             let mut g = grid(w, h, plane);
             punch(&mut g, cols.clone(), rows.clone());

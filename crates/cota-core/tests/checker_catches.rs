@@ -1,5 +1,6 @@
 //! The checker must fail on each kind of broken mesh: otherwise the tests that
 //! rely on it prove nothing.
+#![allow(clippy::unwrap_used, reason = "tests unwrap to fail loudly")]
 
 use cota_core::{
     check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, Mesh, Violation,

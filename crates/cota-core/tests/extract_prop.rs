@@ -1,6 +1,7 @@
 //! Property tests: on random grids of random sizes (including 2×2, 2×N and
 //! primes), every extraction passes the invariant checker with its bound, and
 //! budgets are respected.
+#![allow(clippy::unwrap_used, reason = "tests unwrap to fail loudly")]
 
 use cota_core::{check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid};
 use proptest::prelude::*;

@@ -51,6 +51,7 @@ const SUPPORTED_COMPRESSIONS: &str = "none (1), LZW (5), Deflate (8, 32946), Pac
 
 /// Decodes the content of one GeoTIFF. `path` supplies the name.
 pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
+    check_first_directory(bytes)?;
     let mut dec = Decoder::new(Cursor::new(bytes))
         .map_err(|e| tiff_error(e, "reading the TIFF header and first image directory"))?;
     let layout = Layout::read(&mut dec)?;
@@ -74,6 +75,56 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<De
         nodata: nodata.map(|v| nodata::effective_nodata(layout.data_type, v)),
         path: path.to_path_buf(),
     })
+}
+
+/// Checks that the first image directory (IFD) lies inside the file, so that
+/// truncated and garbage files get a message with the numbers. Classic TIFF:
+/// offset u32 at byte 4, then a u16 entry count, 12 bytes per entry and a u32
+/// next-IFD offset. BigTIFF (version 43): offset u64 at byte 8, then a u64
+/// count, 20 bytes per entry and a u64 next offset.
+fn check_first_directory(bytes: &[u8]) -> Result<(), ReadErrorKind> {
+    let le = bytes.starts_with(b"II");
+    let uint = |at: usize, n: usize| -> Option<u64> {
+        let b = bytes.get(at..at.checked_add(n)?)?;
+        let fold = |acc: u64, x: &u8| (acc << 8) | u64::from(*x);
+        Some(if le {
+            b.iter().rev().fold(0, fold)
+        } else {
+            b.iter().fold(0, fold)
+        })
+    };
+    let len = bytes.len() as u64;
+    let big = uint(2, 2) == Some(43);
+    let (offset_at, offset_len, count_len, entry_len) =
+        if big { (8, 8, 8, 20) } else { (4, 4, 2, 12) };
+    let Some(offset) = uint(offset_at, offset_len) else {
+        return Err(malformed(
+            format!("a TIFF header of {} bytes", offset_at + offset_len),
+            format!("{len} bytes"),
+        ));
+    };
+    if offset == 0 {
+        return Err(malformed("the offset of a first image directory", "0"));
+    }
+    let Some(count) = usize::try_from(offset)
+        .ok()
+        .and_then(|o| uint(o, count_len))
+    else {
+        return Err(malformed(
+            format!("the first image directory at byte {offset}"),
+            format!("a file of {len} bytes (truncated?)"),
+        ));
+    };
+    let size = count
+        .saturating_mul(entry_len)
+        .saturating_add(2 * offset_len as u64);
+    if offset.saturating_add(size) > len {
+        return Err(malformed(
+            format!("an image directory of {count} entries ({size} bytes) at byte {offset}"),
+            format!("a file of {len} bytes (truncated?)"),
+        ));
+    }
+    Ok(())
 }
 
 /// Turns a `tiff` crate error into a reader error saying what was being done.
@@ -212,7 +263,13 @@ impl Layout {
             compression,
             tiled,
             chunk_width: u64::from(chunk_width),
-            chunk_height: u64::from(chunk_height).min(u64::from(h)),
+            // RowsPerStrip may exceed the height (2^32-1 means one strip);
+            // tiles keep their padded size.
+            chunk_height: if tiled {
+                u64::from(chunk_height)
+            } else {
+                u64::from(chunk_height).min(u64::from(h))
+            },
             offsets,
             byte_counts,
             decoded_samples,

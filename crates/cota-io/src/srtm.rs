@@ -87,7 +87,7 @@ fn file_name(path: &Path) -> Cow<'_, str> {
 
 /// The side n of an n×n tile of `len` bytes (2·n² with n ≥ 2), if any.
 fn side_for_len(len: u64) -> Option<u64> {
-    if len % 2 != 0 {
+    if !len.is_multiple_of(2) {
         return None;
     }
     let samples = len / 2;
@@ -232,7 +232,7 @@ fn single_hgt_member<R: Read + std::io::Seek>(
         (Some((i, name)), None) => Ok((i, name.clone())),
         (None, _) => Err(malformed(
             "a ZIP archive holding one SRTM .hgt tile",
-            format!("no .hgt member among {}", list_names(&names)),
+            format!("no .hgt member among {}", list_names(&names, "member")),
         )),
         (Some(_), Some(_)) => {
             let all: Vec<String> = names
@@ -242,26 +242,22 @@ fn single_hgt_member<R: Read + std::io::Seek>(
                 .collect();
             Err(malformed(
                 "a ZIP archive holding one SRTM .hgt tile",
-                format!("{} .hgt members: {}", all.len(), list_names(&all)),
+                list_names(&all, ".hgt member"),
             ))
         }
     }
 }
 
-/// A short list of member names for a message.
-fn list_names(names: &[String]) -> String {
+/// "N members (\"a\", \"b\", …)" for a message.
+fn list_names(names: &[String], what: &str) -> String {
     const SHOWN: usize = 5;
-    if names.is_empty() {
-        return "0 members".into();
-    }
-    let mut s = format!("{} members (", names.len());
     let shown: Vec<String> = names.iter().take(SHOWN).map(|n| format!("{n:?}")).collect();
-    s.push_str(&shown.join(", "));
-    if names.len() > SHOWN {
-        s.push_str(", …");
+    let more = if names.len() > SHOWN { ", …" } else { "" };
+    match names.len() {
+        0 => format!("0 {what}s"),
+        1 => format!("1 {what} ({}{more})", shown.join(", ")),
+        n => format!("{n} {what}s ({}{more})", shown.join(", ")),
     }
-    s.push(')');
-    s
 }
 
 /// Decompresses member `index` after checking its declared size.

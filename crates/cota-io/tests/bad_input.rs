@@ -2,6 +2,8 @@
 //! detection: every case must return an error (never panic) whose one-line
 //! message names the file and says what was expected and what was found.
 //! The bad files are generated in a temporary directory.
+// Test helpers outside #[test] functions unwrap and panic like the tests do.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 mod common;
 
@@ -306,15 +308,11 @@ fn zips_without_one_good_hgt() {
         &error(&p),
         &[
             "expected a ZIP archive holding one SRTM .hgt tile",
-            "no .hgt member",
-            "\"readme.txt\"",
+            "no .hgt member among 2 members (\"readme.txt\", \"N00E010.tif\")",
         ],
     );
     let p = zip_case(dir.path(), "two.zip", &[("a.hgt", &tile), ("b.HGT", &tile)]);
-    assert_contains(
-        &error(&p),
-        &["found 2 .hgt members", "\"a.hgt\"", "\"b.HGT\""],
-    );
+    assert_contains(&error(&p), &["found 2 .hgt members (\"a.hgt\", \"b.HGT\")"]);
     let p = zip_case(dir.path(), "odd.hgt.zip", &[("N00E010.hgt", &[0u8; 7])]);
     assert_contains(
         &error(&p),

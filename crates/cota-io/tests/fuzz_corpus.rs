@@ -3,6 +3,8 @@
 //! any crash reproducers saved there are exercised by plain `cargo test`
 //! (no nightly, no libFuzzer). Nothing may panic; seeds named as valid must
 //! decode, so that the corpus does not rot.
+// Test helpers outside #[test] functions unwrap and panic like the tests do.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 mod common;
 

@@ -1,6 +1,8 @@
 //! PNG reader: the three shared PNGs cross-checked against DATA.md, the
 //! bundled Terrarium fixture, and small encoded images for every layout and
 //! encoding (defaults, alpha voids, gray scale/offset).
+// Test helpers outside #[test] functions unwrap and panic like the tests do.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 mod common;
 

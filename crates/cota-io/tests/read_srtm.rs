@@ -1,6 +1,8 @@
 //! SRTM `.hgt` / `.hgt.zip` reader: the bundled fixture, every shared tile
 //! against DATA.md, georeference, shared tile edges, and small synthetic tiles
 //! (any n×n, names with and without a position, ZIP member selection).
+// Test helpers outside #[test] functions unwrap and panic like the tests do.
+#![allow(clippy::unwrap_used, clippy::panic)]
 
 mod common;
 
@@ -48,10 +50,14 @@ fn bundled_fixture_s29w072() {
     assert!((dy - 92.3).abs() < 0.5, "{dy}");
 }
 
+/// A tile's expected statistics and position.
+type Tile = (&'static str, (f32, f32), usize, f64, f64);
+
 #[test]
 fn shared_tiles_match_data_md() {
     let Some(data) = shared_data() else { return };
-    let tiles: [(&str, (f32, f32), usize, f64, f64); 7] = [
+    // (file, valid range, voids, south-west latitude, longitude) from DATA.md.
+    let tiles: [Tile; 7] = [
         ("N00E010.hgt", (1.0, 1005.0), 0, 0.0, 10.0),
         ("N00E011.hgt.zip", (105.0, 1023.0), 0, 0.0, 11.0),
         ("N41E001.hgt.zip", (-20.0, 1204.0), 134, 41.0, 1.0),

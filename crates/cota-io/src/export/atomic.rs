@@ -10,6 +10,10 @@
 //! (best effort: some file systems refuse it), so the rename itself survives a
 //! crash.
 //!
+//! The rename replaces the directory entry: when the target is a symbolic
+//! link, the link itself is replaced by the new file (its old destination is
+//! left alone).
+//!
 //! The temporary file is created with mode `0o666` less the process umask, the
 //! permissions an ordinary `File::create` would give, rather than the `0o600`
 //! that temporary files get by default.

@@ -7,7 +7,7 @@
 //!   case) and writes the file atomically ([`write_atomically`]).
 //! * [`write_mesh_as`] writes a file in a format chosen by the caller;
 //!   [`write_mesh_to`] and the per-format [`write_obj`], [`write_ply`],
-//!   [`write_stl`], [`write_glb`] encode to any [`Write`](std::io::Write).
+//!   [`write_stl`], [`write_glb`] encode to any [`Write`].
 //! * [`ExportOptions`]: coordinate frame, STL base, glTF index width, OBJ/PLY
 //!   normals; start from [`ExportOptions::DEFAULT`].
 //! * Errors: [`WriteError`] (names the file) wraps [`ExportError`].

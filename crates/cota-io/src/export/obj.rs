@@ -76,7 +76,13 @@ fn write_vertices<W: Write>(w: &mut W, mesh: &Mesh, frame: &Frame) -> Result<(),
     for v in &mesh.vertices {
         let [x, y, _] = frame.vertex(v);
         // Adding 0.0 turns a -0.0 into 0.0.
-        writeln!(w, "v {} {} {}", round_xy(x) + 0.0, round_xy(y) + 0.0, v.z_m)?;
+        writeln!(
+            w,
+            "v {} {} {}",
+            round_xy(x) + 0.0,
+            round_xy(y) + 0.0,
+            v.z_m + 0.0
+        )?;
     }
     Ok(())
 }

@@ -237,10 +237,12 @@ fn user_defined(kind: &str, code: Option<u16>) -> String {
 
 /// The citation at `offset..offset+count` of the ASCII params, cleaned: the
 /// `|` separators of GDAL's "GCS Name = …|Datum = …|" style become "; ", and
-/// surrounding blanks go. `None` when out of range or empty.
+/// surrounding blanks go. A count running past the end is cut short; `None`
+/// when the offset is out of range or the text empty.
 fn ascii_param(ascii: &str, offset: u16, count: u16) -> Option<String> {
     let start = usize::from(offset);
-    let raw = ascii.get(start..start + usize::from(count))?;
+    let end = (start + usize::from(count)).min(ascii.len());
+    let raw = ascii.get(start..end)?;
     let parts: Vec<&str> = raw
         .split('|')
         .map(str::trim)
@@ -402,7 +404,7 @@ mod tests {
             [1024, 0, 1, 1],
             [1026, ASCII_PARAMS, 33, 0],
             [2048, 0, 1, 32767],
-            [2049, ASCII_PARAMS, 38, 33],
+            [2049, ASCII_PARAMS, 36, 33],
             [3072, 0, 1, 32767],
         ]);
         let k = parse_key_directory(&d, ascii).unwrap();
@@ -413,7 +415,7 @@ mod tests {
         let d = directory(&[
             [1024, 0, 1, 2],
             [2048, 0, 1, 32767],
-            [2049, ASCII_PARAMS, 38, 33],
+            [2049, ASCII_PARAMS, 38, 33], // count past the end: cut short
         ]);
         let k = parse_key_directory(&d, ascii).unwrap();
         assert_eq!(

@@ -192,7 +192,7 @@ mod tests {
     fn float64_compares_exactly() {
         let nd = f64::nodata_as(parsed("-9999"));
         assert!((-9999.0_f64).height(nd).is_nan());
-        assert_eq!((-9999.000_001_f64).height(nd), -9999.000_001_f64 as f32);
+        assert_eq!((-9_999.000_001_f64).height(nd), -9_999.000_001_f64 as f32);
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! `<workspace root>/../shared/data`. Tests that need it call
 //! [`shared_data`] and return early (printing "skipped: …") when it is absent;
 //! tests on `/fixtures` always run.
-#![allow(dead_code)]
+#![allow(dead_code, clippy::unwrap_used, clippy::panic)]
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
