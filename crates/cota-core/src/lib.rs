@@ -13,6 +13,7 @@
 
 pub mod bitree;
 pub mod check;
+pub mod criteria;
 pub mod extract;
 pub mod grid;
 pub mod hierarchy;
@@ -23,6 +24,7 @@ pub mod raster;
 pub mod voids;
 
 pub use bitree::{Bitree, MeshError};
+pub use criteria::{All, Any, Criterion, Element, MaxVerticalError};
 pub use check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
 pub use extract::{ExtractOptions, Extraction, Target};
 pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
