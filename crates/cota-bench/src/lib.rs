@@ -46,13 +46,18 @@ pub struct Case {
 pub fn data_dir() -> PathBuf {
     match std::env::var_os("COTA_DATA_DIR") {
         Some(d) => PathBuf::from(d),
-        None => repo_root().join("..").join("shared").join("data"),
+        None => tidy(repo_root().join("..").join("shared").join("data")),
     }
 }
 
 /// The repository root (two levels above this crate's manifest).
 pub fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("..")
+    tidy(Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(".."))
+}
+
+/// `p` without `..` components when it exists, else `p` as it is.
+fn tidy(p: PathBuf) -> PathBuf {
+    std::fs::canonicalize(&p).unwrap_or(p)
 }
 
 /// Loads every benchmark grid that can be found, in a fixed order (Fuji,

@@ -24,8 +24,8 @@ pub mod raster;
 pub mod voids;
 
 pub use bitree::{Bitree, MeshError};
-pub use criteria::{All, Any, Criterion, Element, MaxVerticalError};
 pub use check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
+pub use criteria::{All, Any, Criterion, Element, MaxVerticalError};
 pub use extract::{ExtractOptions, Extraction, Target};
 pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
 pub use mesh::{Mesh, MeshVertex};

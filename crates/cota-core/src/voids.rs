@@ -295,6 +295,10 @@ const ABSENT: u8 = 2;
 const COARSEST_UNKNOWNS: usize = 16;
 /// Gauss–Seidel sweeps before and after each coarse-grid correction.
 const SMOOTHING_SWEEPS: usize = 2;
+/// Scale of the Galerkin coarse operator built with piecewise-constant
+/// interpolation: 1/2 makes it agree with the operator rediscretised at twice
+/// the spacing away from the boundary.
+const GALERKIN_SCALE: f64 = 0.5;
 /// Above this many (void, border) pairs the inverse-distance border is subsampled.
 const IDW_MAX_PAIRS: usize = 100_000_000;
 
@@ -306,8 +310,10 @@ struct Unknown {
     /// Column and row inside the level (without the padding).
     x: u32,
     y: u32,
-    /// Sum of the weights of its non-absent neighbours.
-    wsum: f64,
+    /// Coupling to the west, east, north and south neighbours (0 for absent ones).
+    w: [f32; 4],
+    /// Diagonal of its equation: the couplings to all non-absent neighbours.
+    diag: f64,
     /// Right-hand side of its equation.
     rhs: f64,
 }
@@ -316,11 +322,12 @@ struct Unknown {
 /// (Dirichlet values), unknown cells, and absent cells that take no part
 /// (outside the component and its border).
 ///
-/// At unknown cell i the equation is Σⱼ wᵢⱼ (uᵢ − uⱼ) = fᵢ over its non-absent
-/// 4-neighbours j, with wᵢⱼ = `wx` across columns and `wy` across rows. On the
-/// finest level f = 0 and the known cells hold the border heights; on coarser
-/// levels it is the error equation: known cells hold 0 and f is the restricted
-/// residual.
+/// At unknown cell i the equation is dᵢ uᵢ − Σⱼ wᵢⱼ uⱼ = fᵢ over its
+/// 4-neighbours j. On the finest level wᵢⱼ = 1/dx² across columns and 1/dy²
+/// across rows for non-absent neighbours, dᵢ = Σⱼ wᵢⱼ, f = 0 and the known
+/// cells hold the border heights. Coarser levels hold the error equation: known
+/// cells hold 0, f is the restricted residual and the coefficients are the
+/// Galerkin product of the finer ones (see [`Level::coarsen_error`]).
 ///
 /// The arrays have a frame of absent cells around the `width`×`height` box so
 /// that every unknown has four neighbours in range, and absent cells hold 0, so
@@ -335,15 +342,11 @@ struct Level {
     /// The unknowns, red cells ((x + y) even) first, each colour in raster order:
     /// one pass in this order is a red–black Gauss–Seidel sweep.
     unknowns: Vec<Unknown>,
-    /// Weight of the west and east neighbours, 1/dx².
-    wx: f64,
-    /// Weight of the north and south neighbours, 1/dy².
-    wy: f64,
 }
 
 impl Level {
     /// An all-absent level of `width`×`height` cells.
-    fn new(width: usize, height: usize, wx: f64, wy: f64) -> Level {
+    fn new(width: usize, height: usize) -> Level {
         let stride = width + 2;
         Level {
             width,
@@ -352,8 +355,6 @@ impl Level {
             state: vec![ABSENT; stride * (height + 2)],
             value: vec![0.0; stride * (height + 2)],
             unknowns: Vec::new(),
-            wx,
-            wy,
         }
     }
 
@@ -378,20 +379,40 @@ impl Level {
             at: i,
             x: x as u32,
             y: y as u32,
-            wsum: 0.0,
+            w: [0.0; 4],
+            diag: 0.0,
             rhs: 0.0,
         });
     }
 
-    /// Computes each unknown's weight sum and puts the unknowns in red–black order.
-    fn finish(&mut self) {
-        let present = |s: u8| if s == ABSENT { 0.0 } else { 1.0 };
+    /// Padded index offsets of the west, east, north and south neighbours.
+    fn offsets(&self) -> [isize; 4] {
+        let s = self.stride as isize;
+        [-1, 1, -s, s]
+    }
+
+    /// Sets the Laplace coefficients of the finest level (weights `wx` across
+    /// columns and `wy` across rows to non-absent neighbours) and puts the
+    /// unknowns in red–black order.
+    fn finish(&mut self, wx: f64, wy: f64) {
+        let offsets = self.offsets();
         for u in &mut self.unknowns {
-            let i = u.at;
-            u.wsum = self.wx * (present(self.state[i - 1]) + present(self.state[i + 1]))
-                + self.wy
-                    * (present(self.state[i - self.stride]) + present(self.state[i + self.stride]));
+            let mut diag = 0.0;
+            for (k, off) in offsets.iter().enumerate() {
+                let j = u.at.wrapping_add_signed(*off);
+                if self.state[j] != ABSENT {
+                    let w = if k < 2 { wx } else { wy };
+                    u.w[k] = w as f32;
+                    diag += f64::from(w as f32);
+                }
+            }
+            u.diag = diag;
         }
+        self.order();
+    }
+
+    /// Puts the unknowns in red–black order.
+    fn order(&mut self) {
         self.unknowns
             .sort_unstable_by_key(|u| ((u.x + u.y) % 2, u.y, u.x));
     }
@@ -399,16 +420,17 @@ impl Level {
     /// One red–black Gauss–Seidel sweep with over-relaxation `omega`; returns
     /// the largest difference between an unknown and the value its equation asks for.
     fn sweep(&mut self, omega: f64) -> f64 {
-        let (s, wx, wy) = (self.stride, self.wx, self.wy);
+        let s = self.stride;
         let v = &mut self.value;
         let mut max_change = 0.0f64;
         for u in &self.unknowns {
             let i = u.at;
-            if u.wsum <= 0.0 {
+            if u.diag <= 0.0 {
                 continue;
             }
-            let sum = u.rhs + wx * (v[i - 1] + v[i + 1]) + wy * (v[i - s] + v[i + s]);
-            let d = sum / u.wsum - v[i];
+            let [ww, we, wn, ws] = u.w.map(f64::from);
+            let sum = u.rhs + ww * v[i - 1] + we * v[i + 1] + wn * v[i - s] + ws * v[i + s];
+            let d = sum / u.diag - v[i];
             v[i] += omega * d;
             max_change = max_change.max(d.abs());
         }
@@ -419,7 +441,8 @@ impl Level {
     #[inline]
     fn residual(&self, u: &Unknown) -> f64 {
         let (i, s, v) = (u.at, self.stride, &self.value);
-        u.rhs + self.wx * (v[i - 1] + v[i + 1]) + self.wy * (v[i - s] + v[i + s]) - u.wsum * v[i]
+        let [ww, we, wn, ws] = u.w.map(f64::from);
+        u.rhs + ww * v[i - 1] + we * v[i + 1] + wn * v[i - s] + ws * v[i + s] - u.diag * v[i]
     }
 
     /// The over-relaxation factor for sweeps alone on this level: the optimum
@@ -454,41 +477,82 @@ impl Level {
         (known, unknown, sum)
     }
 
-    /// A coarse level of half the size (weights for twice the spacing) where a
-    /// block with any known cell is known (with their mean when `values`, else
-    /// 0), else unknown if it holds unknowns, else absent. Known cells win so
-    /// that no part of the boundary is lost and no coarse problem is singular.
-    fn coarsen(&self, values: bool) -> Level {
-        let mut coarse = Level::new(
-            self.width.div_ceil(2),
-            self.height.div_ceil(2),
-            self.wx / 4.0,
-            self.wy / 4.0,
-        );
+    /// The pull step of [`start_estimate`]: a coarse level of half the size
+    /// where a block with any known cell is known with their mean, else unknown
+    /// if it holds unknowns, else absent.
+    fn coarsen_values(&self) -> Level {
+        let mut coarse = Level::new(self.width.div_ceil(2), self.height.div_ceil(2));
         for cy in 0..coarse.height {
             for cx in 0..coarse.width {
                 match self.block(cx, cy) {
                     (0, 0, _) => {}
                     (0, _, _) => coarse.set_unknown(cx, cy),
-                    (known, _, sum) => {
-                        let v = if values { sum / f64::from(known) } else { 0.0 };
-                        coarse.set_known(cx, cy, v);
-                    }
+                    (known, _, sum) => coarse.set_known(cx, cy, sum / f64::from(known)),
                 }
             }
         }
-        coarse.finish();
         coarse
     }
 
     /// The coarse level of the error equation, or `None` when this level is
-    /// small enough to solve directly or the coarse level has no unknowns.
+    /// small enough to solve directly.
+    ///
+    /// A 2×2 block holding an unknown is unknown, else known (error 0) if it
+    /// holds known cells, else absent. The coefficients are the Galerkin product
+    /// Pᵀ A P for the piecewise-constant interpolation P (couplings inside a
+    /// block cancel, couplings between blocks add up, couplings to known cells
+    /// stay on the diagonal), times [`GALERKIN_SCALE`]. Built this way the
+    /// boundary keeps its true place on every level and no coarse problem is
+    /// singular.
     fn coarsen_error(&self) -> Option<Level> {
         if self.unknowns.len() <= COARSEST_UNKNOWNS {
             return None;
         }
-        let coarse = self.coarsen(false);
-        (!coarse.unknowns.is_empty()).then_some(coarse)
+        let mut coarse = Level::new(self.width.div_ceil(2), self.height.div_ceil(2));
+        for cy in 0..coarse.height {
+            for cx in 0..coarse.width {
+                match self.block(cx, cy) {
+                    (0, 0, _) => {}
+                    (_, 0, _) => coarse.set_known(cx, cy, 0.0),
+                    _ => coarse.set_unknown(cx, cy),
+                }
+            }
+        }
+        // Accumulate the coefficients by coarse cell, in f64.
+        let mut diag = vec![0.0f64; coarse.value.len()];
+        let mut off = vec![[0.0f64; 4]; coarse.value.len()];
+        let offsets = self.offsets();
+        for u in &self.unknowns {
+            let (x, y) = (u.x as usize, u.y as usize);
+            let c = coarse.at(x / 2, y / 2);
+            for (k, &d) in offsets.iter().enumerate() {
+                let w = f64::from(u.w[k]);
+                if w == 0.0 {
+                    continue;
+                }
+                let j = u.at.wrapping_add_signed(d);
+                if self.state[j] == UNKNOWN {
+                    // An unknown neighbour is inside the box (the frame is absent).
+                    let (nx, ny) = match k {
+                        0 => (x - 1, y),
+                        1 => (x + 1, y),
+                        2 => (x, y - 1),
+                        _ => (x, y + 1),
+                    };
+                    if coarse.at(nx / 2, ny / 2) == c {
+                        continue;
+                    }
+                    off[c][k] += w;
+                }
+                diag[c] += w;
+            }
+        }
+        for cu in &mut coarse.unknowns {
+            cu.diag = GALERKIN_SCALE * diag[cu.at];
+            cu.w = off[cu.at].map(|w| (GALERKIN_SCALE * w) as f32);
+        }
+        coarse.order();
+        Some(coarse)
     }
 
     /// Sets (`add` false) or corrects (`add` true) every unknown with the
@@ -634,7 +698,7 @@ fn fine_level(
     let y0 = c.rows.0.saturating_sub(1);
     let x1 = (c.cols.1 + 1).min(grid.width() - 1);
     let y1 = (c.rows.1 + 1).min(grid.height() - 1);
-    let mut level = Level::new(x1 - x0 + 1, y1 - y0 + 1, wx, wy);
+    let mut level = Level::new(x1 - x0 + 1, y1 - y0 + 1);
     level.unknowns.reserve_exact(c.cells.len());
     let mut range = (f64::INFINITY, f64::NEG_INFINITY);
     for &(col, row) in &c.cells {
@@ -660,7 +724,7 @@ fn fine_level(
             border(col, row + 1);
         }
     }
-    level.finish();
+    level.finish(wx, wy);
     (level, (x0, y0), range)
 }
 
@@ -696,6 +760,13 @@ fn harmonic(mut fine: Level, opts: &FillOptions) -> (Level, Solved) {
         };
         changes = [change, changes[0], changes[1]];
         s.finest_sweeps += 1;
+        if levels[0].unknowns.len() > 100_000 && std::env::var_os("COTA_DEBUG_FILL").is_some() {
+            eprintln!(
+                "DBG cycle {} change {change:e} levels {}",
+                s.finest_sweeps,
+                levels.len()
+            );
+        }
     }
     s.last_change_m = if s.finest_sweeps == 0 {
         0.0
@@ -753,7 +824,7 @@ fn v_cycle(levels: &mut [Level]) -> usize {
 /// which start at the mean of the known cells, then interpolated back up.
 fn start_estimate(level: &mut Level) {
     if level.unknowns.len() > COARSEST_UNKNOWNS {
-        let mut coarse = level.coarsen(true);
+        let mut coarse = level.coarsen_values();
         if !coarse.unknowns.is_empty() {
             start_estimate(&mut coarse);
         }

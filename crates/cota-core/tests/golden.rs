@@ -6,7 +6,10 @@ use cota_core::{Bitree, ExtractOptions, GeoRef, HeightGrid, Mesh};
 
 fn run(w: usize, h: usize, heights: Vec<f32>, e: f64) -> (Vec<(u32, u32)>, Vec<[u32; 3]>) {
     let g = HeightGrid::new(w, h, heights, GeoRef::unreferenced(1.0)).unwrap();
-    let Mesh { vertices, triangles } = Bitree::build(&g)
+    let Mesh {
+        vertices,
+        triangles,
+    } = Bitree::build(&g)
         .unwrap()
         .extract(&ExtractOptions::max_error_m(e))
         .unwrap()
@@ -30,10 +33,31 @@ fn bump_on_five_by_five() {
     assert_eq!(errs, expected);
 
     let (v, t) = run(5, 5, heights.clone(), 3.9);
-    assert_eq!(v, [(0, 0), (2, 0), (4, 0), (1, 1), (0, 2), (2, 2), (0, 4), (4, 4)]);
+    assert_eq!(
+        v,
+        [
+            (0, 0),
+            (2, 0),
+            (4, 0),
+            (1, 1),
+            (0, 2),
+            (2, 2),
+            (0, 4),
+            (4, 4)
+        ]
+    );
     assert_eq!(
         t,
-        [[5, 2, 1], [1, 0, 3], [5, 1, 3], [7, 2, 5], [6, 7, 5], [4, 5, 3], [0, 4, 3], [6, 5, 4]]
+        [
+            [5, 2, 1],
+            [1, 0, 3],
+            [5, 1, 3],
+            [7, 2, 5],
+            [6, 7, 5],
+            [4, 5, 3],
+            [0, 4, 3],
+            [6, 5, 4]
+        ]
     );
     // At 4 m the bump is within tolerance: the two root triangles.
     let (v, t) = run(5, 5, heights, 4.0);

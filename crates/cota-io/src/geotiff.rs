@@ -20,7 +20,7 @@
 //!   see [`nodata`]; NaN float samples are always voids.
 //!
 //! Before anything large is allocated the header's dimensions are checked
-//! against [`cota_core::MAX_SAMPLES`], and every chunk to be decoded must lie
+//! against [`MAX_SAMPLES`], and every chunk to be decoded must lie
 //! inside the file and be able to expand to its decoded size at the
 //! compression's largest possible ratio; so a small or truncated file cannot
 //! make the reader allocate gigabytes.
@@ -117,7 +117,7 @@ fn check_first_directory(bytes: &[u8]) -> Result<(), ReadErrorKind> {
     };
     let size = count
         .saturating_mul(entry_len)
-        .saturating_add(2 * offset_len as u64);
+        .saturating_add((count_len + offset_len) as u64);
     if offset.saturating_add(size) > len {
         return Err(malformed(
             format!("an image directory of {count} entries ({size} bytes) at byte {offset}"),
@@ -132,7 +132,7 @@ fn tiff_error(err: TiffError, context: &str) -> ReadErrorKind {
     match err {
         TiffError::IoError(e) if e.kind() == io::ErrorKind::UnexpectedEof => malformed(
             format!("more data while {context}"),
-            format!("the end of the file ({e})"),
+            format!("the data ends early ({e})"),
         ),
         TiffError::IoError(e) => malformed(format!("valid data while {context}"), e),
         TiffError::UnsupportedError(e) => ReadErrorKind::Unsupported {
@@ -306,6 +306,12 @@ impl Layout {
             ));
         }
         let (cw, ch) = (self.chunk_width as usize, self.chunk_height as usize);
+        if cw == 0 || ch == 0 {
+            return Err(malformed(
+                format!("a non-empty {} size", self.chunk_kind()),
+                format!("{cw}x{ch}"),
+            ));
+        }
         let across = self.width.div_ceil(cw);
         let down = self.height.div_ceil(ch);
         let count = across * down;
@@ -608,7 +614,7 @@ fn read_chunk(
         heights,
         grid_width: layout.width,
         chunk,
-        samples: usize::from(layout.decoded_samples),
+        samples: usize::from(layout.decoded_samples.max(1)),
         band: usize::from(chunk.pick),
     };
     if chunk.sparse {
@@ -708,6 +714,9 @@ fn scale_heights(heights: &mut [f32], to_m: f32) {
 /// Flips a grid stored south-up (pixel_y > 0) or east-to-west (pixel_x < 0)
 /// so that row 0 is north and column 0 west, adjusting the origin.
 fn north_up(heights: &mut [f32], width: usize, height: usize, g: &mut GeoRef) {
+    if width == 0 || heights.len() != width * height {
+        return;
+    }
     let span = |n: usize| match g.pixel_is {
         PixelIs::Area => n as f64,
         PixelIs::Point => n as f64 - 1.0,

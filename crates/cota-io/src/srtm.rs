@@ -124,7 +124,7 @@ fn be_i16_to_heights(data: &[u8]) -> Vec<f32> {
 
 /// The error for a byte count that is not 2·n².
 fn size_error(len: u64, what: &str) -> ReadErrorKind {
-    let n = (len / 2).isqrt();
+    let n = u128::from((len / 2).isqrt());
     let (lo, hi) = (n.max(2), n.max(1) + 1);
     let nearest = if lo == hi {
         format!("{} for {hi}²", 2 * hi * hi)
@@ -330,6 +330,8 @@ mod test {
         assert!(m.contains("found 1000 bytes"), "{m}");
         assert!(m.contains("2884802"), "{m}");
         assert!(m.contains("968 for 22²"), "{m}");
+        let m = size_error(u64::MAX, "").to_string();
+        assert!(m.contains("found 18446744073709551615 bytes"), "{m}");
     }
 
     #[test]

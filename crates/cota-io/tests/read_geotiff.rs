@@ -363,6 +363,10 @@ fn random_bytes_named_tif() {
     let err = err_bytes(&bytes, "noise.tif");
     assert!(err.starts_with("noise.tif: expected"), "{err}");
     assert!(err.contains("found"), "{err}");
+    assert_eq!(
+        err_bytes(b"II*\0\x08\0\0", "short.tif"),
+        "short.tif: expected a TIFF header of 8 bytes, found 7 bytes"
+    );
     // Random bytes behind a TIFF signature reach the GeoTIFF reader.
     for head in [&b"II*\0"[..], &b"MM\0*"[..]] {
         let mut b = head.to_vec();
@@ -787,6 +791,42 @@ fn horizontal_predictor_on_floats_adds_bit_patterns() {
         .strips(vec![strip]);
     let (got, _) = heights(&tiff);
     assert_eq!(got, row);
+}
+
+/// A zlib stream of `data` in one stored (uncompressed) deflate block.
+fn zlib_stored(data: &[u8]) -> Vec<u8> {
+    let len = data.len() as u16;
+    let mut z = vec![0x78, 0x01, 0x01];
+    z.extend_from_slice(&len.to_le_bytes());
+    z.extend_from_slice(&(!len).to_le_bytes());
+    z.extend_from_slice(data);
+    let (mut a, mut b) = (1u32, 0u32);
+    for &x in data {
+        a = (a + u32::from(x)) % 65521;
+        b = (b + a) % 65521;
+    }
+    z.extend_from_slice(&((b << 16) | a).to_be_bytes());
+    z
+}
+
+#[test]
+fn deflate_codes_8_and_32946() {
+    let samples: Vec<u8> = [-5i16, 0, 7, 3000]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    for code in [8u16, 32946] {
+        let tiff = Builder::le()
+            .long(256, &[2])
+            .long(257, &[2])
+            .short(258, &[16])
+            .short(259, &[code])
+            .short(262, &[1])
+            .short(339, &[2])
+            .strips(vec![zlib_stored(&samples)]);
+        let (got, _) = heights(&tiff);
+        assert_eq!(got, [-5.0, 0.0, 7.0, 3000.0], "code {code}");
+    }
 }
 
 /// 5×3 image in 4×2 tiles (2 across, 2 down, partial on both edges), two

@@ -141,3 +141,20 @@ fn every_layout_and_encoding() {
     assert!(dem.grid.heights()[0].is_nan());
     assert_eq!(dem.grid.heights()[1], 9.0);
 }
+
+#[test]
+fn images_beyond_the_png_crate_default_memory_limit() {
+    // 6000² 16-bit gray = 72 MB of pixels, past the png crate's 64 MiB default.
+    let (w, h) = (6000u32, 6000u32);
+    let mut data = vec![0u8; (w * h * 2) as usize];
+    data[1] = 7;
+    let bytes = png_bytes(w, h, ColorType::Grayscale, BitDepth::Sixteen, &data);
+    drop(data);
+    let dir = tempfile::tempdir().unwrap();
+    let dem = read_with(
+        &write_file(dir.path(), "big.png", &bytes),
+        &ReadOptions::DEFAULT,
+    );
+    assert_eq!(dem.grid.len(), 36_000_000);
+    assert_eq!(dem.grid.valid_range(), Some((0.0, 7.0)));
+}
