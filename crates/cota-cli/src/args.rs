@@ -18,6 +18,8 @@ pub enum Command {
     Info(InfoArgs),
     /// Build a mesh with a guaranteed maximum error, or within a triangle budget.
     Mesh(MeshArgs),
+    /// Regenerate paper 000's Table 1 and Table 2: bitree vs restricted quadtree.
+    Compare(CompareArgs),
 }
 
 /// How to read and combine the input files.
@@ -126,6 +128,212 @@ pub struct MeshArgs {
     #[arg(long)]
     pub check: bool,
     /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// The hierarchy: the bitree, or the restricted quadtree baseline (Pajarola
+    /// 1998; --criterion max-error with --mode conforming only, no budget).
+    #[arg(long, value_enum, default_value_t = HierarchyArg::Bitree)]
+    pub hierarchy: HierarchyArg,
+    /// Quadtree leaves (with --hierarchy quadtree): fans around their centre,
+    /// or also 2 halves without the centre where the bound allows.
+    #[arg(long, value_enum, default_value_t = QuadVariant::Templates)]
+    pub quadtree_leaves: QuadVariant,
+    #[command(flatten)]
+    pub refine: RefineArgs,
+}
+
+/// The hierarchy `cota mesh` uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum HierarchyArg {
+    /// Right-triangle bitree (paper 000).
+    Bitree,
+    /// Restricted quadtree (Pajarola 1998), the baseline of `cota compare`.
+    Quadtree,
+}
+
+/// Fictitious points and refinement criteria (`cota mesh`). The default,
+/// `--mode conforming --criterion max-error`, uses the fast error-map path.
+#[derive(Debug, Args)]
+#[command(next_help_heading = "Refinement")]
+pub struct RefineArgs {
+    /// conforming: every vertex has its real height. fictitious: points needed
+    /// only to complete the hierarchy get the height interpolated on their
+    /// diagonal and are not transmitted (paper 000), without T-junctions.
+    /// fictitious-faithful: the paper's variant, with hanging vertices.
+    #[arg(long, value_enum, default_value_t = ModeArg::Conforming)]
+    pub mode: ModeArg,
+    /// What drives refinement. max-error and euclidean use --max-error (metres);
+    /// curvature, light and paper003 use --tolerance; view uses --max-error-px.
+    #[arg(long, value_enum, default_value_t = CriterionArg::MaxError)]
+    pub criterion: CriterionArg,
+    /// Tolerance of curvature and light (1/m, accumulated curvature) and of
+    /// paper003 (1/m2). Default: 1e-4 of the grid's total accumulated
+    /// curvature (paper003: divided by the terrain's diagonal in metres).
+    #[arg(long, value_name = "T")]
+    pub tolerance: Option<f64>,
+    /// Observer position in metres, local frame (x east, y north, z up, origin
+    /// at the south-west sample). Required by view, paper001 and paper003.
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_negative_numbers = true)]
+    pub observer: Option<[f64; 3]>,
+    /// View direction (view) or direction of motion (paper003).
+    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_vec3, allow_negative_numbers = true, default_value = "0,1,0")]
+    pub look: [f64; 3],
+    /// Vertical field of view in degrees (view).
+    #[arg(long, value_name = "DEG", default_value_t = 60.0)]
+    pub fov_deg: f64,
+    /// Viewport height in pixels (view).
+    #[arg(long, value_name = "PX", default_value_t = 1080.0)]
+    pub viewport_px: f64,
+    /// Largest projected vertical error in pixels (view).
+    #[arg(long, value_name = "PX", default_value_t = 1.0)]
+    pub max_error_px: f64,
+    /// Direction towards the light (light).
+    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_vec3, allow_negative_numbers = true, default_value = "1,1,1")]
+    pub light: [f64; 3],
+    /// Weight of pure curvature in [0, 1] (light): accept when K·(alpha + (1 − alpha)·I) <= T.
+    #[arg(long, value_name = "A", default_value_t = 0.5)]
+    pub alpha: f64,
+    /// Size factor: fraction of the terrain's diagonal (size, paper001).
+    #[arg(long, value_name = "F", default_value_t = 0.01)]
+    pub size_factor: f64,
+    /// Distance factor: fraction of the largest distance (paper001).
+    #[arg(long, value_name = "F", default_value_t = 0.8)]
+    pub distance_factor: f64,
+    /// Curvature factor: fraction of the grid's accumulated curvature (paper001).
+    #[arg(long, value_name = "F", default_value_t = 0.2)]
+    pub curvature_factor: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ModeArg {
+    /// Every vertex carries its sample's height (no fictitious points).
+    Conforming,
+    /// Fictitious points, watertight: no T-junction, same surface.
+    Fictitious,
+    /// Fictitious points as in paper 000: hanging vertices (line triangles).
+    FictitiousFaithful,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CriterionArg {
+    /// Exact vertical error <= --max-error at every sample.
+    MaxError,
+    /// 3D distance of the samples to the triangle's plane <= --max-error (paper 000).
+    Euclidean,
+    /// Accumulated curvature <= --tolerance (papers 002-004).
+    Curvature,
+    /// Longest edge <= --size-factor x terrain diagonal (paper 001).
+    Size,
+    /// Curvature masked by illumination (paper 002): --light, --alpha, --tolerance.
+    Light,
+    /// Screen-space error <= --max-error-px from --observer looking --look.
+    View,
+    /// Near AND large AND curved (paper 001): --observer and the factors.
+    Paper001,
+    /// Curvature x cos(theta) / distance <= --tolerance (paper 003): --observer, --look.
+    Paper003,
+}
+
+/// Parses `X,Y,Z`.
+fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("expected three numbers X,Y,Z, found {s:?} ({e})"))?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([*x, *y, *z]),
+        _ => Err(format!("expected three finite numbers X,Y,Z, found {s:?}")),
+    }
+}
+
+/// A bitree mode compared by `cota compare`.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum BitreeMode {
+    /// The conforming extraction of `cota mesh` (every vertex real).
+    Conforming,
+    /// Fictitious points, no T-junction.
+    Fictitious,
+    /// Fictitious points as in paper 000 (hanging vertices).
+    Faithful,
+}
+
+/// A restricted-quadtree variant compared by `cota compare`.
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum QuadVariant {
+    /// Every leaf is a fan around its centre (the 16 templates, papers 002-004).
+    Templates,
+    /// Leaves without finer neighbours may be 2 triangles without their centre
+    /// (Pajarola 1998's unselected block centres).
+    CentreWhenNeeded,
+}
+
+/// A window of a grid: first column, first row, width, height (samples).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Crop {
+    pub col: usize,
+    pub row: usize,
+    pub width: usize,
+    pub height: usize,
+}
+
+fn parse_crop(s: &str) -> Result<Crop, String> {
+    let v: Vec<usize> = s
+        .split(',')
+        .map(|p| p.trim().parse::<usize>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("expected COL,ROW,W,H as four whole numbers, found {s:?} ({e})"))?;
+    match v[..] {
+        [col, row, width, height] => Ok(Crop {
+            col,
+            row,
+            width,
+            height,
+        }),
+        _ => Err(format!(
+            "expected COL,ROW,W,H as four whole numbers, found {s:?}"
+        )),
+    }
+}
+
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Error tolerances in % of the grid's height range (paper 000's Table 1).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0,1,2,7,10,14,50",
+        value_name = "PCT"
+    )]
+    pub tolerances: Vec<f64>,
+    /// Compare on a window of the input: first column, first row, width, height.
+    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop)]
+    pub crop: Option<Crop>,
+    /// Bitree modes to compare with the quadtree.
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "conforming,fictitious,faithful"
+    )]
+    pub modes: Vec<BitreeMode>,
+    /// Restricted-quadtree variants to compare.
+    #[arg(
+        long,
+        value_enum,
+        value_delimiter = ',',
+        default_value = "templates,centre-when-needed"
+    )]
+    pub quadtree: Vec<QuadVariant>,
+    /// Void policy.
+    #[arg(long, value_enum, default_value_t = Voids::Fill)]
+    pub voids: Voids,
+    /// Run the invariant checker on every mesh.
+    #[arg(long)]
+    pub check: bool,
+    /// Print one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,
 }

@@ -6,10 +6,12 @@ use std::process::ExitCode;
 use clap::Parser;
 
 mod args;
+mod compare;
 mod info;
 mod input;
 mod mesh;
 mod progress;
+mod refine;
 
 fn main() -> ExitCode {
     match run() {
@@ -26,5 +28,6 @@ fn run() -> anyhow::Result<ExitCode> {
     match cli.command {
         args::Command::Info(a) => info::run(&a),
         args::Command::Mesh(a) => mesh::run(&a),
+        args::Command::Compare(a) => compare::run(&a),
     }
 }

@@ -12,9 +12,11 @@ use cota_core::{check_mesh, measure, Bitree, CheckOptions, ExtractOptions, Metri
 use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use serde_json::json;
 
-use crate::args::{CoordsArg, MeshArgs, Voids};
+use crate::args::{CoordsArg, HierarchyArg, MeshArgs, QuadVariant, Voids};
 use crate::input::load;
 use crate::progress;
+use crate::refine;
+use cota_core::quadtree::{QuadOptions, QuadTree};
 
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
@@ -58,6 +60,13 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     if a.max_triangles == Some(0) {
         anyhow::bail!("--max-triangles: expected at least 2 triangles, found 0");
     }
+    crate::refine::validate(&a.refine, a.max_triangles)?;
+    let quadtree = a.hierarchy == HierarchyArg::Quadtree;
+    if quadtree && (!refine::is_fast(&a.refine) || a.max_triangles.is_some()) {
+        anyhow::bail!(
+            "--hierarchy quadtree: expected --criterion max-error, --mode conforming and --max-error (no --max-triangles)"
+        );
+    }
     let opts = match (a.max_error, a.max_triangles) {
         (_, Some(n)) => ExtractOptions::max_triangles(n),
         (Some(e), None) => ExtractOptions::max_error_m(e),
@@ -77,23 +86,62 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         fill_voids(&mut grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")?;
     let fill_ms = ms(t);
 
-    let t = Instant::now();
-    let pb = progress::bar(0, "building");
-    let tin = Bitree::build_with_progress(&grid, &|done, total| {
-        pb.set_length(total as u64);
-        pb.set_position(done as u64);
-    })?;
-    pb.finish_and_clear();
-    let build_ms = ms(t);
+    let (mesh, threshold_m, build_ms, extract_ms, check_opts, generic) = if quadtree {
+        let t = Instant::now();
+        let qt = QuadTree::build(&grid)?;
+        let build_ms = ms(t);
+        let t = Instant::now();
+        let e = a.max_error.unwrap_or(1.0);
+        let leaves = QuadOptions::DEFAULT
+            .with_centre_when_needed(matches!(a.quadtree_leaves, QuadVariant::CentreWhenNeeded));
+        let x = qt.refine_with(&cota_core::MaxVerticalError { max_error_m: e }, &leaves);
+        let extract_ms = ms(t);
+        let check = CheckOptions::conforming(e);
+        (x.mesh, Some(e), build_ms, extract_ms, check, None)
+    } else if refine::is_fast(&a.refine) {
+        let t = Instant::now();
+        let pb = progress::bar(0, "building");
+        let tin = Bitree::build_with_progress(&grid, &|done, total| {
+            pb.set_length(total as u64);
+            pb.set_position(done as u64);
+        })?;
+        pb.finish_and_clear();
+        let build_ms = ms(t);
 
-    let t = Instant::now();
-    let x = tin.extract(&opts)?;
-    let extract_ms = ms(t);
-    let mesh = x.mesh;
+        let t = Instant::now();
+        let x = tin.extract(&opts)?;
+        let extract_ms = ms(t);
+        let check = CheckOptions::conforming(x.threshold_m);
+        (
+            x.mesh,
+            Some(x.threshold_m),
+            build_ms,
+            extract_ms,
+            check,
+            None,
+        )
+    } else {
+        // Generic criterion-driven refinement: no error map to build.
+        let t = Instant::now();
+        let mut o = refine::run(&a.refine, a.max_error.unwrap_or(1.0), &grid)?;
+        let extract_ms = ms(t);
+        let mesh = std::mem::take(&mut o.mesh);
+        (mesh, o.threshold_m, 0.0, extract_ms, o.check, Some(o))
+    };
+    let (transmitted, fictitious, line_triangles) = match &generic {
+        Some(o) => (o.transmitted_points, o.fictitious_points, o.line_triangles),
+        None => (mesh.vertex_count(), 0, 0),
+    };
+    let criterion = match &generic {
+        Some(o) => o.criterion.clone(),
+        None => cota_core::Criterion::name(&cota_core::MaxVerticalError {
+            max_error_m: threshold_m.unwrap_or(0.0),
+        }),
+    };
 
     let t = Instant::now();
     let metrics: Metrics = if a.check {
-        check_mesh(&grid, &mesh, &CheckOptions::conforming(x.threshold_m))
+        check_mesh(&grid, &mesh, &check_opts)
             .context("the invariant checker rejected the mesh (this is a bug in cota)")?
             .metrics
     } else {
@@ -127,8 +175,15 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "height": grid.height(),
         "voids_filled": fill.filled,
         "nodata_count": nodata,
-        "threshold_m": x.threshold_m,
+        "threshold_m": threshold_m,
+        "hierarchy": if quadtree { "quadtree" } else { "bitree" },
+        "mode": refine::mode(&a.refine).name(),
+        "criterion": criterion,
+        "refine_rounds": generic.as_ref().map(|o| o.rounds),
         "vertices": mesh.vertex_count(),
+        "transmitted_points": transmitted,
+        "fictitious_points": fictitious,
+        "line_triangles": line_triangles,
         "triangles": mesh.triangle_count(),
         "full_triangles": 2 * (grid.width() - 1) * (grid.height() - 1),
         "max_error_m": metrics.max_error_m,
@@ -177,19 +232,41 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::mosaic::SeamRepor
         100.0 * f("triangles") / f("full_triangles").max(1.0),
         r["full_triangles"]
     );
+    let bound = match r["threshold_m"].as_f64() {
+        Some(b) => format!("bound {b} m"),
+        None => "no vertical bound".to_string(),
+    };
     println!(
-        "error       max {:.3} m (bound {} m), RMSE {:.3} m, mean {:.3} m",
+        "error       max {:.3} m ({bound}), RMSE {:.3} m, mean {:.3} m",
         f("max_error_m"),
-        f("threshold_m"),
         f("rmse_m"),
         f("mean_abs_error_m")
+    );
+    println!(
+        "refinement  {}, {}",
+        r["mode"].as_str().unwrap_or(""),
+        r["criterion"].as_str().unwrap_or("")
+    );
+    println!(
+        "points      {} transmitted, {} fictitious, {} line triangles",
+        r["transmitted_points"], r["fictitious_points"], r["line_triangles"]
     );
     println!(
         "volume      {:.4e} m3 between mesh and grid",
         f("volume_m3")
     );
     if r["checked"].as_bool() == Some(true) {
-        println!("check       passed: covers the grid exactly, no T-junction, bound holds at every sample");
+        let joints = if r["mode"].as_str() == Some("fictitious-faithful") {
+            "T-junctions allowed (hanging vertices, paper 000)"
+        } else {
+            "no T-junction"
+        };
+        let bound = if r["threshold_m"].is_null() {
+            ""
+        } else {
+            ", bound holds at every sample"
+        };
+        println!("check       passed: covers the grid exactly, {joints}{bound}");
     }
     println!(
         "time        read {:.1} ms, fill {:.1} ms, build {:.1} ms, extract {:.2} ms, measure {:.1} ms, write {:.1} ms",

@@ -21,7 +21,8 @@ fn check_at(g: &HeightGrid, tolerances: &[f64]) -> Vec<usize> {
     for &e in tolerances {
         let mesh = tin.extract(&ExtractOptions::max_error_m(e)).unwrap().mesh;
         let r = check_mesh(g, &mesh, &CheckOptions::conforming(e))
-            .unwrap_or_else(|err| panic!("E = {e} m: {err}"));
+            .map_err(|err| format!("E = {e} m: {err}"))
+            .unwrap();
         assert!(r.metrics.max_error_m <= e);
         counts.push(mesh.triangle_count());
     }

@@ -181,6 +181,44 @@ impl<'g> Bitree<'g> {
     pub(crate) fn err_at(&self, m: Pt) -> f32 {
         self.errors[self.hier.index(m)]
     }
+
+    /// The *own* error of the split point `m`: the largest exact `e(T)` of the
+    /// triangles of its diamond that lie inside the grid, without the values
+    /// propagated from finer levels (`+∞` when one straddles the border). `None`
+    /// when `m` splits nothing (a root corner). Used by the point accounting of
+    /// [`crate::points`] (added for `cota compare`).
+    pub(crate) fn own_error_at(&self, m: Pt) -> Option<f64> {
+        let lowbit = |v: u32| {
+            if v == 0 {
+                u32::MAX
+            } else {
+                v & v.wrapping_neg()
+            }
+        };
+        let (lx, ly) = (lowbit(m[0]), lowbit(m[1]));
+        let half = lx.min(ly);
+        if half == u32::MAX || half >= self.hier.size() {
+            return None;
+        }
+        let s = 2 * half;
+        let level = if lx == ly { Level::A(s) } else { Level::B(s) };
+        let heights = self.grid.heights();
+        let w = self.hier.width() as usize;
+        let hv = |p: Pt| heights[p[1] as usize * w + p[0] as usize] as f64;
+        let mut e = 0f64;
+        for t in diamond(level, m, self.hier.size()).into_iter().flatten() {
+            match self.hier.place(&t) {
+                Placement::Outside => continue,
+                Placement::Straddling => return Some(f64::INFINITY),
+                Placement::Inside => {}
+            }
+            e = e.max(match level {
+                Level::B(2) => triangle_error(heights, &self.hier, level, &t),
+                _ => span_error(heights, w, &t, hv(t.a), hv(t.b), hv(t.c)),
+            });
+        }
+        Some(e)
+    }
 }
 
 /// One level of the hierarchy: `A(s)` or `B(s)` (see [`crate::hierarchy`]).

@@ -4,9 +4,10 @@
 //! It proves, for a mesh over a W×H grid:
 //! 1. **vertices on samples**: every index is in range, every vertex sits on a
 //!    grid sample, no two vertices share a sample, and each vertex carries the
-//!    sample's true height (or, where allowed, a height interpolated between two
-//!    other vertices on a grid line through it: a *fictitious point*, paper
-//!    `000_ebf7e3a88dffd361.txt` §2.2);
+//!    sample's true height (or, where allowed, a *fictitious point*'s height,
+//!    paper `000_ebf7e3a88dffd361.txt` §2.2: exactly the midpoint interpolation
+//!    of its bitree diagonal, found from its position, whose two ends must be
+//!    vertices; within `f32` rounding);
 //! 2. **no degenerate or flipped triangle**: every triangle has positive area
 //!    counter-clockwise seen from above;
 //! 3. **conformity**: no directed edge appears twice (no overlap, no edge used by
@@ -24,7 +25,9 @@
 //! hanging vertices on their neighbour's edge) check 3 only forbids repeated
 //! directed edges, and coverage rests on (4) plus the per-sample coverage test.
 
+use crate::fictitious::diagonal_of;
 use crate::grid::HeightGrid;
+use crate::hierarchy::Hierarchy;
 use crate::mesh::Mesh;
 use crate::metrics::{measure, Metrics};
 
@@ -37,8 +40,10 @@ pub struct CheckOptions {
     pub max_error_m: Option<f64>,
     /// Require a conforming mesh (no T-junction). Default: true.
     pub conforming: bool,
-    /// Accept vertices whose height is interpolated on a grid line between two
-    /// other vertices (fictitious points). Default: false.
+    /// Accept fictitious points: a vertex whose height is not its sample's must
+    /// equal, within `f32` rounding, the midpoint interpolation of its
+    /// hierarchy diagonal, both ends being mesh vertices (their mesh heights
+    /// are used). Default: false.
     pub allow_fictitious: bool,
 }
 
@@ -137,6 +142,36 @@ pub enum Violation {
         got: f32,
         /// Height in the grid.
         expected: f32,
+    },
+    /// A vertex with an invented height that is not a fictitious point: its
+    /// hierarchy diagonal's ends are not both mesh vertices.
+    #[error("vertex {vertex} at column {col}, row {row} has height {got} m, the sample has {expected} m, and it is not a fictitious point (the ends of its hierarchy diagonal are not both vertices)")]
+    FictitiousWithoutDiagonal {
+        /// Vertex index.
+        vertex: usize,
+        /// Column.
+        col: u32,
+        /// Row.
+        row: u32,
+        /// Height in the mesh.
+        got: f32,
+        /// Height in the grid.
+        expected: f32,
+    },
+    /// A fictitious point whose height is not the midpoint interpolation of its
+    /// hierarchy diagonal.
+    #[error("fictitious vertex {vertex} at column {col}, row {row} has height {got} m, the midpoint of its diagonal is at {expected} m")]
+    WrongFictitiousHeight {
+        /// Vertex index.
+        vertex: usize,
+        /// Column.
+        col: u32,
+        /// Row.
+        row: u32,
+        /// Height in the mesh.
+        got: f32,
+        /// The interpolated height.
+        expected: f64,
     },
     /// A zero-area triangle.
     #[error("triangle {tri} is degenerate (zero area)")]
@@ -315,6 +350,54 @@ fn check_vertices(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &m
                 row: v.row,
                 got: v.z_m,
                 expected: truth,
+            });
+        }
+    }
+    if opts.allow_fictitious && found.total == 0 {
+        check_fictitious(grid, mesh, &owner, found);
+    }
+}
+
+/// A vertex whose height is not its sample's must be a fictitious point: the
+/// interpolation at the midpoint of its hierarchy diagonal (the hypotenuse of
+/// the bitree diamond it splits, found from its position), whose two ends are
+/// mesh vertices, using their mesh heights; equal within `f32` rounding (half
+/// an `f32` ulp of the exact midpoint value, plus one ulp of slack).
+fn check_fictitious(grid: &HeightGrid, mesh: &Mesh, owner: &[u32], found: &mut Found) {
+    let w = grid.width();
+    let hier = Hierarchy::new(w as u32, grid.height() as u32);
+    for (k, v) in mesh.vertices.iter().enumerate() {
+        let i = v.row as usize * w + v.col as usize;
+        let truth = grid.heights()[i];
+        if v.z_m.to_bits() == truth.to_bits() {
+            continue;
+        }
+        let ends = diagonal_of([v.col, v.row], hier.size()).and_then(|(a, b)| {
+            let id = |p: [u32; 2]| {
+                (hier.contains(p) && owner[hier.index(p)] != u32::MAX)
+                    .then(|| owner[hier.index(p)] as usize)
+            };
+            Some((id(a)?, id(b)?))
+        });
+        let Some((ia, ib)) = ends else {
+            found.push(Violation::FictitiousWithoutDiagonal {
+                vertex: k,
+                col: v.col,
+                row: v.row,
+                got: v.z_m,
+                expected: truth,
+            });
+            continue;
+        };
+        let mid = 0.5 * (mesh.vertices[ia].z_m as f64 + mesh.vertices[ib].z_m as f64);
+        let tol = (mid as f32).abs().max(f32::MIN_POSITIVE) as f64 * f32::EPSILON as f64 * 1.5;
+        if (v.z_m as f64 - mid).abs() > tol {
+            found.push(Violation::WrongFictitiousHeight {
+                vertex: k,
+                col: v.col,
+                row: v.row,
+                got: v.z_m,
+                expected: mid,
             });
         }
     }

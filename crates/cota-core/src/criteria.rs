@@ -7,6 +7,19 @@
 //! (accumulated curvature). Each criterion looks at one element of a hierarchy
 //! (a bitree triangle or a quadtree block) and says whether it must be refined.
 //! Both hierarchies call the same trait.
+//!
+//! 1. [`MaxVerticalError`]: the exact vertical error (the default).
+//! 2. [`EuclideanDistance`]: paper 000 §3.2, the 3D distance to the plane.
+//! 3. [`RelativeSize`]: paper 001's size factor.
+//! 4. [`crate::curvature::AccumulatedCurvature`]: papers 002–004.
+//! 5. [`crate::light::IlluminationMask`]: paper 002's mask.
+//! 6. [`crate::view::ScreenSpaceError`], [`crate::view::Paper001`],
+//!    [`crate::view::Paper003`]: view-dependent.
+//! 7. [`All`], [`Any`]: combinations.
+//!
+//! Geometry is in the grid's local frame in metres: x east, y north, z up,
+//! origin at the south-west sample ([`local_m`]), with the cell size of
+//! [`HeightGrid::cell_size_m`].
 
 use crate::grid::HeightGrid;
 
@@ -39,11 +52,18 @@ pub trait Criterion: Sync {
     fn name(&self) -> String;
 }
 
-/// The default criterion: refine while the exact vertical error exceeds a bound.
+/// The default criterion: refine while the exact vertical error exceeds a bound:
+/// `vertical_error_m > max_error_m` (metres).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MaxVerticalError {
     /// The bound in metres. Default: 1.0.
     pub max_error_m: f64,
+}
+
+impl Default for MaxVerticalError {
+    fn default() -> Self {
+        MaxVerticalError { max_error_m: 1.0 }
+    }
 }
 
 impl Criterion for MaxVerticalError {
@@ -83,5 +103,125 @@ impl Criterion for Any<'_> {
     fn name(&self) -> String {
         let names: Vec<String> = self.0.iter().map(|c| c.name()).collect();
         format!("any({})", names.join(", "))
+    }
+}
+
+/// The local frame position in metres of an element corner `[col, row, z_m]`:
+/// x east = `col·dx`, y north = `(H − 1 − row)·dy`, z = height.
+pub fn local_m(grid: &HeightGrid, corner: [f64; 3]) -> [f64; 3] {
+    let [dx, dy] = grid.cell_size_m();
+    [
+        corner[0] * dx,
+        (grid.height() as f64 - 1.0 - corner[1]) * dy,
+        corner[2],
+    ]
+}
+
+/// The length in metres of the horizontal diagonal of the grid's rectangle:
+/// `√(((W−1)·dx)² + ((H−1)·dy)²)`.
+pub fn terrain_diagonal_m(grid: &HeightGrid) -> f64 {
+    let [dx, dy] = grid.cell_size_m();
+    let (w, h) = (grid.width() as f64 - 1.0, grid.height() as f64 - 1.0);
+    (w * dx).hypot(h * dy)
+}
+
+/// The longest horizontal edge of an element, metres: the largest distance
+/// between consecutive corners (cyclically) in the local frame's x, y.
+pub fn longest_edge_m(e: &Element<'_>) -> f64 {
+    let n = e.corners.len();
+    (0..n)
+        .map(|k| {
+            let p = local_m(e.grid, e.corners[k]);
+            let q = local_m(e.grid, e.corners[(k + 1) % n]);
+            (p[0] - q[0]).hypot(p[1] - q[1])
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Paper 000 §3.2's measure: the largest 3D (Euclidean) distance, in metres,
+/// of the grid samples in or on the element to the element's plane.
+///
+/// For a plane `z = z0 + gx·x + gy·y` (gradients in metres per metre, from the
+/// corners in the local frame) a sample at vertical offset `Δz` is at distance
+/// `|Δz| / √(1 + gx² + gy²)`, so the largest distance is exactly
+/// `vertical_error_m / √(1 + gx² + gy²)`: O(1) per element. Elements with more
+/// than three corners (quadtree blocks) use, of the fan triangles
+/// `(c0, ck, ck+1)`, the least steep plane, which gives the largest (safest)
+/// distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EuclideanDistance {
+    /// Refine while the distance exceeds this many metres. Default: 1.0.
+    pub max_distance_m: f64,
+}
+
+impl Default for EuclideanDistance {
+    fn default() -> Self {
+        EuclideanDistance {
+            max_distance_m: 1.0,
+        }
+    }
+}
+
+impl EuclideanDistance {
+    /// The element's largest Euclidean distance in metres (see the type docs).
+    pub fn distance_m(e: &Element<'_>) -> f64 {
+        let p: Vec<[f64; 3]> = e.corners.iter().map(|&c| local_m(e.grid, c)).collect();
+        let mut slope2 = f64::INFINITY;
+        for k in 1..p.len().saturating_sub(1) {
+            let (a, b, c) = (p[0], p[k], p[k + 1]);
+            let (u, v) = (sub(b, a), sub(c, a));
+            // Normal n = u × v; gradient = (−nx/nz, −ny/nz).
+            let n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            if n[2] != 0.0 {
+                slope2 = slope2.min((n[0] * n[0] + n[1] * n[1]) / (n[2] * n[2]));
+            }
+        }
+        if !slope2.is_finite() {
+            return e.vertical_error_m;
+        }
+        e.vertical_error_m / (1.0 + slope2).sqrt()
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+impl Criterion for EuclideanDistance {
+    fn wants_split(&self, e: &Element<'_>) -> bool {
+        Self::distance_m(e) > self.max_distance_m
+    }
+
+    fn name(&self) -> String {
+        format!("euclidean {} m", self.max_distance_m)
+    }
+}
+
+/// Paper 001's size factor: refine while the element's longest horizontal edge
+/// ([`longest_edge_m`]) exceeds `factor × terrain diagonal`
+/// ([`terrain_diagonal_m`]), both in metres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RelativeSize {
+    /// Fraction of the terrain's diagonal. Default: 0.01 (1 %, paper 001).
+    pub factor: f64,
+}
+
+impl Default for RelativeSize {
+    fn default() -> Self {
+        RelativeSize { factor: 0.01 }
+    }
+}
+
+impl Criterion for RelativeSize {
+    fn wants_split(&self, e: &Element<'_>) -> bool {
+        longest_edge_m(e) > self.factor * terrain_diagonal_m(e.grid)
+    }
+
+    fn name(&self) -> String {
+        format!("size {} of the diagonal", self.factor)
     }
 }

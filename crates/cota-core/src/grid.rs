@@ -198,6 +198,25 @@ impl GeoRef {
         )
     }
 
+    /// For a known transform in an unknown CRS: `Some(Crs::Geographic(..))` when
+    /// the whole `width × height` grid lies within longitude/latitude bounds
+    /// (±180°, ±90°) and the pixel is below 0.01 units, which only degrees make
+    /// sense of (an ESRI ASCII clip of SRTM without its `.prj`, say). `None`
+    /// otherwise. Readers apply it so that cell sizes in metres stay right.
+    pub fn guess_geographic(&self, width: usize, height: usize) -> Option<Crs> {
+        if self.crs != Crs::Unknown || !self.known {
+            return None;
+        }
+        let small = self.pixel_x.abs() < 0.01 && self.pixel_y.abs() < 0.01;
+        let (x0, y0) = self.sample_xy(-0.5, -0.5);
+        let (x1, y1) = self.sample_xy(width as f64 - 0.5, height as f64 - 0.5);
+        let fits =
+            [x0, x1].iter().all(|x| x.abs() <= 180.0) && [y0, y1].iter().all(|y| y.abs() <= 90.0);
+        (small && fits).then(|| {
+            Crs::Geographic("WGS 84 (assumed: coordinates and cell size look like degrees)".into())
+        })
+    }
+
     /// Ground distance in metres of one pixel step along x and along y at the
     /// grid position (`col`, `row`).
     ///
@@ -450,6 +469,26 @@ mod test {
         assert!((dy - 92.13).abs() < 0.05, "{dy}");
         let [mx, _] = metres_per_degree(45.0);
         assert!((mx - 78_847.0).abs() < 5.0, "{mx}");
+    }
+
+    #[test]
+    fn degrees_are_guessed_only_when_nothing_else_fits() {
+        let mut g = GeoRef {
+            crs: Crs::Unknown,
+            origin_x: -105.55,
+            origin_y: 40.21,
+            pixel_x: 1.0 / 1200.0,
+            pixel_y: -1.0 / 1200.0,
+            pixel_is: PixelIs::Area,
+            known: true,
+        };
+        assert!(g
+            .guess_geographic(240, 144)
+            .is_some_and(|c| c.is_geographic()));
+        g.pixel_x = 10.0;
+        g.pixel_y = -10.0;
+        assert_eq!(g.guess_geographic(240, 144), None); // 10-unit cells: metres
+        assert_eq!(GeoRef::unreferenced(0.001).guess_geographic(5, 5), None);
     }
 
     #[test]

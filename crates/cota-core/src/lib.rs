@@ -14,19 +14,33 @@
 pub mod bitree;
 pub mod check;
 pub mod criteria;
+pub mod curvature;
 pub mod extract;
+pub mod fictitious;
 pub mod grid;
 pub mod hierarchy;
+pub mod light;
 pub mod mesh;
 pub mod metrics;
 pub mod mosaic;
+pub mod points;
+pub mod quadtree;
+pub mod quadtree_templates;
 pub mod raster;
+pub mod refine;
+pub mod view;
 pub mod voids;
 
 pub use bitree::{Bitree, MeshError};
 pub use check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
-pub use criteria::{All, Any, Criterion, Element, MaxVerticalError};
+pub use criteria::{
+    All, Any, Criterion, Element, EuclideanDistance, MaxVerticalError, RelativeSize,
+};
 pub use extract::{ExtractOptions, Extraction, Target};
 pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
 pub use mesh::{Mesh, MeshVertex};
 pub use metrics::{measure, Metrics};
+pub use mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy, SeamReport};
+pub use points::PointCounts;
+pub use quadtree::{QuadExtraction, QuadTree};
+pub use voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidError, VoidPolicy};

@@ -14,6 +14,10 @@
 //!
 //! Samples not covered by any triangle are counted in `uncovered` and left out of
 //! the sums (a mesh from cota covers all of them; the checker insists on it).
+//!
+//! Also: paper `004_ab8d08b3e6a5a70a.txt`'s distortion `D(M)`
+//! ([`distortion_m2`]) and a per-sample weighted volume
+//! ([`weighted_volume_m3`], paper 002's illumination-weighted volume error).
 
 use crate::grid::HeightGrid;
 use crate::mesh::Mesh;
@@ -117,4 +121,128 @@ pub fn measure(grid: &HeightGrid, mesh: &Mesh) -> Metrics {
         m.mean_abs_error_m = sum_abs / m.samples as f64;
     }
     m
+}
+
+/// Paper `004_ab8d08b3e6a5a70a.txt`'s distortion `D(M)`, m²: the sum over the
+/// centroids of the regular grid's triangles of `(z − z_approx)²`.
+///
+/// The regular grid's triangles are the full-resolution bitree's unit
+/// triangles: cell `(x, y)` is cut along `\` when `x + y` is even, `/` when odd.
+/// `z` at a centroid is the mean of its triangle's three sample heights (the
+/// full-resolution surface there) and `z_approx` the mesh's plane at the same
+/// point. Centroids are visited exactly, on a lattice three times finer
+/// ([`for_each_span`] on the mesh triangles scaled by 3), each once, in the
+/// first mesh triangle containing it.
+///
+/// # Runtime
+/// `O(9·W·H + triangles)`, plus `2·W·H` bits.
+pub fn distortion_m2(grid: &HeightGrid, mesh: &Mesh) -> f64 {
+    let (w, h) = (grid.width(), grid.height());
+    let hs = grid.heights();
+    let z = |x: usize, y: usize| hs[y * w + x] as f64;
+    let mut seen = vec![0u64; (2 * w * h).div_ceil(64)];
+    let mut d = 0f64;
+    for t in &mesh.triangles {
+        let get = |i: u32| mesh.vertices.get(i as usize).copied();
+        let (Some(v0), Some(v1), Some(v2)) = (get(t[0]), get(t[1]), get(t[2])) else {
+            continue;
+        };
+        let vs = [v0, v1, v2];
+        if vs
+            .iter()
+            .any(|v| v.col as usize >= w || v.row as usize >= h)
+        {
+            continue;
+        }
+        let p = vs.map(|v| [v.col, v.row]);
+        let Some(plane) = Plane::new(p, vs.map(|v| v.z_m as f64)) else {
+            continue;
+        };
+        let p3 = p.map(|q| [3 * q[0], 3 * q[1]]);
+        for_each_span(p3, |yy, x0, x1| {
+            let (y, ry) = ((yy / 3) as usize, yy % 3);
+            if ry == 0 || y + 1 >= h {
+                return;
+            }
+            for xx in x0..=x1 {
+                let (x, rx) = ((xx / 3) as usize, xx % 3);
+                if rx == 0 || x + 1 >= w {
+                    continue;
+                }
+                // Which of the cell's two triangles has its centroid here.
+                let back = (x + y).is_multiple_of(2);
+                let (second, corners) = match (back, rx, ry) {
+                    (true, 2, 1) => (false, [(x, y), (x + 1, y), (x + 1, y + 1)]),
+                    (true, 1, 2) => (true, [(x, y), (x, y + 1), (x + 1, y + 1)]),
+                    (false, 1, 1) => (false, [(x, y), (x + 1, y), (x, y + 1)]),
+                    (false, 2, 2) => (true, [(x + 1, y), (x + 1, y + 1), (x, y + 1)]),
+                    _ => continue,
+                };
+                let k = 2 * (y * w + x) + usize::from(second);
+                let (word, bit) = (k / 64, 1u64 << (k % 64));
+                if seen[word] & bit != 0 {
+                    continue;
+                }
+                seen[word] |= bit;
+                let truth = corners.iter().map(|&(cx, cy)| z(cx, cy)).sum::<f64>() / 3.0;
+                let approx = plane.at(xx as f64 / 3.0, yy as f64 / 3.0);
+                d += (truth - approx) * (truth - approx);
+            }
+        });
+    }
+    d
+}
+
+/// The volume between the mesh and the grid's surface weighted per sample,
+/// m³ (times the weight's unit): `Σ |Δz|·wx·wy·dx·dy·weight(col, row)` with the
+/// trapezoidal shares of [`measure`]'s `volume_m3`; each sample once, in the
+/// first mesh triangle containing it. With the received light as the weight
+/// (paper `002_9d6c1367b8962b6c.txt`, [`crate::light::received_light`]) this is
+/// the illumination-weighted volume error.
+pub fn weighted_volume_m3(grid: &HeightGrid, mesh: &Mesh, weight: impl Fn(u32, u32) -> f64) -> f64 {
+    let (w, h) = (grid.width(), grid.height());
+    let [dx, dy] = grid.cell_size_m();
+    let heights = grid.heights();
+    let mut seen = vec![0u64; (w * h).div_ceil(64)];
+    let mut v = 0f64;
+    for t in &mesh.triangles {
+        let get = |i: u32| mesh.vertices.get(i as usize).copied();
+        let (Some(v0), Some(v1), Some(v2)) = (get(t[0]), get(t[1]), get(t[2])) else {
+            continue;
+        };
+        let vs = [v0, v1, v2];
+        if vs
+            .iter()
+            .any(|v| v.col as usize >= w || v.row as usize >= h)
+        {
+            continue;
+        }
+        let p = vs.map(|v| [v.col, v.row]);
+        let Some(plane) = Plane::new(p, vs.map(|v| v.z_m as f64)) else {
+            continue;
+        };
+        for_each_span(p, |y, x0, x1| {
+            for x in x0..=x1 {
+                let i = y as usize * w + x as usize;
+                let (word, bit) = (i / 64, 1u64 << (i % 64));
+                if seen[word] & bit != 0 || heights[i].is_nan() {
+                    continue;
+                }
+                seen[word] |= bit;
+                let a = (plane.at(x as f64, y as f64) - heights[i] as f64).abs();
+                let wx = if x == 0 || x as usize == w - 1 {
+                    0.5
+                } else {
+                    1.0
+                };
+                let wy = if y == 0 || y as usize == h - 1 {
+                    0.5
+                } else {
+                    1.0
+                };
+                v += a * wx * wy * dx * dy * weight(x, y);
+            }
+        });
+    }
+    v
 }

@@ -18,19 +18,28 @@
 //! Steps:
 //! 1. Find the 4-connected void components. They are independent (no two share a
 //!    neighbour), so each is solved on its own bounding box plus a one-sample
-//!    margin, in parallel.
-//! 2. Coarse to fine (a cascadic multigrid): the component's box is halved
-//!    repeatedly (a 2×2 block holding any border value becomes a known cell with
-//!    their mean, a block of voids an unknown cell) down to at most
-//!    64 unknowns, which start at the mean of the known cells.
-//! 3. At each level, from the coarsest, the unknowns start from the bilinear
-//!    interpolation of the coarser solution and are relaxed by successive
-//!    over-relaxation (Gauss–Seidel with ω) until no sample changes by more than
-//!    [`FillOptions::tolerance_m`] in a sweep, or [`FillOptions::max_iterations`]
-//!    sweeps.
-//! 4. The values are clamped to the component's border range (the exact
-//!    solution lies in it; this only removes over-relaxation overshoot) and
-//!    written back.
+//!    margin, in parallel (rayon).
+//! 2. Start estimate (pull–push): the border values are averaged down a pyramid
+//!    of 2×2 blocks until at most 16 unknowns remain, which start at the mean of
+//!    the known cells; the estimate is interpolated back up bilinearly.
+//! 3. Multigrid W-cycles on the error equation: red–black Gauss–Seidel
+//!    smoothing (2 sweeps before and after), the summed residual of each 2×2
+//!    block as the coarse right-hand side, a Galerkin coarse operator (see
+//!    `Level::coarsen_error`: the boundary keeps its true place on every
+//!    level, so irregular voids converge as fast as rectangles), bilinear
+//!    interpolation of the correction. Each cycle divides the error by about 8
+//!    (measured: 0.12 per cycle on a 1200×1200 hole). The coarsest level (at
+//!    most 16 unknowns) is solved exactly by a dense Cholesky factorisation,
+//!    and so is a component of at most 16 samples, without cycles.
+//! 4. Stop when the estimated remaining error (from the change of the last
+//!    cycle and the observed contraction, see [`FillOptions::tolerance_m`]) is
+//!    below the tolerance, or after [`FillOptions::max_iterations`] cycles.
+//! 5. Clamp to the component's border range (the exact solution lies in it;
+//!    this only removes what is left of the iteration's overshoot) and write back.
+//!
+//! On the shared SRTM tile N42E001 (7652 voids in 760 components, the largest
+//! 1406) the default fill takes about 10 ms and is within 5e-4 m of the
+//! converged solution.
 //!
 //! # Inverse-distance fill
 //! [`FillMethod::InverseDistance`]: each void sample is the mean of its
@@ -89,10 +98,12 @@ impl Default for VoidPolicy {
 pub struct FillOptions {
     /// The policy. Default: `Fill(Harmonic)`.
     pub policy: VoidPolicy,
-    /// The harmonic relaxation stops when no sample moves by more than this in a
-    /// sweep, metres. Default: 1e-3.
+    /// The harmonic fill stops when its estimated remaining error is below this,
+    /// metres. The estimate is 2·c·ρ/(1 − ρ) for the largest change c of the last
+    /// cycle and the observed contraction ρ per cycle (taken in [0.5, 0.99]), so
+    /// it is never below twice the last change. Default: 1e-3.
     pub tolerance_m: f64,
-    /// Most relaxation sweeps per level of each component. Default: 10 000.
+    /// Most multigrid cycles per component. Default: 200.
     pub max_iterations: usize,
 }
 
@@ -101,7 +112,7 @@ impl FillOptions {
     pub const DEFAULT: FillOptions = FillOptions {
         policy: VoidPolicy::Fill(FillMethod::Harmonic),
         tolerance_m: 1e-3,
-        max_iterations: 10_000,
+        max_iterations: 200,
     };
 
     /// Sets [`FillOptions::policy`].
@@ -156,14 +167,16 @@ pub struct FillReport {
     pub components: usize,
     /// Samples in the largest component.
     pub largest_component: usize,
-    /// Most relaxation sweeps at the finest level needed by any component
-    /// (0 for the inverse-distance method).
+    /// Most multigrid cycles needed by any component (1 for components of at
+    /// most 16 samples, solved directly; 0 for the inverse-distance method).
     pub max_iterations_used: usize,
-    /// Relaxation sweeps summed over every level of every component, a measure of the work.
+    /// Gauss–Seidel sweeps summed over every level of every component, a
+    /// measure of the work.
     pub total_sweeps: usize,
-    /// True when every component reached [`FillOptions::tolerance_m`] before the sweep cap.
+    /// True when every component reached [`FillOptions::tolerance_m`] before
+    /// [`FillOptions::max_iterations`].
     pub converged: bool,
-    /// Largest change in the last sweep at the finest level over all components, metres.
+    /// Largest change of a sample in the last iteration, over all components, metres.
     pub last_change_m: f64,
 }
 
@@ -175,9 +188,9 @@ pub struct FillReport {
 /// [`VoidError::AllVoid`] when every sample is void.
 ///
 /// # Runtime
-/// Harmonic: roughly linear in the number of voids times the sweeps per level,
-/// which the coarse-to-fine start keeps small. Memory: a few bytes per sample of
-/// each component's bounding box, plus one flag per grid sample.
+/// Harmonic: linear in the number of voids (multigrid; about ten W-cycles for
+/// the default tolerance). Memory: about 80 bytes per void sample and 12 per
+/// sample of each component's bounding box, plus one byte per grid sample.
 pub fn fill_voids(grid: &mut HeightGrid, opts: &FillOptions) -> Result<FillReport, VoidError> {
     let method = match opts.policy {
         VoidPolicy::Refuse => {
@@ -214,16 +227,15 @@ pub fn fill_voids(grid: &mut HeightGrid, opts: &FillOptions) -> Result<FillRepor
         converged: true,
         ..FillReport::default()
     };
-    let width = grid.width();
     let heights = grid.heights_mut();
     for (c, (values, s)) in components.iter().zip(solved) {
         report.largest_component = report.largest_component.max(c.cells.len());
-        report.max_iterations_used = report.max_iterations_used.max(s.finest_sweeps);
+        report.max_iterations_used = report.max_iterations_used.max(s.iterations);
         report.total_sweeps += s.total_sweeps;
         report.converged &= s.converged;
         report.last_change_m = report.last_change_m.max(s.last_change_m);
-        for (&(col, row), v) in c.cells.iter().zip(values) {
-            heights[row * width + col] = v;
+        for (&i, v) in c.cells.iter().zip(values) {
+            heights[i] = v;
         }
     }
     Ok(report)
@@ -231,8 +243,8 @@ pub fn fill_voids(grid: &mut HeightGrid, opts: &FillOptions) -> Result<FillRepor
 
 /// One 4-connected set of void samples.
 struct Component {
-    /// Its samples (column, row), in raster order.
-    cells: Vec<(usize, usize)>,
+    /// Its samples (row-major grid indices), in search order.
+    cells: Vec<usize>,
     /// Bounding box: first and last column, first and last row.
     cols: (usize, usize),
     rows: (usize, usize),
@@ -258,7 +270,7 @@ fn find_components(grid: &HeightGrid) -> Vec<Component> {
         };
         while let Some(i) = stack.pop() {
             let (x, y) = (i % w, i / w);
-            c.cells.push((x, y));
+            c.cells.push(i);
             c.cols = (c.cols.0.min(x), c.cols.1.max(x));
             c.rows = (c.rows.0.min(y), c.rows.1.max(y));
             let mut visit = |j: usize| {
@@ -280,7 +292,6 @@ fn find_components(grid: &HeightGrid) -> Vec<Component> {
                 visit(i + w);
             }
         }
-        c.cells.sort_unstable_by_key(|&(x, y)| (y, x));
         out.push(c);
     }
     out
@@ -295,10 +306,13 @@ const ABSENT: u8 = 2;
 const COARSEST_UNKNOWNS: usize = 16;
 /// Gauss–Seidel sweeps before and after each coarse-grid correction.
 const SMOOTHING_SWEEPS: usize = 2;
-/// Scale of the Galerkin coarse operator built with piecewise-constant
-/// interpolation: 1/2 makes it agree with the operator rediscretised at twice
-/// the spacing away from the boundary.
-const GALERKIN_SCALE: f64 = 0.5;
+/// Scale of the couplings between coarse cells in the Galerkin product with
+/// piecewise-constant interpolation: 1/2 makes it agree, away from the
+/// boundary, with the operator rediscretised at twice the spacing (with the
+/// summed restriction). Couplings to known cells are kept whole: halving them
+/// too makes the cycles diverge near the boundary; of the factors tried on
+/// them (0.5 to 2) 1 converged fastest on the unit tests' holes.
+const COARSE_COUPLING_SCALE: f64 = 0.5;
 /// Above this many (void, border) pairs the inverse-distance border is subsampled.
 const IDW_MAX_PAIRS: usize = 100_000_000;
 
@@ -371,18 +385,34 @@ impl Level {
         self.value[i] = v;
     }
 
-    /// Marks (`x`, `y`) unknown (call [`Level::finish`] once all cells are set).
+    /// Marks (`x`, `y`) unknown (call [`Level::collect_unknowns`] once all
+    /// cells are set).
     fn set_unknown(&mut self, x: usize, y: usize) {
         let i = self.at(x, y);
         self.state[i] = UNKNOWN;
-        self.unknowns.push(Unknown {
-            at: i,
-            x: x as u32,
-            y: y as u32,
-            w: [0.0; 4],
-            diag: 0.0,
-            rhs: 0.0,
-        });
+    }
+
+    /// Lists the unknown cells in red–black order (red, (x + y) even, first;
+    /// each colour in raster order), without coefficients yet.
+    fn collect_unknowns(&mut self) {
+        self.unknowns.clear();
+        for parity in 0..2 {
+            for y in 0..self.height {
+                for x in ((y + parity) % 2..self.width).step_by(2) {
+                    let at = self.at(x, y);
+                    if self.state[at] == UNKNOWN {
+                        self.unknowns.push(Unknown {
+                            at,
+                            x: x as u32,
+                            y: y as u32,
+                            w: [0.0; 4],
+                            diag: 0.0,
+                            rhs: 0.0,
+                        });
+                    }
+                }
+            }
+        }
     }
 
     /// Padded index offsets of the west, east, north and south neighbours.
@@ -391,10 +421,10 @@ impl Level {
         [-1, 1, -s, s]
     }
 
-    /// Sets the Laplace coefficients of the finest level (weights `wx` across
-    /// columns and `wy` across rows to non-absent neighbours) and puts the
-    /// unknowns in red–black order.
+    /// Lists the unknowns and sets the Laplace coefficients of the finest level
+    /// (weights `wx` across columns and `wy` across rows to non-absent neighbours).
     fn finish(&mut self, wx: f64, wy: f64) {
+        self.collect_unknowns();
         let offsets = self.offsets();
         for u in &mut self.unknowns {
             let mut diag = 0.0;
@@ -408,18 +438,11 @@ impl Level {
             }
             u.diag = diag;
         }
-        self.order();
     }
 
-    /// Puts the unknowns in red–black order.
-    fn order(&mut self) {
-        self.unknowns
-            .sort_unstable_by_key(|u| ((u.x + u.y) % 2, u.y, u.x));
-    }
-
-    /// One red–black Gauss–Seidel sweep with over-relaxation `omega`; returns
+    /// One red–black Gauss–Seidel sweep; returns
     /// the largest difference between an unknown and the value its equation asks for.
-    fn sweep(&mut self, omega: f64) -> f64 {
+    fn sweep(&mut self) -> f64 {
         let s = self.stride;
         let v = &mut self.value;
         let mut max_change = 0.0f64;
@@ -431,7 +454,7 @@ impl Level {
             let [ww, we, wn, ws] = u.w.map(f64::from);
             let sum = u.rhs + ww * v[i - 1] + we * v[i + 1] + wn * v[i - s] + ws * v[i + s];
             let d = sum / u.diag - v[i];
-            v[i] += omega * d;
+            v[i] += d;
             max_change = max_change.max(d.abs());
         }
         max_change
@@ -443,17 +466,6 @@ impl Level {
         let (i, s, v) = (u.at, self.stride, &self.value);
         let [ww, we, wn, ws] = u.w.map(f64::from);
         u.rhs + ww * v[i - 1] + we * v[i + 1] + wn * v[i - s] + ws * v[i + s] - u.diag * v[i]
-    }
-
-    /// The over-relaxation factor for sweeps alone on this level: the optimum
-    /// 2 / (1 + sin(π / (d + 1))) of a square of side d, d being the unknowns'
-    /// mean width (their count over the longer side of the box without its
-    /// margin), so that thin voids, which Gauss–Seidel already solves fast, are
-    /// not over-relaxed.
-    fn sor_omega(&self) -> f64 {
-        let side = self.width.max(self.height).saturating_sub(2).max(1);
-        let d = self.unknowns.len() as f64 / side as f64;
-        2.0 / (1.0 + (std::f64::consts::PI / (d + 1.0)).sin())
     }
 
     /// Counts of known and unknown cells in the 2×2 block of coarse cell
@@ -491,6 +503,7 @@ impl Level {
                 }
             }
         }
+        coarse.collect_unknowns();
         coarse
     }
 
@@ -498,12 +511,13 @@ impl Level {
     /// small enough to solve directly.
     ///
     /// A 2×2 block holding an unknown is unknown, else known (error 0) if it
-    /// holds known cells, else absent. The coefficients are the Galerkin product
-    /// Pᵀ A P for the piecewise-constant interpolation P (couplings inside a
-    /// block cancel, couplings between blocks add up, couplings to known cells
-    /// stay on the diagonal), times [`GALERKIN_SCALE`]. Built this way the
-    /// boundary keeps its true place on every level and no coarse problem is
-    /// singular.
+    /// holds known cells, else absent. The coefficients come from the Galerkin
+    /// product Pᵀ A P with the piecewise-constant interpolation P: couplings
+    /// inside a block cancel, couplings between two blocks add up (scaled by
+    /// [`COARSE_COUPLING_SCALE`]), couplings to known cells add up on the
+    /// diagonal. So the Dirichlet boundary keeps its place and strength on every
+    /// level, and no coarse problem is singular (each has its diagonal at least
+    /// the sum of its couplings, strictly where the boundary is near).
     fn coarsen_error(&self) -> Option<Level> {
         if self.unknowns.len() <= COARSEST_UNKNOWNS {
             return None;
@@ -518,40 +532,42 @@ impl Level {
                 }
             }
         }
+        coarse.collect_unknowns();
         // Accumulate the coefficients by coarse cell, in f64.
-        let mut diag = vec![0.0f64; coarse.value.len()];
         let mut off = vec![[0.0f64; 4]; coarse.value.len()];
         let offsets = self.offsets();
+        let mut dirichlet = vec![0.0f64; coarse.value.len()];
         for u in &self.unknowns {
             let (x, y) = (u.x as usize, u.y as usize);
             let c = coarse.at(x / 2, y / 2);
+            // The part of the diagonal from known neighbours (absent ones have
+            // no coupling): on coarse levels they have no coefficient of their own.
+            let mut dir = u.diag;
             for (k, &d) in offsets.iter().enumerate() {
                 let w = f64::from(u.w[k]);
-                if w == 0.0 {
+                let j = u.at.wrapping_add_signed(d);
+                if w == 0.0 || self.state[j] != UNKNOWN {
                     continue;
                 }
-                let j = u.at.wrapping_add_signed(d);
-                if self.state[j] == UNKNOWN {
-                    // An unknown neighbour is inside the box (the frame is absent).
-                    let (nx, ny) = match k {
-                        0 => (x - 1, y),
-                        1 => (x + 1, y),
-                        2 => (x, y - 1),
-                        _ => (x, y + 1),
-                    };
-                    if coarse.at(nx / 2, ny / 2) == c {
-                        continue;
-                    }
+                dir -= w;
+                // An unknown neighbour is inside the box (the frame is absent).
+                let (nx, ny) = match k {
+                    0 => (x - 1, y),
+                    1 => (x + 1, y),
+                    2 => (x, y - 1),
+                    _ => (x, y + 1),
+                };
+                if coarse.at(nx / 2, ny / 2) != c {
                     off[c][k] += w;
                 }
-                diag[c] += w;
             }
+            dirichlet[c] += dir;
         }
         for cu in &mut coarse.unknowns {
-            cu.diag = GALERKIN_SCALE * diag[cu.at];
-            cu.w = off[cu.at].map(|w| (GALERKIN_SCALE * w) as f32);
+            let o = off[cu.at];
+            cu.diag = dirichlet[cu.at] + COARSE_COUPLING_SCALE * (o[0] + o[1] + o[2] + o[3]);
+            cu.w = o.map(|w| (COARSE_COUPLING_SCALE * w) as f32);
         }
-        coarse.order();
         Some(coarse)
     }
 
@@ -600,13 +616,13 @@ impl Level {
     }
 
     /// Sets `coarse` to the error equation of this level: zero values, and as
-    /// right-hand side the mean residual of each block (cell-centred restriction).
+    /// right-hand side the summed residual of each block (Pᵀ r).
     fn restrict_residual(&self, coarse: &mut Level) {
         // Accumulate in coarse.value (then cleared): it is indexed by cell.
         coarse.value.fill(0.0);
         for u in &self.unknowns {
             let ci = coarse.at(u.x as usize / 2, u.y as usize / 2);
-            coarse.value[ci] += 0.25 * self.residual(u);
+            coarse.value[ci] += self.residual(u);
         }
         for cu in &mut coarse.unknowns {
             cu.rhs = coarse.value[cu.at];
@@ -614,30 +630,95 @@ impl Level {
         coarse.value.fill(0.0);
     }
 
-    /// Solves the (small) coarsest level by over-relaxed sweeps until its
-    /// changes are negligible next to the first; returns the sweeps done.
-    fn solve_coarsest(&mut self) -> usize {
-        let omega = self.sor_omega();
-        let cap = 50 + 10 * (self.unknowns.len() as f64).sqrt() as usize;
-        let first = self.sweep(omega);
-        let mut sweeps = 1;
-        while sweeps < cap {
-            let change = self.sweep(omega);
-            sweeps += 1;
-            if change <= 1e-6 * first {
-                break;
+    /// Solves a level of at most [`COARSEST_UNKNOWNS`] unknowns exactly
+    /// (Cholesky factorisation of its dense matrix). Should rounding make the
+    /// matrix look indefinite, falls back to Gauss–Seidel sweeps. Returns the
+    /// sweeps done (0 for the direct solve) and whether it converged.
+    fn solve_coarsest(&mut self) -> (usize, bool) {
+        if self.solve_direct() {
+            return (0, true);
+        }
+        let first = self.sweep();
+        for sweeps in 2..=10_000 {
+            if self.sweep() <= 1e-9 * first {
+                return (sweeps, true);
             }
         }
-        sweeps
+        (10_000, false)
+    }
+
+    /// Solves the level's equations by a dense Cholesky factorisation; false
+    /// (values untouched) when a pivot is not positive.
+    fn solve_direct(&mut self) -> bool {
+        let n = self.unknowns.len();
+        let offsets = self.offsets();
+        let mut a = vec![0.0f64; n * n];
+        let mut b = vec![0.0f64; n];
+        for (k, u) in self.unknowns.iter().enumerate() {
+            a[k * n + k] = u.diag;
+            b[k] = u.rhs;
+            for (dir, &d) in offsets.iter().enumerate() {
+                let w = f64::from(u.w[dir]);
+                let j = u.at.wrapping_add_signed(d);
+                if w == 0.0 {
+                    continue;
+                }
+                if self.state[j] == UNKNOWN {
+                    if let Some(l) = self.unknowns.iter().position(|v| v.at == j) {
+                        a[k * n + l] -= w;
+                    }
+                } else {
+                    b[k] += w * self.value[j];
+                }
+            }
+        }
+        // A = L Lᵀ, L stored in the lower triangle of `a`.
+        for i in 0..n {
+            for j in 0..=i {
+                let mut sum = a[i * n + j];
+                for k in 0..j {
+                    sum -= a[i * n + k] * a[j * n + k];
+                }
+                if i == j {
+                    if sum <= 0.0 || !sum.is_finite() {
+                        return false;
+                    }
+                    a[i * n + i] = sum.sqrt();
+                } else {
+                    a[i * n + j] = sum / a[j * n + j];
+                }
+            }
+        }
+        // L y = b, then Lᵀ x = y, in place in `b`.
+        for i in 0..n {
+            let mut sum = b[i];
+            for k in 0..i {
+                sum -= a[i * n + k] * b[k];
+            }
+            b[i] = sum / a[i * n + i];
+        }
+        for i in (0..n).rev() {
+            let mut sum = b[i];
+            for k in i + 1..n {
+                sum -= a[k * n + i] * b[k];
+            }
+            b[i] = sum / a[i * n + i];
+        }
+        for (u, x) in self.unknowns.iter().zip(b) {
+            self.value[u.at] = x;
+        }
+        true
     }
 }
 
 /// How a component's solve went.
 #[derive(Default)]
 struct Solved {
-    finest_sweeps: usize,
+    iterations: usize,
     total_sweeps: usize,
     converged: bool,
+    /// A coarsest-level solve fell back to sweeps and did not converge.
+    coarsest_failed: bool,
     last_change_m: f64,
 }
 
@@ -676,9 +757,11 @@ fn solve_component(
     let values = c
         .cells
         .iter()
-        .map(|&(col, row)| {
+        .map(|&i| {
+            let (col, row) = (i % grid.width(), i / grid.width());
             let i = level.at(col - origin.0, row - origin.1);
-            level.value[i].clamp(range.0, range.1) as f32
+            // max/min rather than clamp: no panic even for an empty range.
+            level.value[i].max(range.0).min(range.1) as f32
         })
         .collect();
     (values, solved)
@@ -699,9 +782,9 @@ fn fine_level(
     let x1 = (c.cols.1 + 1).min(grid.width() - 1);
     let y1 = (c.rows.1 + 1).min(grid.height() - 1);
     let mut level = Level::new(x1 - x0 + 1, y1 - y0 + 1);
-    level.unknowns.reserve_exact(c.cells.len());
     let mut range = (f64::INFINITY, f64::NEG_INFINITY);
-    for &(col, row) in &c.cells {
+    for &i in &c.cells {
+        let (col, row) = (i % grid.width(), i / grid.width());
         level.set_unknown(col - x0, row - y0);
         let mut border = |nc: usize, nr: usize| {
             let v = grid.get(nc, nr);
@@ -729,8 +812,8 @@ fn fine_level(
 }
 
 /// The harmonic fill of one component: a pull–push starting estimate, then
-/// multigrid V-cycles (or, for a level too small to coarsen, over-relaxed
-/// sweeps) until the estimated remaining error is below the tolerance.
+/// multigrid W-cycles until the estimated remaining error is below the
+/// tolerance; a component too small to coarsen is solved directly.
 fn harmonic(mut fine: Level, opts: &FillOptions) -> (Level, Solved) {
     start_estimate(&mut fine);
     let mut levels = vec![fine];
@@ -738,42 +821,37 @@ fn harmonic(mut fine: Level, opts: &FillOptions) -> (Level, Solved) {
         levels.push(coarse);
     }
     let mut s = Solved::default();
+    if levels.len() == 1 {
+        // Small enough to solve exactly.
+        let (sweeps, converged) = levels[0].solve_coarsest();
+        s.iterations = 1;
+        s.total_sweeps = sweeps;
+        s.converged = converged;
+        let fine = levels.swap_remove(0);
+        return (fine, s);
+    }
     let mut previous = Vec::new();
-    let omega = levels[0].sor_omega();
     // Changes of the last three cycles, newest first.
     let mut changes = [f64::INFINITY; 3];
-    while s.finest_sweeps < opts.max_iterations && remaining_error(&changes) >= opts.tolerance_m {
-        let change = if levels.len() == 1 {
-            s.total_sweeps += 1;
-            levels[0].sweep(omega)
-        } else {
-            let fine = &levels[0];
-            previous.clear();
-            previous.extend(fine.unknowns.iter().map(|u| fine.value[u.at]));
-            s.total_sweeps += v_cycle(&mut levels);
-            let fine = &levels[0];
-            fine.unknowns
-                .iter()
-                .zip(&previous)
-                .map(|(u, p)| (fine.value[u.at] - p).abs())
-                .fold(0.0, f64::max)
-        };
+    while s.iterations < opts.max_iterations && remaining_error(&changes) >= opts.tolerance_m {
+        let fine = &levels[0];
+        previous.clear();
+        previous.extend(fine.unknowns.iter().map(|u| fine.value[u.at]));
+        let (sweeps, converged) = w_cycle(&mut levels);
+        s.total_sweeps += sweeps;
+        s.coarsest_failed |= !converged;
+        let fine = &levels[0];
+        let change = fine
+            .unknowns
+            .iter()
+            .zip(&previous)
+            .map(|(u, p)| (fine.value[u.at] - p).abs())
+            .fold(0.0, f64::max);
         changes = [change, changes[0], changes[1]];
-        s.finest_sweeps += 1;
-        if levels[0].unknowns.len() > 100_000 && std::env::var_os("COTA_DEBUG_FILL").is_some() {
-            eprintln!(
-                "DBG cycle {} change {change:e} levels {}",
-                s.finest_sweeps,
-                levels.len()
-            );
-        }
+        s.iterations += 1;
     }
-    s.last_change_m = if s.finest_sweeps == 0 {
-        0.0
-    } else {
-        changes[0]
-    };
-    s.converged = remaining_error(&changes) < opts.tolerance_m;
+    s.last_change_m = if s.iterations == 0 { 0.0 } else { changes[0] };
+    s.converged = !s.coarsest_failed && remaining_error(&changes) < opts.tolerance_m;
     let fine = levels.swap_remove(0);
     (fine, s)
 }
@@ -797,26 +875,30 @@ fn remaining_error(changes: &[f64; 3]) -> f64 {
     2.0 * changes[0] * rho / (1.0 - rho)
 }
 
-/// One V-cycle from `levels[0]` down; returns the sweeps done on all levels.
-fn v_cycle(levels: &mut [Level]) -> usize {
+/// One W-cycle from `levels[0]` down (each coarse level is visited twice per
+/// visit of the finer one); returns the sweeps done on all levels and whether
+/// every coarsest solve succeeded.
+fn w_cycle(levels: &mut [Level]) -> (usize, bool) {
     let Some((fine, rest)) = levels.split_first_mut() else {
-        return 0;
+        return (0, true);
     };
     let Some(coarse) = rest.first_mut() else {
         return fine.solve_coarsest();
     };
     for _ in 0..SMOOTHING_SWEEPS {
-        fine.sweep(1.0);
+        fine.sweep();
     }
     fine.restrict_residual(coarse);
-    let sweeps = v_cycle(rest) + 2 * SMOOTHING_SWEEPS;
+    // Two cycles on the coarse error equation (its right-hand side stays).
+    let (first, ok_first) = w_cycle(rest);
+    let (second, ok_second) = w_cycle(rest);
     if let Some(coarse) = rest.first() {
         fine.interpolate_from(coarse, true);
     }
     for _ in 0..SMOOTHING_SWEEPS {
-        fine.sweep(1.0);
+        fine.sweep();
     }
-    sweeps
+    (first + second + 2 * SMOOTHING_SWEEPS, ok_first && ok_second)
 }
 
 /// Pull–push starting values: the known values averaged down a pyramid of 2×2
@@ -931,6 +1013,42 @@ mod test {
                 "{w}x{h} hole {cols:?} x {rows:?}: error {e} m, {report:?}"
             );
         }
+    }
+
+    #[test]
+    fn round_hole_in_a_harmonic_quadratic_is_reproduced() {
+        // x² − y² is exactly harmonic for the 5-point stencil, and a round hole
+        // gives the multigrid levels an irregular boundary.
+        let f = |c: usize, r: usize| {
+            let (x, y) = (c as f32 - 90.0, r as f32 - 110.0);
+            (x * x - y * y) / 50.0 + 300.0
+        };
+        let mut g = grid(200, 220, f);
+        let w = g.width();
+        for r in 0..220 {
+            for c in 0..200 {
+                let (x, y) = (c as f32 - 100.0, r as f32 - 105.0);
+                if x * x + y * y < 85.0 * 85.0 {
+                    g.heights_mut()[r * w + c] = f32::NAN;
+                }
+            }
+        }
+        let report = fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
+        assert!(report.filled > 20_000 && report.converged, "{report:?}");
+        assert!(report.max_iterations_used <= 10, "{report:?}");
+        let e = max_error(&g, f);
+        assert!(e < 1e-3, "error {e} m, {report:?}");
+    }
+
+    #[test]
+    fn iteration_cap_is_reported() {
+        let mut g = grid(100, 100, plane);
+        punch(&mut g, 5..95, 5..95);
+        let opts = FillOptions::DEFAULT.with_max_iterations(1);
+        let report = fill_voids(&mut g, &opts).unwrap();
+        assert!(!report.converged);
+        assert_eq!(report.max_iterations_used, 1);
+        assert_eq!(g.void_count(), 0, "even an unconverged fill leaves no void");
     }
 
     #[test]

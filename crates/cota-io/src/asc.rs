@@ -5,6 +5,7 @@
 //!   `ncols`, `nrows`, `xllcorner` or `xllcenter`, `yllcorner` or `yllcenter`,
 //!   `cellsize` (or GDAL's `dx` and `dy` for non-square cells) and an optional
 //!   `NODATA_value`. The first token that is not a header key starts the data.
+//!   A UTF-8 byte-order mark before the header is skipped.
 //! * Then exactly ncols × nrows numbers, row-major from the **northern** row,
 //!   separated by any whitespace (line breaks need not match rows).
 //! * `xllcorner`/`yllcorner` give the outer lower-left corner of the lower-left
@@ -36,6 +37,7 @@ use crate::srtm::too_large;
 /// Decodes an ESRI ASCII grid.
 pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
     let _ = opts; // Nothing to configure.
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes); // UTF-8 BOM
     let mut tokens = Tokens::new(bytes);
     let header = read_header(&mut tokens)?;
     let (width, height) = header.dimensions()?;
@@ -466,6 +468,21 @@ mod test {
         assert_eq!((g.origin_y, g.pixel_is), (1.0, PixelIs::Point));
         assert_eq!(g.sample_xy(0.0, 1.0), (0.0, 0.0));
         assert_eq!(d.grid.heights(), &[1.5, 2.0, 3.0, 4.0]);
+    }
+
+    #[test]
+    fn byte_order_mark() {
+        let d = decode(
+            b"\xef\xbb\xbfncols 1 nrows 1 xllcorner 0 yllcorner 0 cellsize 1 5",
+            Path::new("t.asc"),
+            &ReadOptions::DEFAULT,
+        )
+        .unwrap();
+        assert_eq!(d.grid.heights(), &[5.0]);
+        assert_eq!(
+            crate::read::sniff(b"\xef\xbb\xbfNCOLS 1"),
+            crate::read::Sniffed::Ascii
+        );
     }
 
     #[test]

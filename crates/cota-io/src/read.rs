@@ -38,7 +38,8 @@ impl fmt::Display for PngEncoding {
 #[non_exhaustive]
 pub struct ReadOptions {
     /// PNG encoding. `None` picks by the image: RGB/RGBA images are read as
-    /// terrain-RGB, grayscale images as gray16. Default: `None`.
+    /// terrain-RGB, grayscale images as gray16. Default: `None`. With any
+    /// encoding, a pixel whose alpha (or `tRNS` transparency) is 0 is a void.
     pub png_encoding: Option<PngEncoding>,
     /// Metres per gray level for [`PngEncoding::Gray16`]. Default: 1.0.
     pub gray_scale_m: f64,
@@ -142,7 +143,8 @@ pub enum DataType {
     F64,
     /// 8-bit RGB(A) pixels decoded by a PNG encoding.
     Rgb8,
-    /// Decimal text (ESRI ASCII).
+    /// Decimal text of unknown type. The ESRI ASCII reader reports
+    /// [`DataType::I32`] when every value is an integer, else [`DataType::F32`].
     Text,
 }
 
@@ -213,6 +215,7 @@ pub(crate) fn sniff(bytes: &[u8]) -> Sniffed {
         Sniffed::Png
     } else {
         let head = &bytes[..bytes.len().min(64)];
+        let head = head.strip_prefix(b"\xef\xbb\xbf").unwrap_or(head); // UTF-8 BOM
         let text = String::from_utf8_lossy(head).to_ascii_lowercase();
         let t = text.trim_start();
         if ASCII_HEADER_KEYS.iter().any(|k| t.starts_with(k)) {
@@ -255,6 +258,17 @@ pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Dem, ReadError> {
     decode_bytes(&bytes, path, opts).map_err(wrap)
 }
 
+/// Applies [`cota_core::GeoRef::guess_geographic`] to a freshly read DEM.
+fn with_guessed_crs(mut dem: Dem) -> Dem {
+    let g = &dem.grid;
+    if let Some(crs) = g.georef().guess_geographic(g.width(), g.height()) {
+        let mut georef = g.georef().clone();
+        georef.crs = crs;
+        dem.grid.set_georef(georef);
+    }
+    dem
+}
+
 /// Decodes DEM content already in memory; `path` supplies the name (SRTM
 /// position, extension) and is used in no other way. This is what the fuzzers call.
 ///
@@ -273,7 +287,7 @@ pub(crate) fn decode_bytes(
     path: &Path,
     opts: &ReadOptions,
 ) -> Result<Dem, ReadErrorKind> {
-    match sniff(bytes) {
+    let dem = match sniff(bytes) {
         // A ZIP is read as a zipped SRTM tile (the only zipped format cota knows).
         Sniffed::Zip => crate::srtm::decode(bytes, path, opts),
         Sniffed::Tiff => crate::geotiff::decode(bytes, path, opts),
@@ -286,7 +300,8 @@ pub(crate) fn decode_bytes(
         Sniffed::Unknown => Err(ReadErrorKind::UnknownFormat {
             found: format!("{}{}", describe_bytes(bytes), name_hint(path)),
         }),
-    }
+    }?;
+    Ok(with_guessed_crs(dem))
 }
 
 /// For unrecognised content, what the file's extension promised and lacks

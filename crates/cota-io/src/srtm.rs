@@ -19,7 +19,8 @@
 //!   mean Earth sphere, 111 195 m / (n−1) (92.7 m for 1201², 30.9 m for 3601²),
 //!   and `known == false`.
 //! * A `.hgt.zip` must hold exactly one `.hgt` member (other members are
-//!   ignored). Its declared size must be 2·n² bytes, and must be within what
+//!   ignored). The position comes from the archive's name, else from the
+//!   member's. Its declared size must be 2·n² bytes, and must be within what
 //!   DEFLATE can expand the archive to (at most 1032:1), so a forged header
 //!   cannot make the reader allocate more than the archive could hold.
 //!   Decompression stops one byte past the declared size.

@@ -5,6 +5,8 @@
 //! moving a tile's georeference) whose hole is then filled, and the refusals
 //! (different resolution, tiles far apart, no georeference).
 
+#![allow(clippy::unwrap_used, clippy::panic, reason = "tests fail loudly")]
+
 mod common;
 
 use std::path::Path;

@@ -23,7 +23,6 @@ pub fn shared_data() -> Option<PathBuf> {
     if dir.is_dir() {
         Some(dir)
     } else {
-        println!("skipped: shared data not found at {}", dir.display());
         eprintln!("skipped: shared data not found at {}", dir.display());
         None
     }
