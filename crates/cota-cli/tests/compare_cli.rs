@@ -103,3 +103,27 @@ fn rejects_bad_crops_and_tolerances() {
     let o = cota(&["compare", "--tolerances", "-1"]);
     assert!(!o.status.success());
 }
+
+#[test]
+fn mesh_with_the_quadtree_hierarchy_is_checked() {
+    for leaves in ["templates", "centre-when-needed"] {
+        let o = cota(&[
+            "mesh",
+            "--hierarchy",
+            "quadtree",
+            "--quadtree-leaves",
+            leaves,
+            "--max-error",
+            "20",
+            "--check",
+            "--json",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        assert_eq!(v["hierarchy"], "quadtree");
+        assert!(v["max_error_m"].as_f64().unwrap() <= 20.0);
+    }
+    let o = cota(&["mesh", "--hierarchy", "quadtree", "--max-triangles", "100"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--hierarchy quadtree"));
+}

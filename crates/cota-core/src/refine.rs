@@ -19,10 +19,13 @@
 //!    with `vertical_error_m` the exact largest `|plane − h|` over every sample
 //!    in or on it (the plane through the mesh's own `f32` heights, as
 //!    [`crate::measure`] and the checker compute it), and ask the criterion.
-//!    A non-unit leaf that wants a split gets its split point selected. A
-//!    fictitious vertex `v` of such a leaf is selected too when the deviation
-//!    `|z_v − h_v|` alone makes the criterion want a split while a zero error
-//!    would not (the vertex is then the cause, and no split can remove it).
+//!    A leaf that wants a split gets its split point selected (unless it is a
+//!    unit triangle). A fictitious vertex `v` of such a leaf (unit or not) is
+//!    selected too when the deviation `|z_v − h_v|` alone makes the criterion
+//!    want a split while a zero error would not (the vertex is then the cause,
+//!    and no split can remove it). So the points "selected by the criterion"
+//!    are the split points of the leaves it refined; fictitious points are
+//!    those only the dependencies (forced splits) needed.
 //! 5. Repeat 2–4 until no point is added; then emit the leaves (numbered
 //!    row-major as in [`crate::extract`]).
 //!
@@ -42,8 +45,9 @@
 //! # Runtime
 //! Each round walks the mesh and evaluates every leaf not accepted before with
 //! the same vertex heights (a cache keyed by the leaf and its heights), in
-//! parallel; about `2·log2(N)` rounds. Memory: one byte and one `f32` per
-//! sample, plus the leaves.
+//! parallel; about `2·log2(N)` rounds (15 on a 1201² SRTM tile, 0.2–0.8 s
+//! for 5 m to 0 m in fictitious mode). Memory: one byte and one `f32` per
+//! sample, plus the leaves and the cache.
 
 use std::collections::HashSet;
 
@@ -186,16 +190,12 @@ pub fn refine(
     let mut rounds = 0;
     loop {
         rounds += 1;
-        let t0 = std::time::Instant::now();
         let (leaves, z) = walk(grid, &marks);
-        let t1 = t0.elapsed();
         let fresh: Vec<(Leaf, LeafKey)> = leaves
             .into_iter()
             .map(|l| (l, key(&l, &z, &hier)))
             .filter(|(_, k)| !accepted.contains(k))
             .collect();
-        let t2 = t0.elapsed();
-        let nl = fresh.len();
         let verdicts: Vec<Verdict> = fresh
             .par_iter()
             .map(|(l, _)| judge(grid, &marks, &z, l, criterion))
@@ -213,15 +213,10 @@ pub fn refine(
                 }
             }
         }
-        let t3 = t0.elapsed();
-        marks.close();
-        eprintln!(
-            "round {rounds}: walk {t1:?} keys {t2:?} judge+select {t3:?} close {:?} fresh {nl}",
-            t0.elapsed()
-        );
         if !added {
             break;
         }
+        marks.close();
     }
     let mut out = triangulate(grid, &marks, opts.mode);
     out.rounds = rounds;

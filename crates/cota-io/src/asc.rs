@@ -18,7 +18,8 @@
 //!   name their line and grid position; so are fewer or more values than the
 //!   header promises.
 //! * The CRS lives in a sibling `.prj` file, which a reader of bytes cannot
-//!   see, so the CRS is always [`Crs::Unknown`].
+//!   see, so this reader leaves the CRS [`Crs::Unknown`] (the dispatch in
+//!   `read.rs` may then assume WGS 84 when the georeference looks like degrees).
 //! * The data type reported is [`DataType::I32`] when every value (and the
 //!   nodata value) is an integer literal within i32 range, else
 //!   [`DataType::F32`], as GDAL decides for this format.

@@ -10,8 +10,13 @@
 //!   - Terrarium: h = R·256 + G + B/256 − 32768 m;
 //!   - gray: h = v·`gray_scale_m` + `gray_offset_m`, for 8- and 16-bit gray.
 //!
-//!   Without a choice, RGB and RGBA images are read as terrain-RGB and
-//!   grayscale images as gray.
+//!   Without a choice, grayscale images are read as gray and RGB/RGBA images
+//!   as terrain-RGB, unless terrain-RGB gives heights no terrain on Earth has
+//!   (outside −12 000..9 000 m) while Terrarium gives plausible ones: then
+//!   Terrarium. The two encodings put the bulk of the value in different
+//!   channels, so a real tile is plausible under one and absurd under the other
+//!   (a Terrarium tile at 1 000 m reads as ~860 km in terrain-RGB; a terrain-RGB
+//!   tile reads as ~−32 000 m in Terrarium). The chosen encoding is reported.
 //! * Alpha: a pixel whose alpha is 0 is a void (NaN); other alpha values are
 //!   ignored. A `tRNS` chunk counts as alpha (its colour becomes a void).
 //! * Not read (an `Unsupported` error): palette images, gray below 8 bits,
@@ -51,7 +56,21 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<De
     let mut buf = vec![0u8; len];
     let out = reader.next_frame(&mut buf).map_err(bad_png)?;
     let used = buf.get(..out.buffer_size()).unwrap_or(&buf);
-    let heights = to_heights(used, out.color_type, out.bit_depth, encoding, opts)?;
+    let mut encoding = encoding;
+    let mut heights = to_heights(used, out.color_type, out.bit_depth, encoding, opts)?;
+    if opts.png_encoding.is_none() && encoding == PngEncoding::TerrainRgb && !plausible(&heights) {
+        let other = to_heights(
+            used,
+            out.color_type,
+            out.bit_depth,
+            PngEncoding::Terrarium,
+            opts,
+        )?;
+        if plausible(&other) {
+            heights = other;
+            encoding = PngEncoding::Terrarium;
+        }
+    }
     let georef = GeoRef::unreferenced(opts.cell_size_m);
     let grid = HeightGrid::new(out.width as usize, out.height as usize, heights, georef)?;
     Ok(Dem {
@@ -210,6 +229,17 @@ fn to_heights(
         }
     };
     Ok(heights)
+}
+
+/// Heights on Earth: the Dead Sea shore to above Everest, with room for
+/// bathymetry down to −12 000 m.
+const PLAUSIBLE_M: std::ops::RangeInclusive<f32> = -12_000.0..=9_000.0;
+
+/// True when every valid height lies in [`PLAUSIBLE_M`].
+fn plausible(heights: &[f32]) -> bool {
+    heights
+        .iter()
+        .all(|h| h.is_nan() || PLAUSIBLE_M.contains(h))
 }
 
 /// Maps every N-byte pixel of `buf` to a height.

@@ -158,3 +158,17 @@ fn images_beyond_the_png_crate_default_memory_limit() {
     assert_eq!(dem.grid.len(), 36_000_000);
     assert_eq!(dem.grid.valid_range(), Some((0.0, 7.0)));
 }
+
+/// Without `--encoding`, an RGB tile that is absurd in terrain-RGB but plausible
+/// in Terrarium is read as Terrarium; a terrain-RGB tile stays terrain-RGB.
+#[test]
+fn default_encoding_picks_the_plausible_one() {
+    let dem = read_with(&fixture("terrarium.png"), &ReadOptions::DEFAULT);
+    assert_eq!(dem.format, Format::Png(PngEncoding::Terrarium));
+    assert_range(&dem, 852.117, 2475.066, 0.01);
+    if let Some(root) = shared_data() {
+        let dem = read_with(&root.join("png/fuji.png"), &ReadOptions::DEFAULT);
+        assert_eq!(dem.format, Format::Png(PngEncoding::TerrainRgb));
+        assert_range(&dem, 13.7, 3751.0, 0.05);
+    }
+}
