@@ -20,6 +20,9 @@ pub enum Command {
     Mesh(MeshArgs),
     /// Regenerate paper 000's Table 1 and Table 2: bitree vs restricted quadtree.
     Compare(CompareArgs),
+    /// Progressive compact stream (paper 000): encode a DEM, decode any prefix.
+    #[command(subcommand)]
+    Stream(StreamCommand),
 }
 
 /// How to read and combine the input files.
@@ -138,6 +141,10 @@ pub struct MeshArgs {
     /// or also 2 halves without the centre where the bound allows.
     #[arg(long, value_enum, default_value_t = QuadVariant::Templates)]
     pub quadtree_leaves: QuadVariant,
+    /// Write the .glb as one triangle strip (mode 5) made by traversing the
+    /// bitree (papers 000, 001), and report its references.
+    #[arg(long)]
+    pub strip: bool,
     #[command(flatten)]
     pub refine: RefineArgs,
 }
@@ -334,6 +341,65 @@ pub struct CompareArgs {
     #[arg(long)]
     pub check: bool,
     /// Print one JSON object instead of tables.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `cota stream encode` / `cota stream decode`.
+#[derive(Debug, Subcommand)]
+pub enum StreamCommand {
+    /// Encode DEM files as a progressive .cstream (coarse to fine, lossless by default).
+    Encode(StreamEncodeArgs),
+    /// Decode a .cstream, or a prefix of it, to a mesh.
+    Decode(StreamDecodeArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct StreamEncodeArgs {
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Output stream file (written atomically).
+    #[arg(short, long, value_name = "OUT.cstream")]
+    pub output: std::path::PathBuf,
+    /// Error of the last step in metres (0: the lossless E = 0 mesh).
+    #[arg(
+        long,
+        value_name = "M",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub max_error: f64,
+    /// Height quantum in metres; heights are sent as multiples of it (lossless
+    /// when the data sit on that lattice: 1 for SRTM, 0.1 for decimetre floats).
+    #[arg(long, value_name = "Q", default_value_t = 1.0)]
+    pub quantum_m: f64,
+    /// Void policy.
+    #[arg(long, value_enum, default_value_t = Voids::Fill)]
+    pub voids: Voids,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct StreamDecodeArgs {
+    /// The stream to decode.
+    #[arg(value_name = "IN.cstream")]
+    pub input: std::path::PathBuf,
+    /// Use only the steps that fit in the first N bytes of the file.
+    #[arg(long, value_name = "N", conflicts_with = "max_error")]
+    pub max_bytes: Option<u64>,
+    /// Stop at the first step whose stated max error is at most M metres.
+    #[arg(long, value_name = "M", allow_negative_numbers = true)]
+    pub max_error: Option<f64>,
+    /// Output mesh: .obj, .ply, .stl or .glb (written atomically). Without it
+    /// only the report is printed.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: Option<std::path::PathBuf>,
+    /// Output coordinates.
+    #[arg(long, value_enum, default_value_t = CoordsArg::Local)]
+    pub coords: CoordsArg,
+    /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
 }

@@ -49,7 +49,8 @@ struct Entry {
     line_triangles: usize,
     /// References when sent as separate triangles: 3 per triangle.
     separate_refs: usize,
-    /// References as triangle strips: not implemented yet.
+    /// References as one triangle strip (`cota_core::strip` for the bitree,
+    /// `cota_core::strip_quadtree` for the quadtree).
     strip_refs: Option<usize>,
     /// Measured largest |Δz| over every sample, metres.
     max_error_m: f64,
@@ -195,6 +196,11 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
     let qt = QuadTree::build(&grid)?;
     let (w, h) = (grid.width(), grid.height());
     let full_tris = 2 * (w - 1) * (h - 1);
+    let full_mesh = cota_core::strip::full_bitree_mesh(w as u32, h as u32);
+    let full_strip_bt = cota_core::strip::stripify_bitree(&full_mesh)
+        .ok()
+        .map(|s| s.refs());
+    let full_strip_qt = Some(cota_core::strip_quadtree::stripify_quadtree(&full_mesh).refs());
     let full = |hierarchy, mode| Entry {
         hierarchy,
         mode,
@@ -208,7 +214,11 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
         added_by_forced_splits: None,
         line_triangles: 0,
         separate_refs: 3 * full_tris,
-        strip_refs: None,
+        strip_refs: if hierarchy == "bitree" {
+            full_strip_bt
+        } else {
+            full_strip_qt
+        },
         max_error_m: 0.0,
     };
     let mut full_entries: Vec<Entry> = modes
@@ -246,7 +256,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
                         added_by_forced_splits: None,
                         line_triangles: 0,
                         separate_refs: 3 * c.triangles,
-                        strip_refs: None,
+                        strip_refs: bitree_strip_refs(&x.mesh),
                         max_error_m: max_error(&grid, &x.mesh, conforming)?,
                     }
                 }
@@ -272,7 +282,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
                         added_by_forced_splits: None,
                         line_triangles: r.line_triangles,
                         separate_refs: 3 * tris,
-                        strip_refs: None,
+                        strip_refs: bitree_strip_refs(&r.mesh),
                         max_error_m: max_error(&grid, &r.mesh, check)?,
                     }
                 }
@@ -297,7 +307,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
                 added_by_forced_splits: Some(x.points.added),
                 line_triangles: 0,
                 separate_refs: 3 * c.triangles,
-                strip_refs: None,
+                strip_refs: Some(cota_core::strip_quadtree::stripify_quadtree(&x.mesh).refs()),
                 max_error_m: max_error(&grid, &x.mesh, conforming)?,
             });
         }
@@ -402,7 +412,7 @@ fn text(r: &Report) -> String {
                 };
                 let _ = writeln!(
                     s,
-                    "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | n/a | n/a |",
+                    "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                     row.label,
                     row.tolerance_m.map_or("-".into(), |m| format!("{m:.1}")),
                     bt.added,
@@ -414,6 +424,8 @@ fn text(r: &Report) -> String {
                     bt.triangles,
                     qt.triangles,
                     fmt_pct(sv.triangles_pct),
+                    fmt_refs(bt.strip_refs),
+                    fmt_refs(qt.strip_refs),
                 );
             }
             let _ = writeln!(s);
@@ -421,7 +433,7 @@ fn text(r: &Report) -> String {
     }
     let _ = writeln!(
         s,
-        "Table 2, references: separate triangles (3 each) vs strips (strips: a later issue)\n"
+        "Table 2, references: separate triangles (3 each) vs one triangle strip\n"
     );
     let mut header = String::from("| tol |");
     let mut rule = String::from("|---|");
@@ -447,9 +459,27 @@ fn text(r: &Report) -> String {
                 .find(|e| e.hierarchy == "quadtree" && e.mode == *q)
         });
         for e in bts.chain(qts) {
-            let _ = write!(s, " {} | {} | n/a |", e.triangles, e.separate_refs);
+            let _ = write!(
+                s,
+                " {} | {} | {} |",
+                e.triangles,
+                e.separate_refs,
+                fmt_refs(e.strip_refs)
+            );
         }
         let _ = writeln!(s);
     }
     s
+}
+
+/// The strip references of a bitree mesh (`None` if it cannot be stripped).
+fn bitree_strip_refs(mesh: &cota_core::Mesh) -> Option<usize> {
+    cota_core::strip::stripify_bitree(mesh)
+        .ok()
+        .map(|s| s.refs())
+}
+
+/// A strip reference count for the tables.
+fn fmt_refs(r: Option<usize>) -> String {
+    r.map_or_else(|| "n/a".to_string(), |n| n.to_string())
 }

@@ -12,6 +12,7 @@ mod input;
 mod mesh;
 mod progress;
 mod refine;
+mod stream;
 
 fn main() -> ExitCode {
     match run() {
@@ -29,5 +30,6 @@ fn run() -> anyhow::Result<ExitCode> {
         args::Command::Info(a) => info::run(&a),
         args::Command::Mesh(a) => mesh::run(&a),
         args::Command::Compare(a) => compare::run(&a),
+        args::Command::Stream(c) => stream::run(&c),
     }
 }

@@ -61,6 +61,21 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         anyhow::bail!("--max-triangles: expected at least 2 triangles, found 0");
     }
     crate::refine::validate(&a.refine, a.max_triangles)?;
+    if a.strip {
+        if a.hierarchy == HierarchyArg::Quadtree {
+            anyhow::bail!(
+                "--strip: expected --hierarchy bitree (strips follow the bitree traversal)"
+            );
+        }
+        if let Some(out) = &a.output {
+            if MeshFormat::from_path(out)? != MeshFormat::Glb {
+                anyhow::bail!(
+                    "{}: --strip writes a glTF triangle strip, expected a .glb output",
+                    out.display()
+                );
+            }
+        }
+    }
     let quadtree = a.hierarchy == HierarchyArg::Quadtree;
     if quadtree && (!refine::is_fast(&a.refine) || a.max_triangles.is_some()) {
         anyhow::bail!(
@@ -149,6 +164,14 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     };
     let measure_ms = ms(t);
 
+    let t = Instant::now();
+    let strip = if a.strip || (a.json && !quadtree) {
+        Some(cota_core::strip::stripify_bitree(&mesh).context("triangle strip")?)
+    } else {
+        None
+    };
+    let strip_ms = ms(t);
+
     let mut write_ms = 0.0;
     if let Some(out) = &a.output {
         let coords = match a.coords {
@@ -159,7 +182,12 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
             .with_coords(coords)
             .with_base_m(a.base_m);
         let t = Instant::now();
-        write_mesh(out, &mesh, &grid, &eo)?;
+        match (&strip, a.strip) {
+            (Some(s), true) => cota_io::export::write_atomically(out, |w| {
+                cota_io::export::write_glb_strip(w, &mesh, &s.indices, &grid, &eo)
+            })?,
+            _ => write_mesh(out, &mesh, &grid, &eo)?,
+        }
         write_ms = ms(t);
     }
 
@@ -198,6 +226,10 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "extract_ms": extract_ms,
         "measure_ms": measure_ms,
         "write_ms": write_ms,
+        "strip_refs": strip.as_ref().map(|s| s.refs()),
+        "strip_refs_per_triangle": strip.as_ref().map(|s| s.refs_per_triangle()),
+        "strip_degenerate": strip.as_ref().map(|s| s.degenerate),
+        "strip_ms": strip.as_ref().map(|_| strip_ms),
         "output": a.output.as_ref().map(|p| p.display().to_string()),
     });
     if a.json {
@@ -255,6 +287,13 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::mosaic::SeamRepor
         "volume      {:.4e} m3 between mesh and grid",
         f("volume_m3")
     );
+    if let Some(refs) = r["strip_refs"].as_u64() {
+        println!(
+            "strip       {refs} references ({:.3} per triangle), {} degenerate",
+            f("strip_refs_per_triangle"),
+            r["strip_degenerate"]
+        );
+    }
     if r["checked"].as_bool() == Some(true) {
         let joints = if r["mode"].as_str() == Some("fictitious-faithful") {
             "T-junctions allowed (hanging vertices, paper 000)"

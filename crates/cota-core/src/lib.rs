@@ -28,6 +28,10 @@ pub mod quadtree;
 pub mod quadtree_templates;
 pub mod raster;
 pub mod refine;
+pub mod stream;
+pub mod stream_coder;
+pub mod strip;
+pub mod strip_quadtree;
 pub mod view;
 pub mod voids;
 

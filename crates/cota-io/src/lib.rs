@@ -19,6 +19,7 @@ mod png;
 mod srtm;
 
 pub mod export;
+pub mod stream_file;
 
 pub use error::{ReadError, ReadErrorKind};
 pub use read::{read_dem, read_dem_bytes, DataType, Dem, Format, PngEncoding, ReadOptions};

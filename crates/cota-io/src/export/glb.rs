@@ -7,7 +7,8 @@
 //!
 //! Content: one scene, one node, one mesh with one primitive, mode TRIANGLES
 //! (the default, so not spelled out), one material (grey, non-metallic,
-//! rough). The single buffer is the BIN chunk, holding three tightly packed
+//! rough); [`write_glb_strip`] writes the same with one TRIANGLE_STRIP
+//! primitive (mode 5) instead. The single buffer is the BIN chunk, holding three tightly packed
 //! buffer views, each starting on a 4-byte boundary:
 //! 1. POSITION: f32 VEC3, target ARRAY_BUFFER, with the accessor `min`/`max`
 //!    the spec requires (computed from the f32 values written);
@@ -72,8 +73,39 @@ const MAX_U32_VERTICES: usize = u32::MAX as usize;
 /// [`ExportError::TooLarge`] when the indices do not fit the chosen
 /// [`IndexWidth`] or the file would exceed 4 GiB; [`ExportError::Json`].
 pub fn write_glb<W: Write>(
+    w: W,
+    mesh: &Mesh,
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+) -> Result<(), ExportError> {
+    write_glb_primitive(w, mesh, None, grid, opts)
+}
+
+/// Writes `mesh` as a GLB whose primitive is one TRIANGLE_STRIP (mode 5) with
+/// the indices `strip` (a standard strip of `mesh`'s vertices, as made by
+/// `cota_core::strip::stripify_bitree`; odd triangles reversed, degenerate
+/// triangles as connectors). Everything else is as in [`write_glb`]. When
+/// the output frame is mirrored the strip gets one leading repeated index,
+/// which flips every triangle's parity and so keeps the front faces up.
+///
+/// # Errors
+/// As [`write_glb`]; [`ExportError::VertexOutOfRange`] for a strip index out
+/// of range (`triangle` is then the strip position minus 2).
+pub fn write_glb_strip<W: Write>(
+    w: W,
+    mesh: &Mesh,
+    strip: &[u32],
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+) -> Result<(), ExportError> {
+    write_glb_primitive(w, mesh, Some(strip), grid, opts)
+}
+
+/// [`write_glb`] (`strip = None`) or [`write_glb_strip`].
+fn write_glb_primitive<W: Write>(
     mut w: W,
     mesh: &Mesh,
+    strip: Option<&[u32]>,
     grid: &HeightGrid,
     opts: &ExportOptions,
 ) -> Result<(), ExportError> {
@@ -85,8 +117,40 @@ pub fn write_glb<W: Write>(
         .map(|v| to_f32(frame.vertex(v)))
         .collect();
     let normals = vertex_normals(mesh, &frame);
-    let layout = Layout::new(mesh, index_type(mesh.vertices.len(), opts.index_width)?);
-    let root = build_root(&positions, &layout, &GeoInfo::new(grid, opts.coords))?;
+    let strip: Option<Vec<u32>> = match strip {
+        None => None,
+        Some(s) => {
+            let nv = mesh.vertices.len();
+            if let Some((k, &bad)) = s.iter().enumerate().find(|(_, &i)| i as usize >= nv) {
+                return Err(ExportError::VertexOutOfRange {
+                    index: bad,
+                    count: nv,
+                    triangle: k.saturating_sub(2),
+                });
+            }
+            let mut v = Vec::with_capacity(s.len() + 1);
+            if frame.mirrored() {
+                v.extend(s.first().copied());
+            }
+            v.extend_from_slice(s);
+            Some(v)
+        }
+    };
+    let index_count = match &strip {
+        Some(s) => s.len() as u64,
+        None => 3 * mesh.triangles.len() as u64,
+    };
+    let mode = if strip.is_some() {
+        Mode::TriangleStrip
+    } else {
+        Mode::Triangles
+    };
+    let layout = Layout::new(
+        mesh,
+        index_count,
+        index_type(mesh.vertices.len(), opts.index_width)?,
+    );
+    let root = build_root(&positions, &layout, mode, &GeoInfo::new(grid, opts.coords))?;
     let json = json::serialize::to_vec(&root).map_err(|e| ExportError::Json(e.to_string()))?;
     let json_padded = pad4(json.len() as u64);
     let bin_padded = pad4(layout.buffer_bytes);
@@ -101,7 +165,15 @@ pub fn write_glb<W: Write>(
     w.write_all(&json)?;
     write_padding(&mut w, json.len() as u64, b' ')?;
     write_chunk_header(&mut w, bin_padded, CHUNK_BIN)?;
-    write_bin(&mut w, mesh, &frame, &positions, &normals, layout.index)?;
+    write_bin(
+        &mut w,
+        mesh,
+        strip.as_deref(),
+        &frame,
+        &positions,
+        &normals,
+        layout.index,
+    )?;
     write_padding(&mut w, layout.buffer_bytes, 0)?;
     w.flush()?;
     Ok(())
@@ -132,7 +204,8 @@ fn index_type(vertices: usize, width: IndexWidth) -> Result<ComponentType, Expor
 #[derive(Debug, Clone, Copy)]
 struct Layout {
     vertices: u64,
-    triangles: u64,
+    /// Index count (3 per triangle, or the strip's length).
+    indices: u64,
     index: ComponentType,
     /// Bytes of the positions view, and of the normals view.
     vec3_bytes: u64,
@@ -145,14 +218,13 @@ struct Layout {
 impl Layout {
     /// Positions, normals, indices, back to back (each a multiple of 4 bytes
     /// from the start, since 12·n is).
-    fn new(mesh: &Mesh, index: ComponentType) -> Self {
+    fn new(mesh: &Mesh, indices: u64, index: ComponentType) -> Self {
         let vertices = mesh.vertices.len() as u64;
-        let triangles = mesh.triangles.len() as u64;
         let vec3_bytes = 12 * vertices;
-        let index_bytes = 3 * triangles * index.size() as u64;
+        let index_bytes = pad4(indices * index.size() as u64);
         Layout {
             vertices,
-            triangles,
+            indices,
             index,
             vec3_bytes,
             index_bytes,
@@ -165,6 +237,7 @@ impl Layout {
 fn build_root(
     positions: &[[f32; 3]],
     layout: &Layout,
+    mode: Mode,
     info: &GeoInfo,
 ) -> Result<json::Root, ExportError> {
     let (min, max) = bounds(positions);
@@ -207,7 +280,7 @@ fn build_root(
         accessors: vec![
             accessor(0, layout.vertices, ComponentType::F32, Type::Vec3).with_bounds(&min, &max),
             accessor(1, layout.vertices, ComponentType::F32, Type::Vec3),
-            accessor(2, 3 * layout.triangles, layout.index, Type::Scalar),
+            accessor(2, layout.indices, layout.index, Type::Scalar),
         ],
         materials: vec![terrain_material()],
         meshes: vec![json::Mesh {
@@ -219,7 +292,7 @@ fn build_root(
                 extras: None,
                 indices: Some(Index::new(2)),
                 material: Some(Index::new(0)),
-                mode: Checked::Valid(Mode::Triangles),
+                mode: Checked::Valid(mode),
                 targets: None,
             }],
             weights: None,
@@ -325,6 +398,7 @@ fn write_padding<W: Write>(w: &mut W, len: u64, byte: u8) -> Result<(), ExportEr
 fn write_bin<W: Write>(
     w: &mut W,
     mesh: &Mesh,
+    strip: Option<&[u32]>,
     frame: &Frame,
     positions: &[[f32; 3]],
     normals: &[[f32; 3]],
@@ -335,6 +409,19 @@ fn write_bin<W: Write>(
     }
     for n in normals {
         write_f32s(w, n)?;
+    }
+    if let Some(s) = strip {
+        for &i in s {
+            if index == ComponentType::U16 {
+                // Fits: index_type allowed u16 only for at most 65 535 vertices.
+                w.write_all(&(i as u16).to_le_bytes())?;
+            } else {
+                w.write_all(&i.to_le_bytes())?;
+            }
+        }
+        // The index view is padded to 4 bytes (an odd count of u16).
+        let bytes = s.len() as u64 * index.size() as u64;
+        return write_padding(w, bytes, 0);
     }
     for &t in &mesh.triangles {
         let t = frame.orient(t);

@@ -78,7 +78,7 @@ use cota_core::{HeightGrid, Mesh};
 
 pub use atomic::write_atomically;
 pub use error::{ExportError, WriteError};
-pub use glb::write_glb;
+pub use glb::{write_glb, write_glb_strip};
 pub use obj::write_obj;
 pub use options::{Coords, ExportOptions, IndexWidth};
 pub use ply::write_ply;

@@ -1,0 +1,262 @@
+//! `cota stream encode|decode`: the progressive stream of paper 000
+//! (`cota_core::stream`, framed by `cota_io::stream_file`).
+//!
+//! Encode: read and mosaic like `cota mesh`, fill voids, encode, write the
+//! `.cstream` atomically, report each step's bytes per triangle and per point.
+//! Decode: read a prefix (all, `--max-bytes`, or `--max-error`), rebuild the
+//! mesh and a grid of the decoded surface for the exporters, write the mesh.
+
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::Context;
+use cota_core::stream::{encode, StreamOptions};
+use cota_core::voids::{fill_voids, FillMethod, FillOptions, VoidPolicy};
+use cota_core::HeightGrid;
+use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
+use cota_io::stream_file::{read_stream, step_end_offsets, write_stream, StreamLimit};
+use serde_json::json;
+
+use crate::args::{CoordsArg, StreamCommand, StreamDecodeArgs, StreamEncodeArgs, Voids};
+use crate::input::load;
+
+pub fn run(c: &StreamCommand) -> anyhow::Result<ExitCode> {
+    match c {
+        StreamCommand::Encode(a) => run_encode(a),
+        StreamCommand::Decode(a) => run_decode(a),
+    }
+}
+
+fn ratio(a: u64, b: usize) -> f64 {
+    if b == 0 {
+        0.0
+    } else {
+        a as f64 / b as f64
+    }
+}
+
+fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
+    if a.max_error.is_nan() || a.max_error < 0.0 {
+        anyhow::bail!("--max-error: expected 0 m or more, found {} m", a.max_error);
+    }
+    if !(a.quantum_m.is_finite() && a.quantum_m > 0.0) {
+        anyhow::bail!(
+            "--quantum-m: expected a positive number of metres, found {}",
+            a.quantum_m
+        );
+    }
+    let input = load(&a.input)?;
+    let mut grid = input.grid;
+    let policy = match a.voids {
+        Voids::Fill => VoidPolicy::Fill(FillMethod::Harmonic),
+        Voids::Idw => VoidPolicy::Fill(FillMethod::InverseDistance),
+        Voids::Refuse => VoidPolicy::Refuse,
+    };
+    fill_voids(&mut grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")?;
+    let t = Instant::now();
+    let opts = StreamOptions::default()
+        .with_quantum_m(a.quantum_m)
+        .with_max_error_m(a.max_error);
+    let s = encode(&grid, &opts)?;
+    let encode_ms = t.elapsed().as_secs_f64() * 1e3;
+    write_stream(&a.output, &s, grid.georef())?;
+    let ends = step_end_offsets(&s, grid.georef());
+    let total = ends.last().copied().unwrap_or(0);
+    let full = 2 * (grid.width() - 1) * (grid.height() - 1);
+    let steps: Vec<_> = s
+        .steps
+        .iter()
+        .zip(&ends)
+        .enumerate()
+        .map(|(k, (st, &end))| {
+            json!({
+                "step": k,
+                "threshold_m": if k == 0 { None } else { Some(st.threshold_m) },
+                "max_error_m": st.max_error_m,
+                "new_points": st.new_points,
+                "step_bytes": st.payload.len() + 8,
+                "total_bytes": end,
+                "triangles": st.triangles,
+                "vertices": st.vertices,
+                "bytes_per_triangle": ratio(end, st.triangles),
+                "bytes_per_point": ratio(end, st.vertices),
+            })
+        })
+        .collect();
+    let last = s.steps.last();
+    let name = input
+        .files
+        .iter()
+        .map(|f| f.path.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" + ");
+    let report = json!({
+        "input": name,
+        "width": grid.width(),
+        "height": grid.height(),
+        "quantum_m": a.quantum_m,
+        "lossless": s.lattice_exact && a.max_error == 0.0,
+        "lattice_exact": s.lattice_exact,
+        "bytes": total,
+        "full_triangles": full,
+        "bytes_per_full_triangle": ratio(total, full),
+        "final_triangles": last.map(|l| l.triangles),
+        "bytes_per_final_triangle": ratio(total, last.map_or(0, |l| l.triangles)),
+        "encode_ms": encode_ms,
+        "steps": steps,
+        "output": a.output.display().to_string(),
+    });
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!(
+        "input       {} ({} x {}), quantum {} m{}",
+        name,
+        grid.width(),
+        grid.height(),
+        a.quantum_m,
+        if s.lattice_exact {
+            ", heights on the lattice (exact)"
+        } else {
+            ", heights rounded to the lattice: add quantum/2 to the errors"
+        }
+    );
+    println!(
+        "{:>4} {:>10} {:>10} {:>10} {:>11} {:>11} {:>10} {:>8} {:>8}",
+        "step",
+        "threshold",
+        "max err m",
+        "new pts",
+        "bytes",
+        "triangles",
+        "vertices",
+        "B/tri",
+        "B/pt"
+    );
+    for (k, (st, &end)) in s.steps.iter().zip(&ends).enumerate() {
+        let thr = if k == 0 {
+            "coarse".to_string()
+        } else {
+            format!("{}", st.threshold_m)
+        };
+        println!(
+            "{:>4} {:>10} {:>10.3} {:>10} {:>11} {:>11} {:>10} {:>8.3} {:>8.3}",
+            k,
+            thr,
+            st.max_error_m,
+            st.new_points,
+            end,
+            st.triangles,
+            st.vertices,
+            ratio(end, st.triangles),
+            ratio(end, st.vertices)
+        );
+    }
+    println!(
+        "total       {} bytes: {:.3} B per triangle of the final mesh, {:.3} B per full-resolution triangle ({})",
+        total,
+        ratio(total, last.map_or(0, |l| l.triangles)),
+        ratio(total, full),
+        full
+    );
+    println!("wrote       {}", a.output.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
+    if let Some(e) = a.max_error {
+        if e.is_nan() || e < 0.0 {
+            anyhow::bail!("--max-error: expected 0 m or more, found {e} m");
+        }
+    }
+    if let Some(out) = &a.output {
+        MeshFormat::from_path(out)?;
+    }
+    let limit = StreamLimit::ALL
+        .with_max_bytes(a.max_bytes)
+        .with_max_error_m(a.max_error);
+    let d = read_stream(&a.input, &limit)?;
+    let h = d.decoder.header().clone();
+    let mesh = d.decoder.mesh();
+    let heights = d
+        .decoder
+        .heights_m()
+        .context("the stream has no complete step")?;
+    let grid = HeightGrid::new(
+        h.width as usize,
+        h.height as usize,
+        heights,
+        d.georef.clone(),
+    )
+    .with_context(|| format!("{}: decoded surface", a.input.display()))?;
+    if let Some(out) = &a.output {
+        let coords = match a.coords {
+            CoordsArg::Local => Coords::LocalMetres,
+            CoordsArg::Grid => Coords::Grid,
+        };
+        write_mesh(
+            out,
+            &mesh,
+            &grid,
+            &ExportOptions::DEFAULT.with_coords(coords),
+        )?;
+    }
+    let used = d.steps.last().map_or(0, |s| s.end_offset);
+    let steps: Vec<_> = d
+        .steps
+        .iter()
+        .map(|s| {
+            json!({
+                "step": s.info.index,
+                "max_error_m": s.info.max_error_m,
+                "new_points": s.info.new_points,
+                "total_bytes": s.end_offset,
+            })
+        })
+        .collect();
+    let report = json!({
+        "input": a.input.display().to_string(),
+        "width": h.width,
+        "height": h.height,
+        "quantum_m": h.quantum_m,
+        "steps_used": d.steps.len(),
+        "bytes_used": used,
+        "file_bytes": d.file_bytes,
+        "max_error_m": d.decoder.max_error_m(),
+        "triangles": mesh.triangle_count(),
+        "vertices": mesh.vertex_count(),
+        "bytes_per_triangle": ratio(used, mesh.triangle_count()),
+        "bytes_per_point": ratio(used, mesh.vertex_count()),
+        "steps": steps,
+        "output": a.output.as_ref().map(|p| p.display().to_string()),
+    });
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!(
+        "input       {} ({} x {}), {} of {} bytes, {} steps",
+        a.input.display(),
+        h.width,
+        h.height,
+        used,
+        d.file_bytes,
+        d.steps.len()
+    );
+    println!(
+        "mesh        {} vertices, {} triangles, max error {} m",
+        mesh.vertex_count(),
+        mesh.triangle_count(),
+        d.decoder.max_error_m().unwrap_or(0.0)
+    );
+    println!(
+        "size        {:.3} B per triangle, {:.3} B per point",
+        ratio(used, mesh.triangle_count()),
+        ratio(used, mesh.vertex_count())
+    );
+    if let Some(out) = &a.output {
+        println!("wrote       {}", out.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
