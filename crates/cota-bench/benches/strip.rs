@@ -2,7 +2,8 @@
 //! meshoptimizer's `stripify` (through the `meshopt` crate, benchmarks only),
 //! on the same meshes of the bundled SRTM tile.
 //!
-//! First a report (stderr): references per triangle of both at several
+//! First a report (stderr): references per triangle of both (cota's guided
+//! default and the papers' pure traversal order) at several
 //! tolerances, conforming and fictitious, and on a full grid; meshoptimizer
 //! gets the mesh's triangles as extracted and, as its documentation advises,
 //! after `optimize_vertex_cache`, and joins its strips with degenerate
@@ -17,7 +18,7 @@ use std::hint::black_box;
 use std::path::PathBuf;
 
 use cota_core::refine::{refine, Mode, RefineOptions};
-use cota_core::strip::stripify_bitree;
+use cota_core::strip::{stripify_bitree, stripify_bitree_with, StripMethod};
 use cota_core::voids::{fill_voids, FillOptions};
 use cota_core::{Bitree, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError, Mesh};
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -67,19 +68,23 @@ fn meshopt_refs(mesh: &Mesh) -> (usize, usize) {
 fn row(label: &str, mesh: &Mesh) {
     let t = mesh.triangles.len() as f64;
     let ours = stripify_bitree(mesh).unwrap();
+    let traversal = stripify_bitree_with(mesh, StripMethod::Traversal).unwrap();
     let (raw, cached) = meshopt_refs(mesh);
     eprintln!(
-        "| {label} | {} | {:.3} | {:.3} | {:.3} |",
+        "| {label} | {} | {:.3} | {:.3} | {:.3} | {:.3} |",
         mesh.triangles.len(),
         ours.refs_per_triangle(),
+        traversal.refs_per_triangle(),
         raw as f64 / t,
         cached as f64 / t
     );
 }
 
 fn report(g: &HeightGrid, tree: &Bitree<'_>) {
-    eprintln!("| mesh | triangles | cota refs/tri | meshopt | meshopt (cache-optimized) |");
-    eprintln!("|---|---|---|---|---|");
+    eprintln!(
+        "| mesh | triangles | cota guided refs/tri | cota traversal | meshopt | meshopt (cache-optimized) |"
+    );
+    eprintln!("|---|---|---|---|---|---|");
     for e in [0.0, 1.0, 5.0, 20.0, 100.0] {
         let mesh = tree.extract(&ExtractOptions::max_error_m(e)).unwrap().mesh;
         row(&format!("conforming E={e} m"), &mesh);

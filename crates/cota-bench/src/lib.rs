@@ -85,7 +85,8 @@ fn load_fuji() -> Result<Case, String> {
     if !path.exists() {
         return Err(format!("{} is absent", path.display()));
     }
-    let dem = read_dem(&path, &ReadOptions::DEFAULT).map_err(|e| e.to_string())?;
+    let opts = ReadOptions::DEFAULT.with_png_encoding(Some(PngEncoding::TerrainRgb));
+    let dem = read_dem(&path, &opts).map_err(|e| e.to_string())?;
     let grid = pad_to(&dem.grid, 513).map_err(|e| e.to_string())?;
     Ok(Case {
         name: "fuji513",

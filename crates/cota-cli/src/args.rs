@@ -376,9 +376,28 @@ pub struct StreamEncodeArgs {
     /// Void policy.
     #[arg(long, value_enum, default_value_t = Voids::Fill)]
     pub voids: Voids,
+    /// progressive: coarse-to-fine steps of decreasing error down to
+    /// --max-error. conforming, fictitious, fictitious-faithful: one step
+    /// holding `cota mesh --mode M --max-error E`'s mesh; fictitious points
+    /// are never sent.
+    #[arg(long, value_enum, default_value_t = StreamModeArg::Progressive)]
+    pub mode: StreamModeArg,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+}
+
+/// What `cota stream encode` streams.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum StreamModeArg {
+    /// Coarse-to-fine steps over the exact error map (every prefix a mesh).
+    Progressive,
+    /// One step: the conforming refinement at --max-error.
+    Conforming,
+    /// One step: fictitious points, watertight.
+    Fictitious,
+    /// One step: fictitious points as in paper 000 (hanging vertices).
+    FictitiousFaithful,
 }
 
 #[derive(Debug, Args)]

@@ -10,14 +10,18 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::stream::{encode, StreamOptions};
+use cota_core::refine::{refine_marks, Mode, RefineOptions};
+use cota_core::stream::{encode, encode_marks, StreamOptions};
 use cota_core::voids::{fill_voids, FillMethod, FillOptions, VoidPolicy};
 use cota_core::HeightGrid;
+use cota_core::MaxVerticalError;
 use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use cota_io::stream_file::{read_stream, step_end_offsets, write_stream, StreamLimit};
 use serde_json::json;
 
-use crate::args::{CoordsArg, StreamCommand, StreamDecodeArgs, StreamEncodeArgs, Voids};
+use crate::args::{
+    CoordsArg, StreamCommand, StreamDecodeArgs, StreamEncodeArgs, StreamModeArg, Voids,
+};
 use crate::input::load;
 
 pub fn run(c: &StreamCommand) -> anyhow::Result<ExitCode> {
@@ -57,7 +61,21 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
     let opts = StreamOptions::default()
         .with_quantum_m(a.quantum_m)
         .with_max_error_m(a.max_error);
-    let s = encode(&grid, &opts)?;
+    let s = match a.mode {
+        StreamModeArg::Progressive => encode(&grid, &opts)?,
+        m => {
+            let mode = match m {
+                StreamModeArg::Fictitious => Mode::Fictitious { watertight: true },
+                StreamModeArg::FictitiousFaithful => Mode::Fictitious { watertight: false },
+                _ => Mode::Conforming,
+            };
+            let crit = MaxVerticalError {
+                max_error_m: a.max_error,
+            };
+            let (_, marks) = refine_marks(&grid, &crit, &RefineOptions::DEFAULT.with_mode(mode))?;
+            encode_marks(&grid, &marks, mode, a.max_error, &opts)?
+        }
+    };
     let encode_ms = t.elapsed().as_secs_f64() * 1e3;
     write_stream(&a.output, &s, grid.georef())?;
     let ends = step_end_offsets(&s, grid.georef());
@@ -71,7 +89,11 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         .map(|(k, (st, &end))| {
             json!({
                 "step": k,
-                "threshold_m": if k == 0 { None } else { Some(st.threshold_m) },
+                "threshold_m": if k == 0 && a.mode == StreamModeArg::Progressive {
+                    None
+                } else {
+                    Some(st.threshold_m)
+                },
                 "max_error_m": st.max_error_m,
                 "new_points": st.new_points,
                 "step_bytes": st.payload.len() + 8,
@@ -95,6 +117,12 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         "width": grid.width(),
         "height": grid.height(),
         "quantum_m": a.quantum_m,
+        "mode": match a.mode {
+            StreamModeArg::Progressive => "progressive",
+            StreamModeArg::Conforming => "conforming",
+            StreamModeArg::Fictitious => "fictitious",
+            StreamModeArg::FictitiousFaithful => "fictitious-faithful",
+        },
         "lossless": s.lattice_exact && a.max_error == 0.0,
         "lattice_exact": s.lattice_exact,
         "bytes": total,
@@ -135,7 +163,7 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         "B/pt"
     );
     for (k, (st, &end)) in s.steps.iter().zip(&ends).enumerate() {
-        let thr = if k == 0 {
+        let thr = if k == 0 && a.mode == StreamModeArg::Progressive {
             "coarse".to_string()
         } else {
             format!("{}", st.threshold_m)

@@ -102,3 +102,37 @@ fn truncated_and_corrupted_files_name_the_file() {
 fn cota_missing(dir: &tempfile::TempDir) -> String {
     dir.path().join("missing.cstream").display().to_string()
 }
+
+#[test]
+fn fictitious_mode_streams_one_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let cs = dir.path().join("f.cstream");
+    let cs_s = cs.to_str().unwrap();
+    let r = json(&cota(&[
+        "stream",
+        "encode",
+        "-o",
+        cs_s,
+        "--mode",
+        "fictitious",
+        "--max-error",
+        "5",
+        "--json",
+    ]));
+    assert_eq!(r["mode"], "fictitious");
+    let steps = r["steps"].as_array().unwrap();
+    assert_eq!(steps.len(), 1);
+    assert!(steps[0]["new_points"].as_u64() < steps[0]["vertices"].as_u64());
+    let ply = dir.path().join("f.ply");
+    let d = json(&cota(&[
+        "stream",
+        "decode",
+        cs_s,
+        "--json",
+        "-o",
+        ply.to_str().unwrap(),
+    ]));
+    assert_eq!(d["triangles"], steps[0]["triangles"]);
+    assert!(d["max_error_m"].as_f64().unwrap() <= 5.0);
+    assert!(ply.exists());
+}

@@ -30,6 +30,7 @@ pub mod raster;
 pub mod refine;
 pub mod stream;
 pub mod stream_coder;
+pub mod stream_marks;
 pub mod strip;
 pub mod strip_quadtree;
 pub mod view;

@@ -169,6 +169,20 @@ pub fn refine(
     criterion: &dyn Criterion,
     opts: &RefineOptions,
 ) -> Result<Refined, MeshError> {
+    refine_marks(grid, criterion, opts).map(|(r, _)| r)
+}
+
+/// [`refine`], also returning the closed [`Marks`] it ended with (which points
+/// are selected, which fictitious), e.g. to stream them
+/// ([`crate::stream::encode_marks`]).
+///
+/// # Errors
+/// As [`refine`].
+pub fn refine_marks(
+    grid: &HeightGrid,
+    criterion: &dyn Criterion,
+    opts: &RefineOptions,
+) -> Result<(Refined, Marks), MeshError> {
     let (w, h) = (grid.width(), grid.height());
     if w < 2 || h < 2 {
         return Err(MeshError::GridTooSmall {
@@ -220,7 +234,7 @@ pub fn refine(
     }
     let mut out = triangulate(grid, &marks, opts.mode);
     out.rounds = rounds;
-    Ok(out)
+    Ok((out, marks))
 }
 
 /// The mesh a closed set of marks describes (steps 3 and 5 of the module

@@ -1,7 +1,7 @@
 //! Progressive transmission: a compact coarse-to-fine stream of the bitree's
 //! split points that never sends a coordinate.
 //!
-//! Paper `000_ebf7e3a88dffd361.txt` §4 (progressive transmission): send the
+//! Paper `000_ebf7e3a88dffd361.txt` §3 ("Transmisión progresiva"): send the
 //! coarse mesh `N0`, then, for successively finer tolerances, the points each
 //! one adds; the receiver rebuilds the hierarchy itself. Here every position is
 //! implicit in the hierarchy ([`crate::hierarchy`]) and only split decisions
@@ -44,9 +44,12 @@
 //!    error of that prefix's mesh at every sample, at most the threshold.
 //!
 //! # Bit layout
-//! Header ([`StreamHeader::to_bytes`], 48 bytes, little-endian): `width: u32`,
+//! Header ([`StreamHeader::to_bytes`], 52 bytes, little-endian): `width: u32`,
 //! `height: u32`, `quantum_m: f64`, then `q` of the padded square's corners
-//! `(0,0), (N,0), (0,N), (N,N)` as four `i64` (0 for corners outside the grid).
+//! `(0,0), (N,0), (0,N), (N,N)` as four `i64` (0 for corners outside the grid),
+//! then `kind: u32` ([`StreamKind`]: 0 error steps, this file; 1–3 a refined
+//! mesh's marks in conforming, fictitious or faithful mode,
+//! [`crate::stream_marks`]).
 //!
 //! Step payload: `max_error_m: f32` (little-endian, the stated `E_k`), then one
 //! range-coded block ([`RangeEncoder`]) holding, in walk order, for each
@@ -60,25 +63,31 @@
 //! good prefix. Its [`StreamDecoder::mesh`] equals `Bitree::extract(E_k)` of the
 //! quantised grid, vertex for vertex.
 //!
-//! Not covered yet: streams of fictitious-mode meshes (`refine`'s `Marks`),
-//! where fictitious split points would cost a flag and no height.
+//! Meshes of other criteria and of the fictitious modes (`refine`'s `Marks`,
+//! where fictitious points cost a flag and no height) are streamed by
+//! [`encode_marks`] ([`crate::stream_marks`]) in one step, decoded by the
+//! same [`StreamDecoder`].
 
 use crate::bitree::{Bitree, MeshError};
+use crate::fictitious::Marks;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{orient_up, Hierarchy, Placement, Pt, Tri};
 use crate::mesh::{Mesh, MeshVertex};
+use crate::refine::Mode;
 use crate::stream_coder::{Bit, RangeDecoder, RangeEncoder, ResidualModel};
 
+pub use crate::stream_marks::encode_marks;
+
 /// Largest magnitude of a quantised height (`|q| < 2^40`).
-const MAX_Q: i64 = 1 << 40;
+pub(crate) const MAX_Q: i64 = 1 << 40;
 /// Number of level contexts.
 const LEVELS: usize = 64;
 /// Number of step contexts.
 const STEPS: usize = 16;
 /// Marks a sample whose height is not known yet.
-const UNKNOWN: i64 = i64::MIN;
+pub(crate) const UNKNOWN: i64 = i64::MIN;
 /// Bytes of the header.
-pub const HEADER_BYTES: usize = 48;
+pub const HEADER_BYTES: usize = 52;
 
 /// Errors of the progressive stream.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -170,6 +179,39 @@ impl StreamOptions {
     }
 }
 
+/// What a stream carries.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StreamKind {
+    /// Steps of decreasing error threshold over the bitree's error map
+    /// ([`encode`]); every prefix is `Bitree::extract(E_k)`.
+    ErrorSteps,
+    /// One step holding a closed set of [`Marks`]
+    /// from [`crate::refine`] in this mode ([`encode_marks`]): fictitious
+    /// points cost a flag and no height.
+    Marks(Mode),
+}
+
+impl StreamKind {
+    fn code(self) -> u32 {
+        match self {
+            StreamKind::ErrorSteps => 0,
+            StreamKind::Marks(Mode::Conforming) => 1,
+            StreamKind::Marks(Mode::Fictitious { watertight: true }) => 2,
+            StreamKind::Marks(Mode::Fictitious { watertight: false }) => 3,
+        }
+    }
+
+    fn from_code(c: u32) -> Option<Self> {
+        Some(match c {
+            0 => StreamKind::ErrorSteps,
+            1 => StreamKind::Marks(Mode::Conforming),
+            2 => StreamKind::Marks(Mode::Fictitious { watertight: true }),
+            3 => StreamKind::Marks(Mode::Fictitious { watertight: false }),
+            _ => return None,
+        })
+    }
+}
+
 /// What a receiver needs before the first step.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StreamHeader {
@@ -182,10 +224,12 @@ pub struct StreamHeader {
     /// Quantised heights of the padded square's corners (0,0), (N,0), (0,N),
     /// (N,N); 0 for corners outside the grid.
     pub corners_q: [i64; 4],
+    /// What the steps carry.
+    pub kind: StreamKind,
 }
 
 impl StreamHeader {
-    /// The 48 header bytes (see the module docs).
+    /// The 52 header bytes (see the module docs).
     pub fn to_bytes(&self) -> Vec<u8> {
         let mut v = Vec::with_capacity(HEADER_BYTES);
         v.extend_from_slice(&self.width.to_le_bytes());
@@ -194,14 +238,16 @@ impl StreamHeader {
         for c in self.corners_q {
             v.extend_from_slice(&c.to_le_bytes());
         }
+        v.extend_from_slice(&self.kind.code().to_le_bytes());
         v
     }
 
-    /// Parses and validates 48 header bytes.
+    /// Parses and validates 52 header bytes.
     ///
     /// # Errors
     /// [`StreamError::BadHeader`] for a wrong length, a grid below 2×2 or above
-    /// 2^30 per side or 2^31 samples, a bad quantum, or corner heights out of range.
+    /// 2^30 per side or 2^31 samples, a bad quantum, corner heights out of
+    /// range or an unknown kind.
     pub fn from_bytes(b: &[u8]) -> Result<Self, StreamError> {
         let bad = |expected: &str, found: String| StreamError::BadHeader {
             expected: expected.to_string(),
@@ -240,11 +286,15 @@ impl StreamHeader {
                 return Err(bad("corner heights below 2^40 quanta", format!("{c}")));
             }
         }
+        let code = u32_at(48);
+        let kind = StreamKind::from_code(code)
+            .ok_or_else(|| bad("a stream kind of 0 to 3", format!("{code}")))?;
         Ok(StreamHeader {
             width,
             height,
             quantum_m,
             corners_q,
+            kind,
         })
     }
 }
@@ -338,6 +388,7 @@ pub fn encode(grid: &HeightGrid, opts: &StreamOptions) -> Result<EncodedStream, 
         height: hier.height(),
         quantum_m: opts.quantum_m,
         corners_q: corner_points(&hier).map(|c| c.map(|p| q[hier.index(p)]).unwrap_or(0)),
+        kind: StreamKind::ErrorSteps,
     };
     let mut state = State::new(&header);
     let mut models = Models::new();
@@ -407,7 +458,7 @@ fn schedule(tree: &Bitree<'_>, opts: &StreamOptions) -> Vec<f64> {
 }
 
 /// The largest `f32` not above `e`.
-fn split_threshold(e: f64) -> f32 {
+pub(crate) fn split_threshold(e: f64) -> f32 {
     let f = e as f32;
     if f as f64 > e {
         f.next_down()
@@ -417,14 +468,14 @@ fn split_threshold(e: f64) -> f32 {
 }
 
 /// The padded square's corners that are grid samples, in header order.
-fn corner_points(hier: &Hierarchy) -> [Option<Pt>; 4] {
+pub(crate) fn corner_points(hier: &Hierarchy) -> [Option<Pt>; 4] {
     let n = hier.size();
     [[0, 0], [n, 0], [0, n], [n, n]].map(|p| hier.contains(p).then_some(p))
 }
 
 /// Context level of a non-unit triangle (see the module docs).
 #[inline]
-fn level(t: &Tri) -> usize {
+pub(crate) fn level(t: &Tri) -> usize {
     let dx = t.a[0].abs_diff(t.b[0]);
     let dy = t.a[1].abs_diff(t.b[1]);
     let s = dx.max(dy);
@@ -434,16 +485,22 @@ fn level(t: &Tri) -> usize {
 
 /// The adaptive models shared by all steps.
 #[derive(Debug, Clone)]
-struct Models {
+pub(crate) struct Models {
     split: Vec<Bit>,
-    residual: Vec<ResidualModel>,
+    pub(crate) residual: Vec<ResidualModel>,
+    /// Marks streams: per (level, point already present) split bits.
+    pub(crate) side: Vec<Bit>,
+    /// Marks streams: per level "selected, not fictitious" bits.
+    pub(crate) select: Vec<Bit>,
 }
 
 impl Models {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Models {
             split: vec![Bit::default(); LEVELS * STEPS * 2],
             residual: vec![ResidualModel::default(); LEVELS * STEPS],
+            side: vec![Bit::default(); LEVELS * 2],
+            select: vec![Bit::default(); LEVELS],
         }
     }
 }
@@ -454,7 +511,7 @@ fn split_ctx(level: usize, step: usize, fresh: bool) -> usize {
 }
 
 #[inline]
-fn residual_ctx(level: usize, step: usize) -> usize {
+pub(crate) fn residual_ctx(level: usize, step: usize) -> usize {
     level * STEPS + step.min(STEPS - 1)
 }
 
@@ -521,19 +578,21 @@ impl Coder for Dec<'_, '_> {
 
 /// What sender and receiver both know: which split points split, and heights.
 #[derive(Debug, Clone)]
-struct State {
-    hier: Hierarchy,
+pub(crate) struct State {
+    pub(crate) hier: Hierarchy,
     split: Vec<bool>,
     /// Epoch of the last decision on each sample (see `walk_step`).
     decided: Vec<u32>,
     epoch: u32,
-    q: Vec<i64>,
+    pub(crate) q: Vec<i64>,
     /// Samples split or given a height by the current step (for rollback).
     journal: Vec<usize>,
+    /// Marks streams: the decoded closed marks, which then drive the walk.
+    pub(crate) marks: Option<Marks>,
 }
 
 impl State {
-    fn new(h: &StreamHeader) -> Self {
+    pub(crate) fn new(h: &StreamHeader) -> Self {
         let hier = Hierarchy::new(h.width, h.height);
         let n = h.width as usize * h.height as usize;
         let mut q = vec![UNKNOWN; n];
@@ -549,6 +608,7 @@ impl State {
             epoch: 0,
             q,
             journal: Vec::new(),
+            marks: None,
         }
     }
 
@@ -676,9 +736,15 @@ impl State {
                 }
                 continue;
             }
-            if inside && !self.split[self.hier.index(t.mid())] {
-                f(&t);
-                continue;
+            if inside {
+                let split = match &self.marks {
+                    Some(m) => m.splits(&t),
+                    None => self.split[self.hier.index(t.mid())],
+                };
+                if !split {
+                    f(&t);
+                    continue;
+                }
             }
             let (c0, c1) = t.children();
             stack.push((c1, inside));
@@ -688,7 +754,7 @@ impl State {
 
     /// The current mesh: leaves counter-clockwise from above, vertices numbered
     /// row-major (as [`Bitree::extract`] numbers them).
-    fn mesh(&self) -> Mesh {
+    pub(crate) fn mesh(&self) -> Mesh {
         let mut tris: Vec<[u32; 3]> = Vec::new();
         let n = self.split.len();
         let mut used = vec![u32::MAX; n];
@@ -748,6 +814,8 @@ pub struct StreamDecoder {
     state: State,
     models: Models,
     steps: Vec<StepInfo>,
+    /// Marks streams: the mesh `refine::triangulate` makes of the marks.
+    marks_mesh: Option<Mesh>,
 }
 
 impl StreamDecoder {
@@ -759,6 +827,7 @@ impl StreamDecoder {
             state,
             models: Models::new(),
             steps: Vec::new(),
+            marks_mesh: None,
         }
     }
 
@@ -805,6 +874,35 @@ impl StreamDecoder {
             ));
         }
         let block = &payload[4..];
+        if let StreamKind::Marks(mode) = self.header.kind {
+            if index > 0 {
+                return Err(bad(
+                    "one step in a marks stream".into(),
+                    format!("step {index}"),
+                ));
+            }
+            let (mesh, new_points) = crate::stream_marks::decode(
+                &mut self.state,
+                &mut self.models,
+                &self.header,
+                mode,
+                block,
+            )
+            .map_err(|found| {
+                self.state = State::new(&self.header);
+                self.models = Models::new();
+                bad("a decodable marks step".into(), found)
+            })?;
+            self.marks_mesh = Some(mesh);
+            let info = StepInfo {
+                index,
+                max_error_m: stated,
+                new_points,
+                payload_bytes: payload.len(),
+            };
+            self.steps.push(info);
+            return Ok(info);
+        }
         let mut d = Dec {
             dec: RangeDecoder::new(block),
             models: &mut self.models,
@@ -845,6 +943,9 @@ impl StreamDecoder {
         if self.steps.is_empty() {
             return Mesh::default();
         }
+        if let Some(m) = &self.marks_mesh {
+            return m.clone();
+        }
         let mut m = self.state.mesh();
         let w = self.header.width as usize;
         for v in &mut m.vertices {
@@ -876,6 +977,13 @@ impl StreamDecoder {
                 }
             })
             .collect();
+        if let Some(m) = &self.marks_mesh {
+            // Fictitious vertices carry their interpolated mesh height.
+            let w = hier.width() as usize;
+            for v in &m.vertices {
+                z[v.row as usize * w + v.col as usize] = v.z_m as f64;
+            }
+        }
         self.state.leaves(|leaf| {
             let mut stack = vec![*leaf];
             while let Some(t) = stack.pop() {
@@ -937,5 +1045,48 @@ mod test {
             let z = d.heights_m().unwrap_or_default();
             assert_eq!(z, g.heights());
         }
+    }
+
+    #[test]
+    fn random_payloads_never_panic() {
+        let g = grid(21, 13);
+        let s = encode(&g, &StreamOptions::default()).unwrap();
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        for len in 0..400usize {
+            let mut d = StreamDecoder::new(s.header.clone());
+            let mut p = vec![0u8; 4];
+            for _ in 0..len {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                p.push(x as u8);
+            }
+            if d.apply_step(&p).is_ok() {
+                let _ = d.apply_step(&p);
+                let m = d.mesh();
+                assert!(m.triangle_count() >= 2);
+                let _ = d.heights_m();
+            } else {
+                assert!(d.steps().is_empty());
+                assert_eq!(d.mesh(), Mesh::default());
+            }
+        }
+    }
+
+    #[test]
+    fn bad_options_and_headers_are_errors() {
+        let g = grid(9, 9);
+        let o = StreamOptions::default().with_quantum_m(0.0);
+        assert!(matches!(encode(&g, &o), Err(StreamError::BadQuantum(_))));
+        let o = StreamOptions::default().with_max_error_m(-1.0);
+        assert!(matches!(encode(&g, &o), Err(StreamError::BadMaxError(_))));
+        let mut h = encode(&g, &StreamOptions::default())
+            .unwrap()
+            .header
+            .to_bytes();
+        assert!(StreamHeader::from_bytes(&h[..47]).is_err());
+        h[0] = 1;
+        let e = StreamHeader::from_bytes(&h).unwrap_err().to_string();
+        assert!(e.contains("expected") && e.contains("found 1x9"), "{e}");
     }
 }

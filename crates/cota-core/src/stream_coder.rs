@@ -1,8 +1,9 @@
 //! The entropy coder of the progressive stream ([`crate::stream`]): an
 //! adaptive binary range coder and the binarisation of signed residuals.
 //!
-//! Paper `000_ebf7e3a88dffd361.txt` §4 sends, per tolerance, the points it
-//! adds; this file only decides how few bits those decisions and heights take.
+//! Paper `000_ebf7e3a88dffd361.txt` §3 ("Transmisión progresiva") sends, per
+//! tolerance, the points it adds; this file only decides how few bits those
+//! decisions and heights take.
 //!
 //! 1. **Range coder.** A carry-propagating binary range coder over a 32-bit
 //!    range and a 64-bit `low` (the classic arithmetic-coding construction of

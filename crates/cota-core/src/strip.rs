@@ -32,38 +32,44 @@
 //!    (odd triangles are drawn reversed) yields the mesh's counter-clockwise
 //!    orientation: every non-degenerate triangle of the strip is a mesh
 //!    triangle, in its orientation, exactly once.
-//!
-//! Fictitious-faithful meshes (paper 000's variant with hanging vertices)
-//! traverse the same way; where a hanging vertex breaks the shared edge the
-//! emitter joins the two leaves with degenerate connectors, the role of the
-//! paper's line triangles.
-//!
 //! 4. **Guided growth** ([`StripMethod::Guided`], the default), a greedy
 //!    pass on top of the traversal: the papers' order reaches about 1.58–1.67
 //!    references per triangle, mostly swaps around long fans. Instead, grow
 //!    the strip from the current triangle into the unvisited neighbour across
 //!    the natural edge or the swap edge, preferring the one with fewer
-//!    unvisited neighbours (natural on ties), so that no triangle is
+//!    unvisited neighbours (Warnsdorff's rule; on ties natural, or in a
+//!    second run the one whose unvisited neighbours have fewer unvisited
+//!    neighbours; the shorter strip of the two is kept), so that no triangle is
 //!    stranded; at a dead end restart at an unvisited triangle around the
 //!    last vertex (one connector index), else at the first unvisited triangle
 //!    in traversal order, which keeps the sweep local, like the traversal.
-//!    About 1.43–1.45 references per triangle on adaptive SRTM meshes and
-//!    1.51 on a full grid.
+//!    About 1.41–1.45 references per triangle on adaptive SRTM meshes and
+//!    1.51 on a full grid (traversal alone: 1.57–1.66, and 1.667 on a full
+//!    grid, exactly paper 000's 13655 / 8192).
+//!
+//! Fictitious-faithful meshes (paper 000's variant with hanging vertices)
+//! are handled the same way: their leaves still tile the grid, so the
+//! traversal visits them all; where a hanging vertex breaks the shared edge
+//! the emitter joins the two leaves with degenerate connectors, the role of
+//! the paper's line triangles (the edge (x, hanging vertex) of one leaf is
+//! not an edge of its neighbour, so no triangle of the strip closes the
+//! T-junction: as in the indexed mesh, the faithful surface is not watertight).
 //!
 //! # Lower bound
-//! In a strip one occurrence of a vertex belongs to at most three triangles,
-//! so a vertex of degree `d` needs `⌈d/3⌉` references. A full bitree grid (the
-//! "4-8" pattern: diagonals alternate) has half its vertices of degree 8 and
-//! half of degree 4: at least `(3 + 2)/2` references per 2 triangles, i.e.
-//! **1.25 references per triangle** for any strip of it, whereas a grid with
-//! parallel diagonals (all degrees 6) can reach 1.
+//! In a strip one occurrence of a vertex belongs to at most three triangles
+//! (the windows it is in), so a vertex in `d` triangles needs `⌈d/3⌉`
+//! references. In a full bitree grid (the "4-8" pattern: diagonals alternate)
+//! half the interior vertices are in 8 triangles and half in 4, so they need
+//! on average `(3 + 2)/2` references for 2 triangles each: **at least 1.25
+//! references per triangle** for any strip of it, whereas a grid with
+//! parallel diagonals (every vertex in 6 triangles) can reach 1.
 //!
 //! [`strip_to_triangles`] is the inverse used to validate a strip.
 //!
 //! # Runtime
-//! Linear in the mesh (one hash lookup per visited hierarchy triangle).
-
-use std::collections::HashMap;
+//! Linear in the mesh when the grid has at most 16 samples per vertex (a
+//! dense sample table), else `O(T log T)` (one binary search per visited
+//! hierarchy triangle).
 
 use crate::hierarchy::{Hierarchy, Placement, Pt, Tri};
 use crate::mesh::Mesh;
@@ -193,25 +199,80 @@ pub fn bitree_order(mesh: &Mesh) -> Result<Vec<[u32; 3]>, StripError> {
                 vertices: nv,
             })
     };
-    let mut leaves: HashMap<(u64, u64), u32> = HashMap::with_capacity(mesh.triangles.len());
+    // Sample -> vertex id: a dense table when the grid is not much larger
+    // than the mesh, else a binary search over sorted sample keys (vertices
+    // are usually numbered row-major already).
+    let key = |p: Pt| p[1] as u64 * w as u64 + p[0] as u64;
+    let samples = w as u64 * h as u64;
+    let dense: Vec<u32> = if samples <= 16 * nv as u64 {
+        let mut d = vec![u32::MAX; samples as usize];
+        for (i, v) in mesh.vertices.iter().enumerate() {
+            d[key([v.col, v.row]) as usize] = i as u32;
+        }
+        d
+    } else {
+        Vec::new()
+    };
+    let mut by_key: Vec<(u64, u32)> = Vec::new();
+    if dense.is_empty() {
+        by_key = mesh
+            .vertices
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (key([v.col, v.row]), i as u32))
+            .collect();
+        if !by_key.is_sorted() {
+            by_key.sort_unstable();
+        }
+    }
+    let id_of = |p: Pt| -> Option<u32> {
+        if p[0] >= w || p[1] >= h {
+            return None;
+        }
+        if !dense.is_empty() {
+            return dense
+                .get(key(p) as usize)
+                .copied()
+                .filter(|&i| i != u32::MAX);
+        }
+        by_key
+            .binary_search_by_key(&key(p), |&(k, _)| k)
+            .ok()
+            .map(|i| by_key[i].1)
+    };
+    // Leaves by their right-angle vertex (compressed rows): (hypotenuse
+    // ends, triangle).
+    let mut apex_of = Vec::with_capacity(mesh.triangles.len());
+    let mut start = vec![0u32; nv + 1];
     for (k, t) in mesh.triangles.iter().enumerate() {
         let p = [pos(t[0])?, pos(t[1])?, pos(t[2])?];
         let apex = right_angle(p).ok_or(StripError::NotBitree(k))?;
         let (a, b) = (p[(apex + 1) % 3], p[(apex + 2) % 3]);
-        let tri = Tri { a, b, c: p[apex] };
-        if leaves.insert(leaf_key(&hier, &tri), k as u32).is_some() {
-            return Err(StripError::NotTiling {
-                missed: 1,
-                total: mesh.triangles.len(),
-            });
-        }
+        apex_of.push((t[apex], a, b));
+        start[t[apex] as usize + 1] += 1;
     }
+    for i in 0..nv {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut by_apex: Vec<(Pt, Pt, u32)> = vec![([0, 0], [0, 0], 0); mesh.triangles.len()];
+    for (k, &(c, a, b)) in apex_of.iter().enumerate() {
+        by_apex[fill[c as usize] as usize] = (a, b, k as u32);
+        fill[c as usize] += 1;
+    }
+    let leaf = |t: &Tri| -> Option<u32> {
+        let c = id_of(t.c)? as usize;
+        by_apex[start[c] as usize..start[c + 1] as usize]
+            .iter()
+            .find(|&&(a, b, _)| (a == t.a && b == t.b) || (a == t.b && b == t.a))
+            .map(|&(_, _, k)| k)
+    };
     let mut order = Vec::with_capacity(mesh.triangles.len());
     let roots = hier.roots();
     // Root 0 from (0,0) to (N,N), root 1 back from (N,N) to (0,0).
     let mut stack: Vec<(Tri, Pt)> = vec![(roots[1], roots[1].a), (roots[0], roots[0].a)];
     while let Some((t, enter)) = stack.pop() {
-        if let Some(&k) = leaves.get(&leaf_key(&hier, &t)) {
+        if let Some(k) = leaf(&t) {
             order.push(mesh.triangles[k as usize]);
             continue;
         }
@@ -246,30 +307,80 @@ pub fn bitree_order(mesh: &Mesh) -> Result<Vec<[u32; 3]>, StripError> {
     Ok(order)
 }
 
-/// Neighbour across each edge `(t[k], t[k+1])`, `u32::MAX` for none.
-fn neighbours(tris: &[[u32; 3]]) -> Vec<[u32; 3]> {
-    let mut owner: HashMap<(u32, u32), u32> = HashMap::with_capacity(tris.len() * 3);
-    for (i, t) in tris.iter().enumerate() {
-        for k in 0..3 {
-            owner.insert((t[k], t[(k + 1) % 3]), i as u32);
+/// Triangles around each vertex (compressed rows) and the neighbour across
+/// each edge.
+struct Adjacency {
+    fan_start: Vec<u32>,
+    fan: Vec<u32>,
+    /// Neighbour across edge `(t[k], t[k+1])`, `u32::MAX` for none.
+    nb: Vec<[u32; 3]>,
+}
+
+impl Adjacency {
+    fn new(tris: &[[u32; 3]]) -> Self {
+        let nv = tris
+            .iter()
+            .flatten()
+            .map(|&v| v as usize + 1)
+            .max()
+            .unwrap_or(0);
+        let mut fan_start = vec![0u32; nv + 1];
+        for &v in tris.iter().flatten() {
+            fan_start[v as usize + 1] += 1;
         }
-    }
-    tris.iter()
-        .map(|t| {
-            [0, 1, 2].map(|k| {
-                owner
-                    .get(&(t[(k + 1) % 3], t[k]))
-                    .copied()
-                    .unwrap_or(u32::MAX)
+        for i in 0..nv {
+            fan_start[i + 1] += fan_start[i];
+        }
+        let mut fill = fan_start.clone();
+        let mut fan = vec![0u32; tris.len() * 3];
+        for (i, t) in tris.iter().enumerate() {
+            for &v in t {
+                fan[fill[v as usize] as usize] = i as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        // The neighbour across (u, v) of a counter-clockwise triangle is the
+        // triangle around v holding the directed edge (v, u).
+        let nb = tris
+            .iter()
+            .map(|t| {
+                [0, 1, 2].map(|k| {
+                    let (u, v) = (t[k], t[(k + 1) % 3]);
+                    let (lo, hi) = (fan_start[v as usize], fan_start[v as usize + 1]);
+                    fan[lo as usize..hi as usize]
+                        .iter()
+                        .copied()
+                        .find(|&x| {
+                            let o = tris[x as usize];
+                            (0..3).any(|r| o[r] == v && o[(r + 1) % 3] == u)
+                        })
+                        .unwrap_or(u32::MAX)
+                })
             })
-        })
-        .collect()
+            .collect();
+        Adjacency { fan_start, fan, nb }
+    }
 }
 
 /// Strips triangles (counter-clockwise) given in a locality order, the
-/// hierarchy's for [`StripMethod::Guided`]: step 4 of the module docs.
+/// hierarchy's for [`StripMethod::Guided`]: step 4 of the module docs (both
+/// tie rules, the shorter strip).
 pub fn stripify_guided(order: &[[u32; 3]]) -> Strip {
-    let nb = neighbours(order);
+    let adj = Adjacency::new(order);
+    let (plain, ahead) = rayon::join(|| grow(order, &adj, false), || grow(order, &adj, true));
+    if std::env::var_os("STRIP_AHEAD").is_some() || ahead.indices.len() < plain.indices.len() {
+        ahead
+    } else {
+        plain
+    }
+}
+
+/// One greedy growth; `lookahead` breaks ties between the natural and the
+/// swap neighbour by the unvisited neighbours of their unvisited neighbours.
+const FINISH: bool = true;
+fn grow(order: &[[u32; 3]], adj: &Adjacency, lookahead: bool) -> Strip {
+    let nb = &adj.nb;
+    let (fan_start, fan) = (&adj.fan_start, &adj.fan);
     let mut visited = vec![false; order.len()];
     let free = |visited: &[bool], t: u32| t != u32::MAX && !visited[t as usize];
     let free_count = |visited: &[bool], t: u32| -> usize {
@@ -284,28 +395,6 @@ pub fn stripify_guided(order: &[[u32; 3]]) -> Strip {
             })
             .map_or(u32::MAX, |k| nb[t][k])
     };
-    // Triangles around each vertex (compressed rows).
-    let nv = order
-        .iter()
-        .flatten()
-        .map(|&v| v as usize + 1)
-        .max()
-        .unwrap_or(0);
-    let mut fan_start = vec![0u32; nv + 1];
-    for &v in order.iter().flatten() {
-        fan_start[v as usize + 1] += 1;
-    }
-    for i in 0..nv {
-        fan_start[i + 1] += fan_start[i];
-    }
-    let mut fill = fan_start.clone();
-    let mut fan = vec![0u32; order.len() * 3];
-    for (i, t) in order.iter().enumerate() {
-        for &v in t {
-            fan[fill[v as usize] as usize] = i as u32;
-            fill[v as usize] += 1;
-        }
-    }
     let mut s: Vec<u32> = Vec::with_capacity(order.len() * 3 / 2 + 8);
     let mut cursor = 0usize;
     let mut cur: Option<usize> = None;
@@ -319,8 +408,37 @@ pub fn stripify_guided(order: &[[u32; 3]]) -> Strip {
             let swp_ok = free(&visited, swp);
             let pick = match (nat_ok, swp_ok) {
                 (true, true) => {
+                    let second = |x: u32| -> usize {
+                        nb[x as usize]
+                            .iter()
+                            .filter(|&&y| free(&visited, y))
+                            .map(|&y| free_count(&visited, y))
+                            .sum()
+                    };
                     let (cn, cs) = (free_count(&visited, nat), free_count(&visited, swp));
-                    Some(if cs < cn { swp } else { nat })
+                    let rem = |x: u32| -> usize {
+                        order[x as usize]
+                            .iter()
+                            .map(|&v| {
+                                let (lo, hi) = (fan_start[v as usize], fan_start[v as usize + 1]);
+                                fan[lo as usize..hi as usize]
+                                    .iter()
+                                    .filter(|&&y| !visited[y as usize])
+                                    .count()
+                            })
+                            .min()
+                            .unwrap_or(0)
+                    };
+                    let (sn, ss) = if lookahead && cn == cs {
+                        if FINISH {
+                            (rem(nat), rem(swp))
+                        } else {
+                            (second(nat), second(swp))
+                        }
+                    } else {
+                        (0, 0)
+                    };
+                    Some(if (cs, ss) < (cn, sn) { swp } else { nat })
                 }
                 (true, false) => Some(nat),
                 (false, true) => Some(swp),
@@ -426,14 +544,6 @@ fn right_angle(p: [Pt; 3]) -> Option<usize> {
     })
 }
 
-/// A key identifying a hierarchy triangle: apex and sorted hypotenuse ends.
-fn leaf_key(hier: &Hierarchy, t: &Tri) -> (u64, u64) {
-    let n = hier.size() as u64 + 1;
-    let id = |p: Pt| p[1] as u64 * n + p[0] as u64;
-    let (a, b) = (id(t.a), id(t.b));
-    (id(t.c), a.min(b) * n * n + a.max(b))
-}
-
 /// Writes triangles, given in visit order and counter-clockwise, as one
 /// standard strip (step 3 of the module docs). Works for any order; the
 /// fewer consecutive triangles share an edge, the more connectors it needs.
@@ -476,7 +586,7 @@ fn same_turn(t: [u32; 3], x: u32, y: u32, z: u32) -> bool {
 /// (`(x, y, z)` reordered by parity), for the indices `x y z` at its end.
 fn drawn(len: usize, x: u32, y: u32, z: u32) -> (u32, u32, u32) {
     // The window starts at len - 3.
-    if (len - 3) % 2 == 0 {
+    if (len - 3).is_multiple_of(2) {
         (x, y, z)
     } else {
         (y, x, z)
@@ -542,7 +652,7 @@ fn start_run(s: &mut Vec<u32>, t: [u32; 3], next: Option<[u32; 3]>) {
     s.push(u);
     // (u, a, b) is counter-clockwise; at an odd window (u, b, a) is drawn
     // as (b, u, a), a rotation of it.
-    if (s.len() - 1) % 2 == 0 {
+    if (s.len() - 1).is_multiple_of(2) {
         s.push(a);
         s.push(b);
     } else {

@@ -1,6 +1,6 @@
 //! The `.cstream` file: framing of cota's progressive stream
-//! ([`cota_core::stream`], paper `000_ebf7e3a88dffd361.txt` §4) with magic,
-//! version, georeference and a checksum per step.
+//! ([`cota_core::stream`], paper `000_ebf7e3a88dffd361.txt` §3, "Transmisión
+//! progresiva") with magic, version, georeference and a checksum per step.
 //!
 //! 1. [`stream_bytes`] frames an [`EncodedStream`]; [`write_stream`] writes it
 //!    atomically ([`write_atomically`]).
@@ -14,7 +14,8 @@
 //! magic      8 bytes  "COTASTRM"
 //! version    u16      1
 //! head_len   u32      bytes of `head`
-//! head       48 bytes core header (StreamHeader::to_bytes: W, H, quantum, corners)
+//! head       52 bytes core header (StreamHeader::to_bytes: W, H, quantum,
+//!            corners, kind)
 //!            u32 number of steps in the file
 //!            u8  georef known (0/1)     u8  pixel is (0 area, 1 point)
 //!            f64 origin_x  f64 origin_y  f64 pixel_x  f64 pixel_y

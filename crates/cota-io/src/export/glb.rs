@@ -221,7 +221,7 @@ impl Layout {
     fn new(mesh: &Mesh, indices: u64, index: ComponentType) -> Self {
         let vertices = mesh.vertices.len() as u64;
         let vec3_bytes = 12 * vertices;
-        let index_bytes = pad4(indices * index.size() as u64);
+        let index_bytes = indices * index.size() as u64;
         Layout {
             vertices,
             indices,
@@ -419,9 +419,8 @@ fn write_bin<W: Write>(
                 w.write_all(&i.to_le_bytes())?;
             }
         }
-        // The index view is padded to 4 bytes (an odd count of u16).
-        let bytes = s.len() as u64 * index.size() as u64;
-        return write_padding(w, bytes, 0);
+        // The chunk's padding follows (write_glb_primitive).
+        return Ok(());
     }
     for &t in &mesh.triangles {
         let t = frame.orient(t);

@@ -1,0 +1,61 @@
+//! `cota mesh --strip`: a TRIANGLE_STRIP GLB and the strip counts in the
+//! JSON report; refusals for non-GLB output and the quadtree.
+#![allow(clippy::unwrap_used, reason = "tests")]
+
+mod common;
+
+use common::{cota, fixture, stderr, stdout};
+
+#[test]
+fn mesh_strip_writes_a_strip_glb_and_reports_refs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.glb");
+    let sample = fixture("S29W072.hgt.zip");
+    let o = cota(&[
+        "mesh",
+        sample.to_str().unwrap(),
+        "--max-error",
+        "20",
+        "--mode",
+        "fictitious-faithful",
+        "--strip",
+        "--json",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let tris = r["triangles"].as_f64().unwrap();
+    let refs = r["strip_refs"].as_f64().unwrap();
+    let per = r["strip_refs_per_triangle"].as_f64().unwrap();
+    assert!((refs / tris - per).abs() < 1e-12);
+    assert!(per > 1.0 && per < 1.5, "{per}");
+    let bytes = std::fs::read(&out).unwrap();
+    let json_len = u32::from_le_bytes([bytes[12], bytes[13], bytes[14], bytes[15]]) as usize;
+    let text = std::str::from_utf8(&bytes[20..20 + json_len]).unwrap();
+    assert!(text.contains("\"mode\":5"), "{text}");
+}
+
+#[test]
+fn mesh_strip_refuses_other_formats_and_the_quadtree() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = fixture("S29W072.hgt.zip");
+    let obj = dir.path().join("s.obj");
+    let o = cota(&[
+        "mesh",
+        sample.to_str().unwrap(),
+        "--strip",
+        "-o",
+        obj.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains(".glb"), "{}", stderr(&o));
+    let o = cota(&[
+        "mesh",
+        sample.to_str().unwrap(),
+        "--strip",
+        "--hierarchy",
+        "quadtree",
+    ]);
+    assert!(!o.status.success());
+}
