@@ -473,15 +473,27 @@ fn span_error(heights: &[f32], w: usize, t: &Tri, ha: f64, hb: f64, hc: f64) -> 
     e
 }
 
-/// max_k |base + gx·k − row[k]|.
+/// max_k |base + gx·k − row[k]|, with four independent maxima so the loop
+/// vectorises (the index runs as an exact `f64` counter, no int→float
+/// conversion per sample).
 #[inline]
 fn row_max_dev(row: &[f32], base: f64, gx: f64) -> f64 {
-    let mut m = 0f64;
-    for (k, &h) in row.iter().enumerate() {
-        let d = (base + gx * (k as i32) as f64 - h as f64).abs();
-        m = if d > m { d } else { m };
+    let mut m = [0f64; 4];
+    let mut k = 0f64;
+    let chunks = row.chunks_exact(4);
+    let rest = chunks.remainder();
+    for c in chunks {
+        for j in 0..4 {
+            let d = (base + gx * (k + j as f64) - c[j] as f64).abs();
+            m[j] = if d > m[j] { d } else { m[j] };
+        }
+        k += 4.0;
     }
-    m
+    for (j, &h) in rest.iter().enumerate() {
+        let d = (base + gx * (k + j as f64) - h as f64).abs();
+        m[j] = if d > m[j] { d } else { m[j] };
+    }
+    m[0].max(m[1]).max(m[2].max(m[3]))
 }
 
 #[cfg(test)]

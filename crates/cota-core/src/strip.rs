@@ -368,7 +368,7 @@ impl Adjacency {
 pub fn stripify_guided(order: &[[u32; 3]]) -> Strip {
     let adj = Adjacency::new(order);
     let (plain, ahead) = rayon::join(|| grow(order, &adj, false), || grow(order, &adj, true));
-    if std::env::var_os("STRIP_AHEAD").is_some() || ahead.indices.len() < plain.indices.len() {
+    if ahead.indices.len() < plain.indices.len() {
         ahead
     } else {
         plain
@@ -377,7 +377,6 @@ pub fn stripify_guided(order: &[[u32; 3]]) -> Strip {
 
 /// One greedy growth; `lookahead` breaks ties between the natural and the
 /// swap neighbour by the unvisited neighbours of their unvisited neighbours.
-const FINISH: bool = true;
 fn grow(order: &[[u32; 3]], adj: &Adjacency, lookahead: bool) -> Strip {
     let nb = &adj.nb;
     let (fan_start, fan) = (&adj.fan_start, &adj.fan);
@@ -416,25 +415,8 @@ fn grow(order: &[[u32; 3]], adj: &Adjacency, lookahead: bool) -> Strip {
                             .sum()
                     };
                     let (cn, cs) = (free_count(&visited, nat), free_count(&visited, swp));
-                    let rem = |x: u32| -> usize {
-                        order[x as usize]
-                            .iter()
-                            .map(|&v| {
-                                let (lo, hi) = (fan_start[v as usize], fan_start[v as usize + 1]);
-                                fan[lo as usize..hi as usize]
-                                    .iter()
-                                    .filter(|&&y| !visited[y as usize])
-                                    .count()
-                            })
-                            .min()
-                            .unwrap_or(0)
-                    };
                     let (sn, ss) = if lookahead && cn == cs {
-                        if FINISH {
-                            (rem(nat), rem(swp))
-                        } else {
-                            (second(nat), second(swp))
-                        }
+                        (second(nat), second(swp))
                     } else {
                         (0, 0)
                     };
