@@ -7,8 +7,9 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
+use cota_core::refine::Mode;
 use cota_core::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
-use cota_core::{check_mesh, measure, Bitree, CheckOptions, ExtractOptions, Metrics};
+use cota_core::{check_mesh, measure, Bitree, CheckOptions, ExtractOptions, Mesh, Metrics};
 use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use serde_json::json;
 
@@ -77,9 +78,9 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         }
     }
     let quadtree = a.hierarchy == HierarchyArg::Quadtree;
-    if quadtree && (!refine::is_fast(&a.refine) || a.max_triangles.is_some()) {
+    if quadtree && (refine::mode(&a.refine) != Mode::Conforming || a.max_triangles.is_some()) {
         anyhow::bail!(
-            "--hierarchy quadtree: expected --criterion max-error, --mode conforming and --max-error (no --max-triangles)"
+            "--hierarchy quadtree: expected --mode conforming and --max-error or another criterion (no --max-triangles)"
         );
     }
     let opts = match (a.max_error, a.max_triangles) {
@@ -109,10 +110,24 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         let e = a.max_error.unwrap_or(1.0);
         let leaves = QuadOptions::DEFAULT
             .with_centre_when_needed(matches!(a.quadtree_leaves, QuadVariant::CentreWhenNeeded));
-        let x = qt.refine_with(&cota_core::MaxVerticalError { max_error_m: e }, &leaves);
+        let (x, name) = refine::with_criterion(&a.refine, e, &grid, |c| {
+            (qt.refine_with(c, &leaves), c.name())
+        })?;
         let extract_ms = ms(t);
-        let check = CheckOptions::conforming(e);
-        (x.mesh, Some(e), build_ms, extract_ms, check, None)
+        // Only the max-error criterion promises a vertical bound.
+        let bound = refine::is_fast(&a.refine).then_some(e);
+        let check = CheckOptions::DEFAULT.with_max_error_m(bound);
+        let outcome = refine::Outcome {
+            mesh: Mesh::default(),
+            threshold_m: bound,
+            transmitted_points: x.mesh.vertex_count(),
+            fictitious_points: 0,
+            line_triangles: 0,
+            criterion: name,
+            rounds: 1,
+            check,
+        };
+        (x.mesh, bound, build_ms, extract_ms, check, Some(outcome))
     } else if refine::is_fast(&a.refine) {
         let t = Instant::now();
         let pb = progress::bar(0, "building");

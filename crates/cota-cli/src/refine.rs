@@ -91,6 +91,36 @@ pub fn validate(r: &RefineArgs, max_triangles: Option<usize>) -> anyhow::Result<
 /// Runs the generic refinement on a void-free grid.
 pub fn run(r: &RefineArgs, max_error_m: f64, grid: &HeightGrid) -> anyhow::Result<Outcome> {
     let mode = mode(r);
+    let (out, name) = with_criterion(r, max_error_m, grid, |criterion| {
+        refine(grid, criterion, &RefineOptions::DEFAULT.with_mode(mode))
+            .map(|o| (o, criterion.name()))
+    })??;
+    let threshold_m = (r.criterion == CriterionArg::MaxError).then_some(max_error_m);
+    let check = CheckOptions::DEFAULT
+        .with_max_error_m(threshold_m)
+        .with_conforming(mode.is_conforming())
+        .with_allow_fictitious(mode != Mode::Conforming);
+    Ok(Outcome {
+        mesh: out.mesh,
+        threshold_m,
+        transmitted_points: out.transmitted_points,
+        fictitious_points: out.fictitious_points,
+        line_triangles: out.line_triangles,
+        criterion: name,
+        rounds: out.rounds,
+        check,
+    })
+}
+
+/// Builds the criterion the flags describe and hands it to `f` (the criteria
+/// borrow a curvature map, so they live only inside this call). Both
+/// hierarchies use it.
+pub fn with_criterion<R>(
+    r: &RefineArgs,
+    max_error_m: f64,
+    grid: &HeightGrid,
+    f: impl FnOnce(&dyn Criterion) -> R,
+) -> anyhow::Result<R> {
     let needs_map = matches!(
         r.criterion,
         CriterionArg::Curvature
@@ -155,20 +185,5 @@ pub fn run(r: &RefineArgs, max_error_m: f64, grid: &HeightGrid) -> anyhow::Resul
         (CriterionArg::Paper003, Some((_, _, _, p))) => p,
         (_, None) => bail!("internal: curvature map missing"),
     };
-    let out = refine(grid, criterion, &RefineOptions::DEFAULT.with_mode(mode))?;
-    let threshold_m = (r.criterion == CriterionArg::MaxError).then_some(max_error_m);
-    let check = CheckOptions::DEFAULT
-        .with_max_error_m(threshold_m)
-        .with_conforming(mode.is_conforming())
-        .with_allow_fictitious(mode != Mode::Conforming);
-    Ok(Outcome {
-        mesh: out.mesh,
-        threshold_m,
-        transmitted_points: out.transmitted_points,
-        fictitious_points: out.fictitious_points,
-        line_triangles: out.line_triangles,
-        criterion: criterion.name(),
-        rounds: out.rounds,
-        check,
-    })
+    Ok(f(criterion))
 }

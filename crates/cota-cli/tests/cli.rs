@@ -172,3 +172,32 @@ fn refuse_policy_rejects_voids() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("void"), "{}", stderr(&o));
 }
+
+#[test]
+fn quadtree_takes_every_criterion() {
+    let r = json(&cota(&[
+        "mesh",
+        "--hierarchy",
+        "quadtree",
+        "--max-error",
+        "5",
+        "--check",
+        "--json",
+    ]));
+    assert!(r["max_error_m"].as_f64().unwrap() <= 5.0);
+    let fine = r["triangles"].as_u64().unwrap();
+    let r = json(&cota(&[
+        "mesh",
+        "--hierarchy",
+        "quadtree",
+        "--criterion",
+        "curvature",
+        "--check",
+        "--json",
+    ]));
+    assert!(r["criterion"].as_str().unwrap().contains("curvature"));
+    let n = r["triangles"].as_u64().unwrap();
+    assert!(n > 100 && n != fine, "{n} vs {fine}");
+    let o = cota(&["mesh", "--hierarchy", "quadtree", "--mode", "fictitious"]);
+    assert_eq!(o.status.code(), Some(1));
+}
