@@ -15,6 +15,7 @@ mod refine;
 mod stream;
 
 fn main() -> ExitCode {
+    quiet_broken_pipe();
     match run() {
         Ok(code) => code,
         Err(e) => {
@@ -32,4 +33,24 @@ fn run() -> anyhow::Result<ExitCode> {
         args::Command::Compare(a) => compare::run(&a),
         args::Command::Stream(c) => stream::run(&c),
     }
+}
+
+/// `cota info … | head` closes stdout early; `println!` then panics with
+/// "failed printing to stdout: Broken pipe". That is not an error of cota's:
+/// exit 0 quietly, as other Unix tools do. Every other panic keeps the default
+/// report.
+fn quiet_broken_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let payload = info.payload();
+        let msg = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if msg.contains("failed printing to stdout") && msg.contains("Broken pipe") {
+            std::process::exit(0);
+        }
+        default(info);
+    }));
 }

@@ -184,6 +184,7 @@ pub struct Dem {
 /// What the first bytes of a file look like.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Sniffed {
+    Gzip,
     Zip,
     Tiff,
     Png,
@@ -203,7 +204,9 @@ const ASCII_HEADER_KEYS: [&str; 6] = [
 
 /// Classifies content by its magic bytes and, for text, its first keyword.
 pub(crate) fn sniff(bytes: &[u8]) -> Sniffed {
-    if bytes.starts_with(b"PK\x03\x04") || bytes.starts_with(b"PK\x05\x06") {
+    if bytes.starts_with(b"\x1f\x8b") {
+        Sniffed::Gzip
+    } else if bytes.starts_with(b"PK\x03\x04") || bytes.starts_with(b"PK\x05\x06") {
         Sniffed::Zip
     } else if bytes.starts_with(b"II*\0")
         || bytes.starts_with(b"MM\0*")
@@ -288,6 +291,9 @@ pub(crate) fn decode_bytes(
     opts: &ReadOptions,
 ) -> Result<Dem, ReadErrorKind> {
     let dem = match sniff(bytes) {
+        // gzip (`N00E010.hgt.gz` as served by the AWS/Mapzen "skadi" tiles, or
+        // any other gzipped DEM): decompress and read what is inside.
+        Sniffed::Gzip => gunzip_and_decode(bytes, path, opts),
         // A ZIP is read as a zipped SRTM tile (the only zipped format cota knows).
         Sniffed::Zip => crate::srtm::decode(bytes, path, opts),
         Sniffed::Tiff => crate::geotiff::decode(bytes, path, opts),
@@ -302,6 +308,49 @@ pub(crate) fn decode_bytes(
         }),
     }?;
     Ok(with_guessed_crs(dem))
+}
+
+/// Largest expansion of DEFLATE, used to refuse gzip bombs early.
+const MAX_GZIP_RATIO: u64 = 1032;
+
+/// Decompresses a gzip file (one level) and decodes its content under the
+/// name without `.gz`. The output is capped at what the sample limit allows
+/// (8 bytes per sample at most) and at DEFLATE's largest ratio.
+fn gunzip_and_decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
+    use std::io::Read;
+    let cap = (cota_core::grid::MAX_SAMPLES * 8).min(bytes.len() as u64 * MAX_GZIP_RATIO);
+    let mut inner = Vec::new();
+    flate2::read::GzDecoder::new(bytes)
+        .take(cap + 1)
+        .read_to_end(&mut inner)
+        .map_err(|e| {
+            crate::error::malformed("a complete gzip stream", format!("a broken one ({e})"))
+        })?;
+    if inner.len() as u64 > cap {
+        return Err(crate::error::malformed(
+            format!("a gzip stream of at most {cap} bytes once decompressed"),
+            "more (a gzip bomb or a grid beyond the sample limit)",
+        ));
+    }
+    if inner.is_empty() {
+        return Err(crate::error::malformed(
+            "a DEM inside the gzip stream",
+            "nothing",
+        ));
+    }
+    if sniff(&inner) == Sniffed::Gzip {
+        return Err(ReadErrorKind::Unsupported {
+            what: "gzip nesting".into(),
+            detail: "a gzip stream inside a gzip stream; decompress the outer one first".into(),
+        });
+    }
+    let name = match path.extension() {
+        Some(e) if e.eq_ignore_ascii_case("gz") => path.with_extension(""),
+        _ => path.to_path_buf(),
+    };
+    let mut dem = decode_bytes(&inner, &name, opts)?;
+    dem.path = path.to_path_buf();
+    Ok(dem)
 }
 
 /// For unrecognised content, what the file's extension promised and lacks
