@@ -17,12 +17,11 @@ use std::process::ExitCode;
 use anyhow::Context;
 use cota_core::quadtree::{QuadOptions, QuadTree};
 use cota_core::refine::{refine, Mode, RefineOptions};
-use cota_core::voids::{fill_voids, FillMethod, FillOptions, VoidPolicy};
 use cota_core::{check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid};
 use cota_core::{measure, MaxVerticalError, Mesh};
 use serde::Serialize;
 
-use crate::args::{BitreeMode, CompareArgs, Crop, QuadVariant, Voids};
+use crate::args::{BitreeMode, CompareArgs, Crop, QuadVariant};
 use crate::input::load;
 
 /// One hierarchy (and mode) at one tolerance.
@@ -167,13 +166,9 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
         anyhow::bail!("--tolerances: expected percentages of 0 or more, found {t}");
     }
     let input = load(&a.input)?;
+    let name = crate::input::name(&input.files);
     let mut grid = input.grid;
-    let policy = match a.voids {
-        Voids::Fill => VoidPolicy::Fill(FillMethod::Harmonic),
-        Voids::Idw => VoidPolicy::Fill(FillMethod::InverseDistance),
-        Voids::Refuse => VoidPolicy::Refuse,
-    };
-    fill_voids(&mut grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")?;
+    crate::input::fill(&mut grid, a.voids)?;
     if let Some(c) = &a.crop {
         grid = crop(&grid, c)?;
     }
@@ -320,12 +315,6 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
         }));
     }
 
-    let name = input
-        .files
-        .iter()
-        .map(|f| f.path.display().to_string())
-        .collect::<Vec<_>>()
-        .join(" + ");
     let report = Report {
         input: name,
         crop: a.crop.as_ref().map(|c| [c.col, c.row, c.width, c.height]),

@@ -6,10 +6,11 @@ use std::time::Instant;
 
 use anyhow::Context;
 use cota_core::mosaic::{mosaic, MosaicOptions, SeamPolicy, SeamReport};
+use cota_core::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
 use cota_core::HeightGrid;
 use cota_io::{read_dem, read_dem_bytes, DataType, Dem, Format, PngEncoding, ReadOptions};
 
-use crate::args::{Encoding, InputArgs, Seam};
+use crate::args::{Encoding, InputArgs, Seam, Voids};
 use crate::progress;
 
 /// The sample DEM bundled in the repository (SRTM 3", Chilean coast, public domain).
@@ -44,6 +45,22 @@ pub struct Input {
     pub hole_samples: usize,
     /// Time spent reading and mosaicking, milliseconds.
     pub read_ms: f64,
+}
+
+/// The input files joined with " + ", for reports.
+pub fn name(files: &[FileInfo]) -> String {
+    let names: Vec<String> = files.iter().map(|f| f.path.display().to_string()).collect();
+    names.join(" + ")
+}
+
+/// Applies the `--voids` policy to `grid`.
+pub fn fill(grid: &mut HeightGrid, voids: Voids) -> anyhow::Result<FillReport> {
+    let policy = match voids {
+        Voids::Fill => VoidPolicy::Fill(FillMethod::Harmonic),
+        Voids::Idw => VoidPolicy::Fill(FillMethod::InverseDistance),
+        Voids::Refuse => VoidPolicy::Refuse,
+    };
+    fill_voids(grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")
 }
 
 fn read_options(a: &InputArgs) -> ReadOptions {

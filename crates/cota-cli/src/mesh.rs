@@ -8,12 +8,12 @@ use std::time::Instant;
 
 use anyhow::Context;
 use cota_core::refine::Mode;
-use cota_core::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
+use cota_core::voids::FillReport;
 use cota_core::{check_mesh, measure, Bitree, CheckOptions, ExtractOptions, Mesh, Metrics};
 use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use serde_json::json;
 
-use crate::args::{CoordsArg, HierarchyArg, MeshArgs, QuadVariant, Voids};
+use crate::args::{CoordsArg, HierarchyArg, MeshArgs, QuadVariant};
 use crate::input::load;
 use crate::progress;
 use crate::refine;
@@ -92,14 +92,8 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let input = load(&a.input)?;
     let mut grid = input.grid;
     let nodata = grid.void_count();
-    let policy = match a.voids {
-        Voids::Fill => VoidPolicy::Fill(FillMethod::Harmonic),
-        Voids::Idw => VoidPolicy::Fill(FillMethod::InverseDistance),
-        Voids::Refuse => VoidPolicy::Refuse,
-    };
     let t = Instant::now();
-    let fill: FillReport =
-        fill_voids(&mut grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")?;
+    let fill: FillReport = crate::input::fill(&mut grid, a.voids)?;
     let fill_ms = ms(t);
 
     let (mesh, threshold_m, build_ms, extract_ms, check_opts, generic) = if quadtree {
@@ -206,12 +200,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         write_ms = ms(t);
     }
 
-    let name = input
-        .files
-        .iter()
-        .map(|f| f.path.display().to_string())
-        .collect::<Vec<_>>()
-        .join(" + ");
+    let name = crate::input::name(&input.files);
     let report = json!({
         "input": name,
         "width": grid.width(),

@@ -12,16 +12,13 @@ use std::time::Instant;
 use anyhow::Context;
 use cota_core::refine::{refine_marks, Mode, RefineOptions};
 use cota_core::stream::{encode, encode_marks, StreamOptions};
-use cota_core::voids::{fill_voids, FillMethod, FillOptions, VoidPolicy};
 use cota_core::HeightGrid;
 use cota_core::MaxVerticalError;
 use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use cota_io::stream_file::{read_stream, step_end_offsets, write_stream, StreamLimit};
 use serde_json::json;
 
-use crate::args::{
-    CoordsArg, StreamCommand, StreamDecodeArgs, StreamEncodeArgs, StreamModeArg, Voids,
-};
+use crate::args::{CoordsArg, StreamCommand, StreamDecodeArgs, StreamEncodeArgs, StreamModeArg};
 use crate::input::load;
 
 pub fn run(c: &StreamCommand) -> anyhow::Result<ExitCode> {
@@ -51,12 +48,7 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
     }
     let input = load(&a.input)?;
     let mut grid = input.grid;
-    let policy = match a.voids {
-        Voids::Fill => VoidPolicy::Fill(FillMethod::Harmonic),
-        Voids::Idw => VoidPolicy::Fill(FillMethod::InverseDistance),
-        Voids::Refuse => VoidPolicy::Refuse,
-    };
-    fill_voids(&mut grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")?;
+    crate::input::fill(&mut grid, a.voids)?;
     let t = Instant::now();
     let opts = StreamOptions::default()
         .with_quantum_m(a.quantum_m)
@@ -106,12 +98,7 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         })
         .collect();
     let last = s.steps.last();
-    let name = input
-        .files
-        .iter()
-        .map(|f| f.path.display().to_string())
-        .collect::<Vec<_>>()
-        .join(" + ");
+    let name = crate::input::name(&input.files);
     let report = json!({
         "input": name,
         "width": grid.width(),

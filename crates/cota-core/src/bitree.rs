@@ -135,22 +135,8 @@ impl<'g> Bitree<'g> {
         grid: &'g HeightGrid,
         progress: Progress<'_>,
     ) -> Result<Self, MeshError> {
-        let (w, h) = (grid.width(), grid.height());
-        if w < 2 || h < 2 {
-            return Err(MeshError::GridTooSmall {
-                width: w,
-                height: h,
-            });
-        }
-        if w > (1 << 30) || h > (1 << 30) {
-            return Err(MeshError::GridTooLarge {
-                width: w,
-                height: h,
-            });
-        }
-        grid.require_no_voids()?;
-        let hier = Hierarchy::new(w as u32, h as u32);
-        let mut errors = vec![0f32; w * h];
+        let hier = hierarchy_for(grid)?;
+        let mut errors = vec![0f32; grid.len()];
         let levels = levels(hier.size());
         for (k, level) in levels.iter().enumerate() {
             build_level(grid.heights(), &hier, *level, &mut errors);
@@ -219,6 +205,29 @@ impl<'g> Bitree<'g> {
         }
         Some(e)
     }
+}
+
+/// The hierarchy of a grid that can be meshed: at least 2×2, at most 2^30 per
+/// side, no voids. Every hierarchy (bitree, quadtree, refine) starts here.
+///
+/// # Errors
+/// [`MeshError::GridTooSmall`], [`MeshError::GridTooLarge`], [`MeshError::Voids`].
+pub(crate) fn hierarchy_for(grid: &HeightGrid) -> Result<Hierarchy, MeshError> {
+    let (w, h) = (grid.width(), grid.height());
+    if w < 2 || h < 2 {
+        return Err(MeshError::GridTooSmall {
+            width: w,
+            height: h,
+        });
+    }
+    if w > (1 << 30) || h > (1 << 30) {
+        return Err(MeshError::GridTooLarge {
+            width: w,
+            height: h,
+        });
+    }
+    grid.require_no_voids()?;
+    Ok(Hierarchy::new(w as u32, h as u32))
 }
 
 /// One level of the hierarchy: `A(s)` or `B(s)` (see [`crate::hierarchy`]).

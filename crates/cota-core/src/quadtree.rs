@@ -188,21 +188,7 @@ impl<'g> QuadTree<'g> {
     /// [`MeshError::GridTooSmall`], [`MeshError::GridTooLarge`], or
     /// [`MeshError::Voids`] when a sample is NaN (fill voids first).
     pub fn build(grid: &'g HeightGrid) -> Result<Self, MeshError> {
-        let (w, h) = (grid.width(), grid.height());
-        if w < 2 || h < 2 {
-            return Err(MeshError::GridTooSmall {
-                width: w,
-                height: h,
-            });
-        }
-        if w > (1 << 30) || h > (1 << 30) {
-            return Err(MeshError::GridTooLarge {
-                width: w,
-                height: h,
-            });
-        }
-        grid.require_no_voids()?;
-        let hier = Hierarchy::new(w as u32, h as u32);
+        let hier = crate::bitree::hierarchy_for(grid)?;
         let mut levels = Vec::new();
         let mut size = hier.size();
         loop {

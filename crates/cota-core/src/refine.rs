@@ -183,21 +183,7 @@ pub fn refine_marks(
     criterion: &dyn Criterion,
     opts: &RefineOptions,
 ) -> Result<(Refined, Marks), MeshError> {
-    let (w, h) = (grid.width(), grid.height());
-    if w < 2 || h < 2 {
-        return Err(MeshError::GridTooSmall {
-            width: w,
-            height: h,
-        });
-    }
-    if w > (1 << 30) || h > (1 << 30) {
-        return Err(MeshError::GridTooLarge {
-            width: w,
-            height: h,
-        });
-    }
-    grid.require_no_voids()?;
-    let hier = Hierarchy::new(w as u32, h as u32);
+    let hier = crate::bitree::hierarchy_for(grid)?;
     let mut marks = Marks::new(hier, opts.mode.closure());
     marks.seed_border();
     let mut accepted: HashSet<LeafKey, FastHash> = HashSet::default();
