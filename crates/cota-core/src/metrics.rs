@@ -20,6 +20,7 @@
 //! ([`weighted_volume_m3`], paper 002's illumination-weighted volume error).
 
 use crate::grid::HeightGrid;
+use crate::hierarchy::Pt;
 use crate::mesh::Mesh;
 use crate::raster::{for_each_span, Plane};
 
@@ -44,6 +45,59 @@ pub struct Metrics {
     pub uncovered: usize,
 }
 
+/// The triangles of `mesh` that lie on `grid`, as sample positions and the
+/// plane through their vertex heights. Triangles with a bad index, a vertex off
+/// the grid or no area are skipped (the checker reports them).
+fn planes<'a>(grid: &'a HeightGrid, mesh: &'a Mesh) -> impl Iterator<Item = ([Pt; 3], Plane)> + 'a {
+    let (w, h) = (grid.width(), grid.height());
+    mesh.triangles.iter().filter_map(move |t| {
+        let get = |i: u32| mesh.vertices.get(i as usize).copied();
+        let vs = [get(t[0])?, get(t[1])?, get(t[2])?];
+        if vs
+            .iter()
+            .any(|v| v.col as usize >= w || v.row as usize >= h)
+        {
+            return None;
+        }
+        let p = vs.map(|v| [v.col, v.row]);
+        Some((p, Plane::new(p, vs.map(|v| v.z_m as f64))?))
+    })
+}
+
+/// Calls `f(col, row, Δz)` once for every valid sample covered by `mesh`, with
+/// `Δz = mesh − grid` from the first triangle (in mesh order) containing it.
+fn for_each_sample_once(grid: &HeightGrid, mesh: &Mesh, mut f: impl FnMut(u32, u32, f64)) {
+    let w = grid.width();
+    let heights = grid.heights();
+    let mut seen = vec![0u64; grid.len().div_ceil(64)];
+    for (p, plane) in planes(grid, mesh) {
+        for_each_span(p, |y, x0, x1| {
+            for x in x0..=x1 {
+                let i = y as usize * w + x as usize;
+                let (word, bit) = (i / 64, 1u64 << (i % 64));
+                if seen[word] & bit != 0 || heights[i].is_nan() {
+                    continue;
+                }
+                seen[word] |= bit;
+                f(x, y, plane.at(x as f64, y as f64) - heights[i] as f64);
+            }
+        });
+    }
+}
+
+/// The trapezoidal share of a sample in its cell area: 1 inside, halved on a
+/// border, quartered at a corner.
+fn trapezoid_share(grid: &HeightGrid, x: u32, y: u32) -> f64 {
+    let edge = |v: u32, n: usize| {
+        if v == 0 || v as usize == n - 1 {
+            0.5
+        } else {
+            1.0
+        }
+    };
+    edge(x, grid.width()) * edge(y, grid.height())
+}
+
 /// Measures `mesh` against `grid` at every sample.
 ///
 /// Vertex indices out of range or off the grid are skipped (the checker reports
@@ -54,66 +108,20 @@ pub struct Metrics {
 pub fn measure(grid: &HeightGrid, mesh: &Mesh) -> Metrics {
     let (w, h) = (grid.width(), grid.height());
     let [dx, dy] = grid.cell_size_m();
-    let heights = grid.heights();
-    let mut seen = vec![0u64; (w * h).div_ceil(64)];
+    let cell_m2 = dx * dy;
     let mut m = Metrics::default();
     let mut sum_abs = 0f64;
-    for t in &mesh.triangles {
-        let get = |i: u32| mesh.vertices.get(i as usize).copied();
-        let (Some(v0), Some(v1), Some(v2)) = (get(t[0]), get(t[1]), get(t[2])) else {
-            continue;
-        };
-        let vs = [v0, v1, v2];
-        if vs
-            .iter()
-            .any(|v| v.col as usize >= w || v.row as usize >= h)
-        {
-            continue;
+    for_each_sample_once(grid, mesh, |x, y, d| {
+        let a = d.abs();
+        if a > m.max_error_m {
+            m.max_error_m = a;
+            m.max_error_at = [x, y];
         }
-        let p = [
-            [vs[0].col, vs[0].row],
-            [vs[1].col, vs[1].row],
-            [vs[2].col, vs[2].row],
-        ];
-        let Some(plane) = Plane::new(p, [vs[0].z_m as f64, vs[1].z_m as f64, vs[2].z_m as f64])
-        else {
-            continue;
-        };
-        for_each_span(p, |y, x0, x1| {
-            for x in x0..=x1 {
-                let i = y as usize * w + x as usize;
-                let (word, bit) = (i / 64, 1u64 << (i % 64));
-                if seen[word] & bit != 0 {
-                    continue;
-                }
-                seen[word] |= bit;
-                let hv = heights[i];
-                if hv.is_nan() {
-                    continue;
-                }
-                let d = plane.at(x as f64, y as f64) - hv as f64;
-                let a = d.abs();
-                if a > m.max_error_m {
-                    m.max_error_m = a;
-                    m.max_error_at = [x, y];
-                }
-                m.sse_m2 += d * d;
-                sum_abs += a;
-                let wx = if x == 0 || x as usize == w - 1 {
-                    0.5
-                } else {
-                    1.0
-                };
-                let wy = if y == 0 || y as usize == h - 1 {
-                    0.5
-                } else {
-                    1.0
-                };
-                m.volume_m3 += a * wx * wy * dx * dy;
-                m.samples += 1;
-            }
-        });
-    }
+        m.sse_m2 += d * d;
+        sum_abs += a;
+        m.volume_m3 += a * trapezoid_share(grid, x, y) * cell_m2;
+        m.samples += 1;
+    });
     let valid = w * h - grid.void_count();
     m.uncovered = valid.saturating_sub(m.samples);
     if m.samples > 0 {
@@ -142,22 +150,7 @@ pub fn distortion_m2(grid: &HeightGrid, mesh: &Mesh) -> f64 {
     let z = |x: usize, y: usize| hs[y * w + x] as f64;
     let mut seen = vec![0u64; (2 * w * h).div_ceil(64)];
     let mut d = 0f64;
-    for t in &mesh.triangles {
-        let get = |i: u32| mesh.vertices.get(i as usize).copied();
-        let (Some(v0), Some(v1), Some(v2)) = (get(t[0]), get(t[1]), get(t[2])) else {
-            continue;
-        };
-        let vs = [v0, v1, v2];
-        if vs
-            .iter()
-            .any(|v| v.col as usize >= w || v.row as usize >= h)
-        {
-            continue;
-        }
-        let p = vs.map(|v| [v.col, v.row]);
-        let Some(plane) = Plane::new(p, vs.map(|v| v.z_m as f64)) else {
-            continue;
-        };
+    for (p, plane) in planes(grid, mesh) {
         let p3 = p.map(|q| [3 * q[0], 3 * q[1]]);
         for_each_span(p3, |yy, x0, x1| {
             let (y, ry) = ((yy / 3) as usize, yy % 3);
@@ -200,49 +193,10 @@ pub fn distortion_m2(grid: &HeightGrid, mesh: &Mesh) -> f64 {
 /// (paper `002_9d6c1367b8962b6c.txt`, [`crate::light::received_light`]) this is
 /// the illumination-weighted volume error.
 pub fn weighted_volume_m3(grid: &HeightGrid, mesh: &Mesh, weight: impl Fn(u32, u32) -> f64) -> f64 {
-    let (w, h) = (grid.width(), grid.height());
     let [dx, dy] = grid.cell_size_m();
-    let heights = grid.heights();
-    let mut seen = vec![0u64; (w * h).div_ceil(64)];
     let mut v = 0f64;
-    for t in &mesh.triangles {
-        let get = |i: u32| mesh.vertices.get(i as usize).copied();
-        let (Some(v0), Some(v1), Some(v2)) = (get(t[0]), get(t[1]), get(t[2])) else {
-            continue;
-        };
-        let vs = [v0, v1, v2];
-        if vs
-            .iter()
-            .any(|v| v.col as usize >= w || v.row as usize >= h)
-        {
-            continue;
-        }
-        let p = vs.map(|v| [v.col, v.row]);
-        let Some(plane) = Plane::new(p, vs.map(|v| v.z_m as f64)) else {
-            continue;
-        };
-        for_each_span(p, |y, x0, x1| {
-            for x in x0..=x1 {
-                let i = y as usize * w + x as usize;
-                let (word, bit) = (i / 64, 1u64 << (i % 64));
-                if seen[word] & bit != 0 || heights[i].is_nan() {
-                    continue;
-                }
-                seen[word] |= bit;
-                let a = (plane.at(x as f64, y as f64) - heights[i] as f64).abs();
-                let wx = if x == 0 || x as usize == w - 1 {
-                    0.5
-                } else {
-                    1.0
-                };
-                let wy = if y == 0 || y as usize == h - 1 {
-                    0.5
-                } else {
-                    1.0
-                };
-                v += a * wx * wy * dx * dy * weight(x, y);
-            }
-        });
-    }
+    for_each_sample_once(grid, mesh, |x, y, d| {
+        v += d.abs() * trapezoid_share(grid, x, y) * dx * dy * weight(x, y);
+    });
     v
 }
