@@ -354,7 +354,15 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, errors: &mut [f3
                 let mut out = Vec::with_capacity((w / s + 1) as usize);
                 let mut x = first_col(level, y);
                 while x < w {
-                    out.push(diamond_error(heights, hier, level, [x, y], errors));
+                    let m = [x, y];
+                    let fast = match level {
+                        Level::B(2) => fine_b2(heights, hier, m),
+                        Level::A(2) => fine_a2(heights, hier, m, errors),
+                        _ => None,
+                    };
+                    out.push(
+                        fast.unwrap_or_else(|| diamond_error(heights, hier, level, m, errors)),
+                    );
                     x += s;
                 }
                 out
@@ -368,6 +376,54 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, errors: &mut [f3
             errors[base + x0 + k * s as usize] = e;
         }
     }
+}
+
+/// `B(2)` away from the grid's border: both triangles of the diamond are inside
+/// and their only off-vertex sample is `m`, so `err[m] = |h(m) − mean(ends)|`.
+/// The same value [`diamond_error`] computes, without building triangles.
+/// `None` near the border (the general path decides there).
+#[inline]
+fn fine_b2(heights: &[f32], hier: &Hierarchy, m: Pt) -> Option<f32> {
+    let (w, h) = (hier.width() as usize, hier.height() as usize);
+    let [x, y] = [m[0] as usize, m[1] as usize];
+    let (a, b) = if y % 2 == 0 {
+        // Horizontal side; apexes above and below.
+        (y >= 1 && y + 1 < h && x + 1 < w).then(|| (y * w + x - 1, y * w + x + 1))?
+    } else {
+        // Vertical side; apexes left and right.
+        (x >= 1 && x + 1 < w && y + 1 < h).then(|| ((y - 1) * w + x, (y + 1) * w + x))?
+    };
+    let hv = |i: usize| heights[i] as f64;
+    Some(round_up_f32((hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs()))
+}
+
+/// `A(2)` inside the grid: both square halves are inside; `err[m]` is the
+/// deviation of the centre from its diagonal and the four side midpoints'
+/// errors (the children). The same value as [`diamond_error`].
+#[inline]
+fn fine_a2(heights: &[f32], hier: &Hierarchy, m: Pt, errors: &[f32]) -> Option<f32> {
+    let (w, h) = (hier.width() as usize, hier.height() as usize);
+    let [x, y] = [m[0] as usize, m[1] as usize];
+    if x + 1 >= w || y + 1 >= h {
+        return None;
+    }
+    let hv = |i: usize| heights[i] as f64;
+    let even = ((x - 1) / 2 + (y - 1) / 2) % 2 == 0;
+    let (a, b) = if even {
+        ((y - 1) * w + x - 1, (y + 1) * w + x + 1)
+    } else {
+        ((y - 1) * w + x + 1, (y + 1) * w + x - 1)
+    };
+    let mut e = (hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs();
+    for c in [
+        y * w + x - 1,
+        y * w + x + 1,
+        (y - 1) * w + x,
+        (y + 1) * w + x,
+    ] {
+        e = e.max(errors[c] as f64);
+    }
+    Some(round_up_f32(e))
 }
 
 /// `err` of the split point `m` (see the module docs), rounded up to `f32`.
@@ -567,6 +623,31 @@ mod test {
                         }
                     }
                     x += s;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fine_level_shortcuts_match_the_general_path() {
+        for (w, h) in [(17, 17), (20, 13), (2, 9), (33, 8)] {
+            let g = grid(w, h, |x, y| {
+                ((x * 37 + y * 11) % 13) as f32 * 1.7 - (x * y) as f32 * 0.03
+            });
+            let t = Bitree::build(&g).unwrap();
+            let hier = t.hierarchy();
+            for level in [Level::B(2), Level::A(2)] {
+                for y in 0..h as u32 {
+                    let on_row = match level {
+                        Level::A(_) => y % 2 == 1,
+                        _ => true,
+                    };
+                    let mut x = first_col(level, y);
+                    while on_row && x < w as u32 {
+                        let general = diamond_error(g.heights(), hier, level, [x, y], t.errors());
+                        assert_eq!(t.err_at([x, y]), general, "{level:?} at {x},{y} on {w}x{h}");
+                        x += 2;
+                    }
                 }
             }
         }

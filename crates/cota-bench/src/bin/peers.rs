@@ -21,6 +21,7 @@
     reason = "a report binary: a failed mesh check must stop it loudly"
 )]
 
+use std::hint::black_box;
 use std::time::Instant;
 
 use cota_bench::{
@@ -81,6 +82,15 @@ fn time<T>(mut f: impl FnMut() -> T) -> (T, f64) {
     (out, times[times.len() / 2])
 }
 
+/// How many times `peers` builds each grid with each builder.
+const BUILD_ROUNDS: usize = 15;
+
+/// The minimum and the median of `v` (not empty).
+fn min_median(mut v: Vec<f64>) -> (f64, f64) {
+    v.sort_by(f64::total_cmp);
+    (v[0], v[v.len() / 2])
+}
+
 /// `1234567` → `1,234,567`.
 fn int(n: usize) -> String {
     let s = n.to_string();
@@ -139,29 +149,55 @@ fn run_case(case: &Case, args: &Args) {
     println!("{}.\n", case.description);
     println!("Load average at start: {}.\n", load_average());
 
-    // Build.
-    let (tree, t_build) = time(|| Bitree::build(grid).expect("cota builds"));
+    // Build: the three builders interleaved, so that they share whatever load
+    // the machine has; min and median of BUILD_ROUNDS rounds.
     let pool = one_thread_pool();
-    let (_, t_build1) = pool.install(|| time(|| Bitree::build(grid).expect("cota builds")));
     let (mut m, t_mnew) = time(|| Martini::new(size as u32));
-    let (tile, t_tile) = time(|| martini_tile(&m, grid));
-    println!("| build | ms |\n|---|---:|");
+    let (mut c2, mut c1, mut mt) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..BUILD_ROUNDS {
+        let t = Instant::now();
+        black_box(Bitree::build(grid).expect("cota builds"));
+        c2.push(t.elapsed().as_secs_f64() * 1e3);
+        pool.install(|| {
+            let t = Instant::now();
+            black_box(Bitree::build(grid).expect("cota builds"));
+            c1.push(t.elapsed().as_secs_f64() * 1e3);
+        });
+        let t = Instant::now();
+        black_box(martini_tile(&m, grid));
+        mt.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    let (c2, c1, mt) = (min_median(c2), min_median(c1), min_median(mt));
+    println!("Build, {BUILD_ROUNDS} interleaved rounds:\n");
+    println!("| build | min ms | median ms |\n|---|---:|---:|");
     println!(
-        "| cota `Bitree::build` ({} rayon threads) | {} |",
+        "| cota `Bitree::build` ({} rayon threads) | {} | {} |",
         rayon::current_num_threads(),
-        ms(t_build)
+        ms(c2.0),
+        ms(c2.1)
     );
-    println!("| cota `Bitree::build` (1 thread) | {} |", ms(t_build1));
-    println!("| martini `create_terrain` | {} |", ms(t_tile));
     println!(
-        "| martini `Martini::new` (per grid size, reusable) | {} |",
+        "| cota `Bitree::build` (1 thread) | {} | {} |",
+        ms(c1.0),
+        ms(c1.1)
+    );
+    println!("| martini `create_terrain` | {} | {} |", ms(mt.0), ms(mt.1));
+    println!(
+        "| martini `Martini::new` (per grid size, reusable) | | {} |",
         ms(t_mnew)
     );
     println!(
-        "| ratio cota / martini `create_terrain` | {:.2} (1 thread: {:.2}) |\n",
-        t_build / t_tile,
-        t_build1 / t_tile
+        "| ratio cota / martini `create_terrain` | {:.2} | {:.2} |",
+        c2.0 / mt.0,
+        c2.1 / mt.1
     );
+    println!(
+        "| ratio cota (1 thread) / martini `create_terrain` | {:.2} | {:.2} |\n",
+        c1.0 / mt.0,
+        c1.1 / mt.1
+    );
+    let tree = Bitree::build(grid).expect("cota builds");
+    let tile = martini_tile(&m, grid);
 
     let hf = heights_f64(grid);
     let mut rows = Vec::new();
