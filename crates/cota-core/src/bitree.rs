@@ -421,7 +421,7 @@ fn fine_a2(heights: &[f32], hier: &Hierarchy, m: Pt, errors: &[f32]) -> Option<f
         (y - 1) * w + x,
         (y + 1) * w + x,
     ] {
-        e = e.max(errors[c] as f64);
+        e = max_no_nan(e, errors[c] as f64);
     }
     Some(round_up_f32(e))
 }
@@ -435,11 +435,11 @@ fn diamond_error(heights: &[f32], hier: &Hierarchy, level: Level, m: Pt, errors:
             Placement::Straddling => return f32::INFINITY,
             Placement::Inside => {}
         }
-        e = e.max(triangle_error(heights, hier, level, &t));
+        e = max_no_nan(e, triangle_error(heights, hier, level, &t));
         let (c0, c1) = t.children();
         if !c0.is_unit() {
-            e = e.max(errors[hier.index(c0.mid())] as f64);
-            e = e.max(errors[hier.index(c1.mid())] as f64);
+            e = max_no_nan(e, errors[hier.index(c0.mid())] as f64);
+            e = max_no_nan(e, errors[hier.index(c1.mid())] as f64);
         }
     }
     round_up_f32(e)
@@ -533,7 +533,7 @@ fn span_error(heights: &[f32], w: usize, t: &Tri, ha: f64, hb: f64, hc: f64) -> 
         let base = hs[0] + gx * (xl - x0) as f64 + gy * (y - y0) as f64;
         let start = y as usize * w + xl as usize;
         let row = &heights[start..=start + (xr - xl) as usize];
-        e = e.max(row_max_dev(row, base, gx));
+        e = max_no_nan(e, row_max_dev(row, base, gx));
     }
     e
 }
@@ -558,7 +558,18 @@ fn row_max_dev(row: &[f32], base: f64, gx: f64) -> f64 {
         let d = (base + gx * (k + j as f64) - h as f64).abs();
         m[j] = if d > m[j] { d } else { m[j] };
     }
-    m[0].max(m[1]).max(m[2].max(m[3]))
+    max_no_nan(max_no_nan(m[0], m[1]), max_no_nan(m[2], m[3]))
+}
+
+/// The larger of two values known not to be NaN (the build refuses voids, so
+/// no NaN height reaches it): one comparison, without `f64::max`'s NaN rules.
+#[inline(always)]
+fn max_no_nan(a: f64, b: f64) -> f64 {
+    if b > a {
+        b
+    } else {
+        a
+    }
 }
 
 #[cfg(test)]
