@@ -9,8 +9,10 @@
 //! which is why its "max error" is not a bound).
 //!
 //! # What is stored
-//! One `f32` per grid sample: for the sample `m` that is the split point of a
-//! diamond (see [`crate::hierarchy`]), `err[m]` is the maximum of
+//! One 16-bit error code per grid sample ([`crate::error_code`]: the error
+//! rounded **up** to 8 significant bits, so 2 bytes per sample beside the
+//! grid's 4). For the sample `m` that is the split point of a diamond (see
+//! [`crate::hierarchy`]), `err[m]` is the maximum of
 //! 1. `e(T)` for each triangle `T` of the diamond that lies inside the grid
 //!    (`+∞` when one of them straddles the grid's border, so it is always split),
 //! 2. `err` of the split points of those triangles' children.
@@ -19,7 +21,10 @@
 //! diamond decide alike, so the extraction "split `T` iff `err[mid(T)] > E`" is
 //! crack-free without any forced-split bookkeeping, and every unsplit triangle
 //! meets `e(T) ≤ E`. Errors are computed in `f64` and rounded **up** to `f32`,
-//! so the bound is never understated.
+//! then to a code, so the bound is never understated; where a code cannot tell
+//! whether `err[m] > E` (only the code just above `E`, and only when `E` is not
+//! itself a code value), [`Bitree`] recomputes the exact `f32` error of `m`, so
+//! the mesh is exactly the one of the unquantised errors.
 //!
 //! # Build
 //! Fine to coarse, one level at a time (`B(2), A(2), B(4), A(4), …`), each level
@@ -36,6 +41,7 @@
 
 use rayon::prelude::*;
 
+use crate::error_code::{self, encode_up, SplitRule, INFINITE};
 use crate::grid::HeightGrid;
 use crate::hierarchy::{Hierarchy, Placement, Pt, Tri};
 
@@ -108,7 +114,7 @@ pub enum MeshError {
 pub struct Bitree<'g> {
     grid: &'g HeightGrid,
     hier: Hierarchy,
-    errors: Vec<f32>,
+    codes: Vec<u16>,
 }
 
 /// A callback told `(levels_done, levels_total)` as the build progresses.
@@ -136,13 +142,13 @@ impl<'g> Bitree<'g> {
         progress: Progress<'_>,
     ) -> Result<Self, MeshError> {
         let hier = hierarchy_for(grid)?;
-        let mut errors = vec![0f32; grid.len()];
+        let mut codes = vec![0u16; grid.len()];
         let levels = levels(hier.size());
         for (k, level) in levels.iter().enumerate() {
-            build_level(grid.heights(), &hier, *level, &mut errors);
+            build_level(grid.heights(), &hier, *level, &mut codes);
             progress(k + 1, levels.len());
         }
-        Ok(Bitree { grid, hier, errors })
+        Ok(Bitree { grid, hier, codes })
     }
 
     /// The grid this bitree was built on.
@@ -155,17 +161,69 @@ impl<'g> Bitree<'g> {
         &self.hier
     }
 
-    /// The monotone error of every split point, indexed like the grid's samples
-    /// (0 at samples that split nothing). `+∞` marks split points that must always
-    /// split because a triangle there straddles the grid's border.
-    pub fn errors(&self) -> &[f32] {
-        &self.errors
+    /// The monotone error code of every split point, indexed like the grid's
+    /// samples (0 at samples that split nothing); decode with
+    /// [`error_code::decode`] for an upper bound in metres.
+    /// [`error_code::INFINITE`] marks split points that must always split
+    /// because a triangle there straddles the grid's border.
+    pub fn error_codes(&self) -> &[u16] {
+        &self.codes
     }
 
-    /// Error of the split point `m`.
+    /// An upper bound, in metres, of the monotone error of the split point at
+    /// sample index `i` (`+∞`: always split; 0 for an index out of range).
+    pub fn error_bound_m(&self, i: usize) -> f32 {
+        self.codes.get(i).map_or(0.0, |&c| error_code::decode(c))
+    }
+
+    /// Whether the split point at sample index `i` splits under `rule`: its
+    /// exact monotone error exceeds the rule's threshold.
     #[inline]
-    pub(crate) fn err_at(&self, m: Pt) -> f32 {
-        self.errors[self.hier.index(m)]
+    pub(crate) fn splits_index(&self, i: usize, rule: &SplitRule) -> bool {
+        match rule.decide(self.codes[i]) {
+            Some(d) => d,
+            None => !self.exact_within(i, rule),
+        }
+    }
+
+    /// The tie-break of [`SplitRule`]: whether the exact monotone error of the
+    /// split point at index `i` (whose code is `rule.floor + 1`) is at most the
+    /// threshold. Recomputes the own error of `i`, and recurses into the child
+    /// split points whose codes are ambiguous too (codes never grow downwards).
+    #[cold]
+    fn exact_within(&self, i: usize, rule: &SplitRule) -> bool {
+        let w = self.hier.width() as usize;
+        let m = [(i % w) as u32, (i / w) as u32];
+        let own = match self.own_error_at(m) {
+            Some(e) => round_up_f32(e),
+            None => 0.0,
+        };
+        if own > rule.threshold {
+            return false;
+        }
+        let Some(level) = level_of(m, self.hier.size()) else {
+            return true;
+        };
+        for t in diamond(level, m, self.hier.size()).into_iter().flatten() {
+            if self.hier.place(&t) != Placement::Inside {
+                continue;
+            }
+            let (c0, c1) = t.children();
+            if c0.is_unit() {
+                continue;
+            }
+            for c in [c0.mid(), c1.mid()] {
+                let j = self.hier.index(c);
+                let split = match rule.decide(self.codes[j]) {
+                    Some(d) => d,
+                    None => !self.exact_within(j, rule),
+                };
+                if split {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// The *own* error of the split point `m`: the largest exact `e(T)` of the
@@ -174,20 +232,7 @@ impl<'g> Bitree<'g> {
     /// when `m` splits nothing (a root corner). Used by the point accounting of
     /// [`crate::points`] (added for `cota compare`).
     pub(crate) fn own_error_at(&self, m: Pt) -> Option<f64> {
-        let lowbit = |v: u32| {
-            if v == 0 {
-                u32::MAX
-            } else {
-                v & v.wrapping_neg()
-            }
-        };
-        let (lx, ly) = (lowbit(m[0]), lowbit(m[1]));
-        let half = lx.min(ly);
-        if half == u32::MAX || half >= self.hier.size() {
-            return None;
-        }
-        let s = 2 * half;
-        let level = if lx == ly { Level::A(s) } else { Level::B(s) };
+        let level = level_of(m, self.hier.size())?;
         let heights = self.grid.heights();
         let w = self.hier.width() as usize;
         let hv = |p: Pt| heights[p[1] as usize * w + p[0] as usize] as f64;
@@ -228,6 +273,25 @@ pub(crate) fn hierarchy_for(grid: &HeightGrid) -> Result<Hierarchy, MeshError> {
     }
     grid.require_no_voids()?;
     Ok(Hierarchy::new(w as u32, h as u32))
+}
+
+/// The level whose split point is `m` in a padded square of side `n`; `None`
+/// for the square's corners, which split nothing.
+pub(crate) fn level_of(m: Pt, n: u32) -> Option<Level> {
+    let lowbit = |v: u32| {
+        if v == 0 {
+            u32::MAX
+        } else {
+            v & v.wrapping_neg()
+        }
+    };
+    let (lx, ly) = (lowbit(m[0]), lowbit(m[1]));
+    let half = lx.min(ly);
+    if half == u32::MAX || half >= n {
+        return None;
+    }
+    let s = 2 * half;
+    Some(if lx == ly { Level::A(s) } else { Level::B(s) })
 }
 
 /// One level of the hierarchy: `A(s)` or `B(s)` (see [`crate::hierarchy`]).
@@ -335,7 +399,7 @@ pub(crate) fn diamond(level: Level, m: Pt, n: u32) -> [Option<Tri>; 2] {
 }
 
 /// Computes `err` for every split point of `level` and writes it into `errors`.
-fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, errors: &mut [f32]) {
+fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, codes: &mut [u16]) {
     let (w, h) = (hier.width(), hier.height());
     let s = match level {
         Level::A(s) | Level::B(s) => s,
@@ -347,8 +411,8 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, errors: &mut [f3
             Level::B(_) => y.is_multiple_of(half),
         })
         .collect();
-    let computed: Vec<Vec<f32>> = {
-        let errors: &[f32] = errors;
+    let computed: Vec<Vec<u16>> = {
+        let codes: &[u16] = codes;
         rows.par_iter()
             .map(|&y| {
                 let mut out = Vec::with_capacity((w / s + 1) as usize);
@@ -357,12 +421,10 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, errors: &mut [f3
                     let m = [x, y];
                     let fast = match level {
                         Level::B(2) => fine_b2(heights, hier, m),
-                        Level::A(2) => fine_a2(heights, hier, m, errors),
+                        Level::A(2) => fine_a2(heights, hier, m, codes),
                         _ => None,
                     };
-                    out.push(
-                        fast.unwrap_or_else(|| diamond_error(heights, hier, level, m, errors)),
-                    );
+                    out.push(fast.unwrap_or_else(|| diamond_error(heights, hier, level, m, codes)));
                     x += s;
                 }
                 out
@@ -373,7 +435,7 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, errors: &mut [f3
         let base = y as usize * w as usize;
         let x0 = first_col(level, y) as usize;
         for (k, e) in row.into_iter().enumerate() {
-            errors[base + x0 + k * s as usize] = e;
+            codes[base + x0 + k * s as usize] = e;
         }
     }
 }
@@ -383,7 +445,7 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, errors: &mut [f3
 /// The same value [`diamond_error`] computes, without building triangles.
 /// `None` near the border (the general path decides there).
 #[inline]
-fn fine_b2(heights: &[f32], hier: &Hierarchy, m: Pt) -> Option<f32> {
+fn fine_b2(heights: &[f32], hier: &Hierarchy, m: Pt) -> Option<u16> {
     let (w, h) = (hier.width() as usize, hier.height() as usize);
     let [x, y] = [m[0] as usize, m[1] as usize];
     let (a, b) = if y % 2 == 0 {
@@ -394,14 +456,16 @@ fn fine_b2(heights: &[f32], hier: &Hierarchy, m: Pt) -> Option<f32> {
         (x >= 1 && x + 1 < w && y + 1 < h).then(|| ((y - 1) * w + x, (y + 1) * w + x))?
     };
     let hv = |i: usize| heights[i] as f64;
-    Some(round_up_f32((hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs()))
+    Some(encode_up(round_up_f32(
+        (hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs(),
+    )))
 }
 
 /// `A(2)` inside the grid: both square halves are inside; `err[m]` is the
 /// deviation of the centre from its diagonal and the four side midpoints'
 /// errors (the children). The same value as [`diamond_error`].
 #[inline]
-fn fine_a2(heights: &[f32], hier: &Hierarchy, m: Pt, errors: &[f32]) -> Option<f32> {
+fn fine_a2(heights: &[f32], hier: &Hierarchy, m: Pt, codes: &[u16]) -> Option<u16> {
     let (w, h) = (hier.width() as usize, hier.height() as usize);
     let [x, y] = [m[0] as usize, m[1] as usize];
     if x + 1 >= w || y + 1 >= h {
@@ -414,35 +478,36 @@ fn fine_a2(heights: &[f32], hier: &Hierarchy, m: Pt, errors: &[f32]) -> Option<f
     } else {
         ((y - 1) * w + x + 1, (y + 1) * w + x - 1)
     };
-    let mut e = (hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs();
+    let mut code = encode_up(round_up_f32((hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs()));
     for c in [
         y * w + x - 1,
         y * w + x + 1,
         (y - 1) * w + x,
         (y + 1) * w + x,
     ] {
-        e = max_no_nan(e, errors[c] as f64);
+        code = code.max(codes[c]);
     }
-    Some(round_up_f32(e))
+    Some(code)
 }
 
-/// `err` of the split point `m` (see the module docs), rounded up to `f32`.
-fn diamond_error(heights: &[f32], hier: &Hierarchy, level: Level, m: Pt, errors: &[f32]) -> f32 {
+/// The code of `err` of the split point `m` (see the module docs).
+fn diamond_error(heights: &[f32], hier: &Hierarchy, level: Level, m: Pt, codes: &[u16]) -> u16 {
     let mut e = 0f64;
+    let mut code = 0u16;
     for t in diamond(level, m, hier.size()).into_iter().flatten() {
         match hier.place(&t) {
             Placement::Outside => continue,
-            Placement::Straddling => return f32::INFINITY,
+            Placement::Straddling => return INFINITE,
             Placement::Inside => {}
         }
         e = max_no_nan(e, triangle_error(heights, hier, level, &t));
         let (c0, c1) = t.children();
         if !c0.is_unit() {
-            e = max_no_nan(e, errors[hier.index(c0.mid())] as f64);
-            e = max_no_nan(e, errors[hier.index(c1.mid())] as f64);
+            code = code.max(codes[hier.index(c0.mid())]);
+            code = code.max(codes[hier.index(c1.mid())]);
         }
     }
-    round_up_f32(e)
+    code.max(encode_up(round_up_f32(e)))
 }
 
 /// The smallest `f32` not below `e`.
@@ -516,10 +581,10 @@ fn span_error(heights: &[f32], w: usize, t: &Tri, ha: f64, hb: f64, hc: f64) -> 
     }
     let ymin = p.iter().map(|q| q[1]).min().unwrap_or(0) as i64;
     let ymax = p.iter().map(|q| q[1]).max().unwrap_or(0) as i64;
-    let mut e = 0f64;
-    for y in ymin..=ymax {
+    let bounds = &bounds[..nb];
+    let row_error = |y: i64| {
         let (mut xl, mut xr) = (i64::MIN, i64::MAX);
-        for b in &bounds[..nb] {
+        for b in bounds {
             let x = b.slope * y + b.intercept;
             if b.is_left {
                 xl = xl.max(x);
@@ -528,15 +593,30 @@ fn span_error(heights: &[f32], w: usize, t: &Tri, ha: f64, hb: f64, hc: f64) -> 
             }
         }
         if xl > xr {
-            continue;
+            return 0.0;
         }
         let base = hs[0] + gx * (xl - x0) as f64 + gy * (y - y0) as f64;
         let start = y as usize * w + xl as usize;
         let row = &heights[start..=start + (xr - xl) as usize];
-        e = max_no_nan(e, row_max_dev(row, base, gx));
+        row_max_dev(row, base, gx)
+    };
+    let rows = (ymax - ymin + 1) as u64;
+    if rows * rows >= PARALLEL_SPAN_SAMPLES {
+        // The coarsest levels have one or two triangles the size of the grid:
+        // split their rows over the cores rather than leave one idle.
+        (ymin as usize..ymax as usize + 1)
+            .into_par_iter()
+            .with_min_len(32)
+            .map(|y| row_error(y as i64))
+            .reduce(|| 0.0, max_no_nan)
+    } else {
+        (ymin..=ymax).map(row_error).fold(0.0, max_no_nan)
     }
-    e
 }
+
+/// Triangles with at least about this many samples (a square of the row
+/// count) are scanned in parallel by rows.
+const PARALLEL_SPAN_SAMPLES: u64 = 1 << 16;
 
 /// max_k |base + gx·k − row[k]|, with four independent maxima so the loop
 /// vectorises (the index runs as an exact `f64` counter, no int→float
@@ -655,8 +735,14 @@ mod test {
                     };
                     let mut x = first_col(level, y);
                     while on_row && x < w as u32 {
-                        let general = diamond_error(g.heights(), hier, level, [x, y], t.errors());
-                        assert_eq!(t.err_at([x, y]), general, "{level:?} at {x},{y} on {w}x{h}");
+                        let general =
+                            diamond_error(g.heights(), hier, level, [x, y], t.error_codes());
+                        let i = hier.index([x, y]);
+                        assert_eq!(
+                            t.error_codes()[i],
+                            general,
+                            "{level:?} at {x},{y} on {w}x{h}"
+                        );
                         x += 2;
                     }
                 }
@@ -669,7 +755,81 @@ mod test {
         let g = grid(33, 20, |x, y| 3.0 * x as f32 - 0.5 * y as f32 + 100.0);
         let t = Bitree::build(&g).unwrap();
         // A plane has zero error everywhere except where the border forces splits.
-        assert!(t.errors().iter().all(|&e| e == 0.0 || e == f32::INFINITY));
+        assert!(t.error_codes().iter().all(|&e| e == 0 || e == INFINITE));
+    }
+
+    /// The monotone errors as the unquantised build stored them (`f32`
+    /// rounded up), computed independently from `own_error_at`.
+    fn reference_errors(t: &Bitree<'_>) -> Vec<f32> {
+        let hier = t.hierarchy();
+        let n = hier.size();
+        let rank = |l: Level| match l {
+            Level::B(s) => 2 * s.trailing_zeros(),
+            Level::A(s) => 2 * s.trailing_zeros() + 1,
+        };
+        let mut order: Vec<(u32, Pt, Level)> = (0..hier.height())
+            .flat_map(|y| (0..hier.width()).map(move |x| [x, y]))
+            .filter_map(|m| level_of(m, n).map(|l| (rank(l), m, l)))
+            .collect();
+        order.sort_by_key(|&(r, m, _)| (r, m[1], m[0]));
+        let mut err = vec![0f32; t.grid().len()];
+        for (_, m, level) in order {
+            let mut e = t.own_error_at(m).map_or(0.0, round_up_f32);
+            for tri in diamond(level, m, n).into_iter().flatten() {
+                if hier.place(&tri) != Placement::Inside {
+                    continue;
+                }
+                let (c0, c1) = tri.children();
+                if !c0.is_unit() {
+                    e = e
+                        .max(err[hier.index(c0.mid())])
+                        .max(err[hier.index(c1.mid())]);
+                }
+            }
+            err[hier.index(m)] = e;
+        }
+        err
+    }
+
+    #[test]
+    fn codes_bound_the_exact_errors_and_split_exactly() {
+        for (w, h) in [(23, 17), (33, 33), (40, 9)] {
+            let g = grid(w, h, |x, y| {
+                (x as f32 * 0.37).sin() * 13.1
+                    + (y as f32 * 0.23).cos() * 7.7
+                    + ((x * 7 + y * 13) % 5) as f32 * 0.173
+            });
+            let t = Bitree::build(&g).unwrap();
+            let reference = reference_errors(&t);
+            for (i, (&c, &e)) in t.error_codes().iter().zip(&reference).enumerate() {
+                assert_eq!(c, encode_up(e), "sample {i}");
+            }
+            // Thresholds exactly at, just below and between the exact errors:
+            // the ambiguous codes, which the tie-break must settle.
+            let mut thresholds: Vec<f64> = reference
+                .iter()
+                .filter(|e| e.is_finite() && **e > 0.0)
+                .step_by(7)
+                .flat_map(|&e| [e as f64, e.next_down() as f64, e as f64 * 0.999])
+                .collect();
+            thresholds.extend([0.0, 0.3, 1.7, 4.2]);
+            let mut ambiguous = 0;
+            for &thr in &thresholds {
+                let rule = SplitRule::new(thr);
+                for (i, &e) in reference.iter().enumerate() {
+                    if level_of([(i % w) as u32, (i / w) as u32], t.hierarchy().size()).is_none() {
+                        continue;
+                    }
+                    ambiguous += usize::from(rule.decide(t.error_codes()[i]).is_none());
+                    let exact = e > rule.threshold;
+                    assert_eq!(t.splits_index(i, &rule), exact, "sample {i}, E = {thr}");
+                }
+            }
+            assert!(
+                ambiguous > 0,
+                "the thresholds never exercised the tie-break"
+            );
+        }
     }
 
     #[test]

@@ -15,6 +15,7 @@ pub mod bitree;
 pub mod check;
 pub mod criteria;
 pub mod curvature;
+pub mod error_code;
 pub mod extract;
 pub mod fictitious;
 pub mod grid;

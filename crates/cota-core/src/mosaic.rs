@@ -307,7 +307,8 @@ pub struct Mosaic {
 /// sparse, or a seam difference above [`MosaicOptions::max_seam_diff_m`].
 ///
 /// # Runtime
-/// O(output samples + n² ) for n tiles; memory: the output grid.
+/// O(output samples + n² ) for n tiles; memory: the output grid, the tiles
+/// (dropped one by one as they are copied) and their overlaps.
 pub fn mosaic(tiles: Vec<HeightGrid>, opts: &MosaicOptions) -> Result<Mosaic, MosaicError> {
     if tiles.len() <= 1 {
         let grid = tiles.into_iter().next().ok_or(MosaicError::NoTiles)?;
@@ -326,12 +327,20 @@ pub fn mosaic(tiles: Vec<HeightGrid>, opts: &MosaicOptions) -> Result<Mosaic, Mo
         });
     }
     let layout = plan(&tiles, opts)?;
-    let mut out = vec![f32::NAN; layout.width * layout.height];
-    for (tile, p) in tiles.iter().zip(&layout.placements) {
-        copy_first_wins(&mut out, layout.width, tile, p);
+    // Zeroed pages cost nothing until written: each tile's area is committed
+    // as it is copied, and the tile is then dropped, keeping only the parts
+    // that overlap other tiles (for the seams). Peak: the output plus about
+    // one tile, not the output plus every tile.
+    let mut out = vec![0f32; layout.width * layout.height];
+    let mut patches = Vec::with_capacity(tiles.len());
+    for (i, tile) in tiles.into_iter().enumerate() {
+        let p = &layout.placements[i];
+        copy_first_wins(&mut out, layout.width, &tile, p, &layout.placements[..i]);
+        patches.push(overlap_patches(&tile, p, &layout.placements));
     }
+    fill_holes(&mut out, layout.width, &layout.placements);
     let grid = HeightGrid::new(layout.width, layout.height, out, layout.georef)?;
-    let (grid, seams) = resolve_seams(grid, &tiles, &layout.placements, opts.seam_policy);
+    let (grid, seams) = resolve_seams(grid, &patches, &layout.placements, opts.seam_policy);
     if let (Some(limit_m), Some(at)) = (opts.max_seam_diff_m, seams.max_diff_at) {
         if seams.max_abs_diff_m > limit_m {
             return Err(MosaicError::SeamTooLarge {
@@ -587,23 +596,103 @@ fn origin_in(g: &GeoRef, pixel_is: PixelIs, x: bool) -> f64 {
 
 /// Copies `tile` into `out` at its placement, row by row, writing only where the
 /// output is still void: the first valid value wins, a void never overwrites data.
-fn copy_first_wins(out: &mut [f32], out_width: usize, tile: &HeightGrid, p: &TilePlacement) {
+fn copy_first_wins(
+    out: &mut [f32],
+    out_width: usize,
+    tile: &HeightGrid,
+    p: &TilePlacement,
+    earlier: &[TilePlacement],
+) {
     let w = tile.width();
     for (r, src) in tile.heights().chunks_exact(w).enumerate() {
-        let start = (p.row + r) * out_width + p.col;
-        for (d, &s) in out[start..start + w].iter_mut().zip(src) {
-            if d.is_nan() {
+        let row = p.row + r;
+        // Column spans of this row already covered by earlier tiles: there the
+        // earlier value wins unless it is void.
+        let spans: Vec<(usize, usize)> = earlier
+            .iter()
+            .filter(|e| row >= e.row && row < e.row + e.height)
+            .map(|e| (e.col, e.col + e.width))
+            .collect();
+        let start = row * out_width + p.col;
+        for (k, (d, &s)) in out[start..start + w].iter_mut().zip(src).enumerate() {
+            let col = p.col + k;
+            if !spans.iter().any(|&(a, b)| col >= a && col < b) || d.is_nan() {
                 *d = s;
             }
         }
     }
 }
 
+/// Sets the samples covered by no tile to NaN (the output starts zeroed).
+fn fill_holes(out: &mut [f32], out_width: usize, placements: &[TilePlacement]) {
+    for (row, line) in out.chunks_exact_mut(out_width).enumerate() {
+        let mut spans: Vec<(usize, usize)> = placements
+            .iter()
+            .filter(|p| row >= p.row && row < p.row + p.height)
+            .map(|p| (p.col, p.col + p.width))
+            .collect();
+        spans.sort_unstable();
+        let mut next = 0;
+        for (a, b) in spans {
+            if a > next {
+                line[next..a].fill(f32::NAN);
+            }
+            next = next.max(b);
+        }
+        if next < out_width {
+            line[next..].fill(f32::NAN);
+        }
+    }
+}
+
+/// The samples of one tile that other tiles also cover: one rectangle per
+/// overlapping tile, in output coordinates.
+struct Patch {
+    col: usize,
+    row: usize,
+    width: usize,
+    height: usize,
+    heights: Vec<f32>,
+}
+
+fn overlap_patches(tile: &HeightGrid, p: &TilePlacement, all: &[TilePlacement]) -> Vec<Patch> {
+    let mut out = Vec::new();
+    for q in all.iter().filter(|q| q.index != p.index) {
+        let (c0, c1) = (p.col.max(q.col), (p.col + p.width).min(q.col + q.width));
+        let (r0, r1) = (p.row.max(q.row), (p.row + p.height).min(q.row + q.height));
+        if c0 >= c1 || r0 >= r1 {
+            continue;
+        }
+        let mut heights = Vec::with_capacity((c1 - c0) * (r1 - r0));
+        for row in r0..r1 {
+            for col in c0..c1 {
+                heights.push(tile.get(col - p.col, row - p.row));
+            }
+        }
+        out.push(Patch {
+            col: c0,
+            row: r0,
+            width: c1 - c0,
+            height: r1 - r0,
+            heights,
+        });
+    }
+    out
+}
+
+/// The value tile `patches` holds at output sample (`col`, `row`), if any.
+fn patch_value(patches: &[Patch], col: usize, row: usize) -> Option<f32> {
+    patches.iter().find_map(|q| {
+        (col >= q.col && col < q.col + q.width && row >= q.row && row < q.row + q.height)
+            .then(|| q.heights[(row - q.row) * q.width + (col - q.col)])
+    })
+}
+
 /// Visits every output sample covered by two or more tiles once, compares the
 /// tiles' valid values there and applies the seam policy.
 fn resolve_seams(
     mut grid: HeightGrid,
-    tiles: &[HeightGrid],
+    tiles: &[Vec<Patch>],
     placements: &[TilePlacement],
     policy: SeamPolicy,
 ) -> (HeightGrid, SeamReport) {
@@ -677,7 +766,7 @@ struct SampleStats {
 /// Gathers the valid values at output (`col`, `row`) of the tiles in `placements`
 /// (a suffix of all placements; indices are the tiles' input indices).
 fn sample_stats(
-    tiles: &[HeightGrid],
+    tiles: &[Vec<Patch>],
     placements: &[TilePlacement],
     col: usize,
     row: usize,
@@ -689,7 +778,9 @@ fn sample_stats(
         max: (f32::NEG_INFINITY, 0),
     };
     for p in placements.iter().filter(|p| p.contains(col, row)) {
-        let v = tiles[p.index].get(col - p.col, row - p.row);
+        let Some(v) = patch_value(&tiles[p.index], col, row) else {
+            continue;
+        };
         if v.is_nan() {
             continue;
         }

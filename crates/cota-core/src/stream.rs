@@ -69,6 +69,7 @@
 //! same [`StreamDecoder`].
 
 use crate::bitree::{Bitree, MeshError};
+use crate::error_code::{decode, SplitRule, INFINITE};
 use crate::fictitious::Marks;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{orient_up, Hierarchy, Placement, Pt, Tri};
@@ -397,9 +398,9 @@ pub fn encode(grid: &HeightGrid, opts: &StreamOptions) -> Result<EncodedStream, 
         let mut c = Enc {
             enc: RangeEncoder::new(),
             models: &mut models,
-            err: tree.errors(),
+            tree: &tree,
             q: &q,
-            threshold: split_threshold(thr),
+            rule: SplitRule::new(thr),
             stated: 0.0,
             new_points: 0,
         };
@@ -440,10 +441,11 @@ fn schedule(tree: &Bitree<'_>, opts: &StreamOptions) -> Vec<f64> {
         }
         None => {
             let emax = tree
-                .errors()
+                .error_codes()
                 .iter()
-                .filter(|e| e.is_finite())
-                .fold(0f32, |a, &e| a.max(e)) as f64;
+                .filter(|&&c| c < INFINITE)
+                .fold(0u16, |a, &c| a.max(c));
+            let emax = decode(emax) as f64;
             if emax > 0.0 {
                 let mut t = 2f64.powi(emax.log2().floor() as i32);
                 while t > e_last && t >= opts.quantum_m && t < f32::MAX as f64 {
@@ -455,16 +457,6 @@ fn schedule(tree: &Bitree<'_>, opts: &StreamOptions) -> Vec<f64> {
     }
     v.push(e_last);
     v
-}
-
-/// The largest `f32` not above `e`.
-pub(crate) fn split_threshold(e: f64) -> f32 {
-    let f = e as f32;
-    if f as f64 > e {
-        f.next_down()
-    } else {
-        f
-    }
 }
 
 /// The padded square's corners that are grid samples, in header order.
@@ -527,19 +519,21 @@ trait Coder {
 struct Enc<'a> {
     enc: RangeEncoder,
     models: &'a mut Models,
-    err: &'a [f32],
+    tree: &'a Bitree<'a>,
     q: &'a [i64],
-    threshold: f32,
+    rule: SplitRule,
     stated: f32,
     new_points: usize,
 }
 
 impl Coder for Enc<'_> {
     fn split(&mut self, ctx: usize, m: usize) -> Result<bool, String> {
-        let e = self.err[m];
-        let yes = e > self.threshold;
+        let yes = self.tree.splits_index(m, &self.rule);
         self.enc.bit(&mut self.models.split[ctx], yes);
         if !yes {
+            // The code's bound, or the threshold when the exact tie-break
+            // found the error at most the threshold.
+            let e = self.tree.error_bound_m(m).min(self.rule.threshold);
             self.stated = self.stated.max(e);
         }
         Ok(yes)
