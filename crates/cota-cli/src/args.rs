@@ -376,12 +376,18 @@ pub struct StreamEncodeArgs {
     /// Void policy.
     #[arg(long, value_enum, default_value_t = Voids::Fill)]
     pub voids: Voids,
-    /// progressive: coarse-to-fine steps of decreasing error down to
-    /// --max-error. conforming, fictitious, fictitious-faithful: one step
-    /// holding `cota mesh --mode M --max-error E`'s mesh; fictitious points
-    /// are never sent.
+    /// progressive: coarse-to-fine steps of decreasing error over the bitree's
+    /// error map, down to --max-error. conforming, fictitious,
+    /// fictitious-faithful: coarse-to-fine steps of the refinement of `cota
+    /// mesh --mode M` at decreasing tolerances, down to --max-error;
+    /// fictitious points are never sent.
     #[arg(long, value_enum, default_value_t = StreamModeArg::Progressive)]
     pub mode: StreamModeArg,
+    /// Step tolerances in metres, decreasing, each above --max-error (e.g.
+    /// 64,16,4); the last step is always --max-error. Default: powers of two
+    /// from the coarse mesh's error down to the quantum.
+    #[arg(long, value_name = "M,M,...", value_delimiter = ',')]
+    pub thresholds: Option<Vec<f64>>,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -392,11 +398,12 @@ pub struct StreamEncodeArgs {
 pub enum StreamModeArg {
     /// Coarse-to-fine steps over the exact error map (every prefix a mesh).
     Progressive,
-    /// One step: the conforming refinement at --max-error.
+    /// Steps of the conforming refinement at decreasing tolerances.
     Conforming,
-    /// One step: fictitious points, watertight.
+    /// Steps of the refinement with fictitious points, watertight.
     Fictitious,
-    /// One step: fictitious points as in paper 000 (hanging vertices).
+    /// Steps of the refinement with fictitious points as in paper 000
+    /// (hanging vertices).
     FictitiousFaithful,
 }
 

@@ -1,19 +1,21 @@
 //! `cota stream encode|decode`: the progressive stream of paper 000
 //! (`cota_core::stream`, framed by `cota_io::stream_file`).
 //!
-//! Encode: read and mosaic like `cota mesh`, fill voids, encode, write the
-//! `.cstream` atomically, report each step's bytes per triangle and per point.
-//! Decode: read a prefix (all, `--max-bytes`, or `--max-error`), rebuild the
-//! mesh and a grid of the decoded surface for the exporters, write the mesh.
+//! Encode: read and mosaic like `cota mesh`, fill voids, encode (error steps,
+//! or the progressive marks of `--mode conforming|fictitious|
+//! fictitious-faithful`), write the `.cstream` atomically, report each step's
+//! bytes per triangle and per point.
+//! Decode: read a prefix (all, `--max-bytes`, or `--max-error`, cut at a step),
+//! rebuild the mesh and a grid of the decoded surface for the exporters, write
+//! the mesh, report bytes per triangle and per point at each step used.
 
 use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::refine::{refine_marks, Mode, RefineOptions};
-use cota_core::stream::{encode, encode_marks, StreamOptions};
+use cota_core::refine::Mode;
+use cota_core::stream::{encode, encode_marks_progressive, StreamOptions};
 use cota_core::HeightGrid;
-use cota_core::MaxVerticalError;
 use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use cota_io::stream_file::{read_stream, step_end_offsets, write_stream, StreamLimit};
 use serde_json::json;
@@ -52,7 +54,8 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
     let t = Instant::now();
     let opts = StreamOptions::default()
         .with_quantum_m(a.quantum_m)
-        .with_max_error_m(a.max_error);
+        .with_max_error_m(a.max_error)
+        .with_thresholds_m(a.thresholds.clone());
     let s = match a.mode {
         StreamModeArg::Progressive => encode(&grid, &opts)?,
         m => {
@@ -61,11 +64,7 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
                 StreamModeArg::FictitiousFaithful => Mode::Fictitious { watertight: false },
                 _ => Mode::Conforming,
             };
-            let crit = MaxVerticalError {
-                max_error_m: a.max_error,
-            };
-            let (_, marks) = refine_marks(&grid, &crit, &RefineOptions::DEFAULT.with_mode(mode))?;
-            encode_marks(&grid, &marks, mode, a.max_error, &opts)?
+            encode_marks_progressive(&grid, mode, &opts)?
         }
     };
     let encode_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -81,7 +80,7 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         .map(|(k, (st, &end))| {
             json!({
                 "step": k,
-                "threshold_m": if k == 0 && a.mode == StreamModeArg::Progressive {
+                "threshold_m": if k == 0 {
                     None
                 } else {
                     Some(st.threshold_m)
@@ -150,7 +149,7 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         "B/pt"
     );
     for (k, (st, &end)) in s.steps.iter().zip(&ends).enumerate() {
-        let thr = if k == 0 && a.mode == StreamModeArg::Progressive {
+        let thr = if k == 0 {
             "coarse".to_string()
         } else {
             format!("{}", st.threshold_m)
@@ -226,7 +225,12 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
                 "step": s.info.index,
                 "max_error_m": s.info.max_error_m,
                 "new_points": s.info.new_points,
+                "step_bytes": s.info.payload_bytes + 8,
                 "total_bytes": s.end_offset,
+                "triangles": s.info.triangles,
+                "vertices": s.info.vertices,
+                "bytes_per_triangle": ratio(s.end_offset, s.info.triangles),
+                "bytes_per_point": ratio(s.end_offset, s.info.vertices),
             })
         })
         .collect();
@@ -259,6 +263,23 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
         d.file_bytes,
         d.steps.len()
     );
+    println!(
+        "{:>4} {:>10} {:>10} {:>11} {:>11} {:>10} {:>8} {:>8}",
+        "step", "max err m", "new pts", "bytes", "triangles", "vertices", "B/tri", "B/pt"
+    );
+    for s in &d.steps {
+        println!(
+            "{:>4} {:>10.3} {:>10} {:>11} {:>11} {:>10} {:>8.3} {:>8.3}",
+            s.info.index,
+            s.info.max_error_m,
+            s.info.new_points,
+            s.end_offset,
+            s.info.triangles,
+            s.info.vertices,
+            ratio(s.end_offset, s.info.triangles),
+            ratio(s.end_offset, s.info.vertices)
+        );
+    }
     println!(
         "mesh        {} vertices, {} triangles, max error {} m",
         mesh.vertex_count(),

@@ -104,7 +104,7 @@ fn cota_missing(dir: &tempfile::TempDir) -> String {
 }
 
 #[test]
-fn fictitious_mode_streams_one_step() {
+fn fictitious_mode_streams_progressively() {
     let dir = tempfile::tempdir().unwrap();
     let cs = dir.path().join("f.cstream");
     let cs_s = cs.to_str().unwrap();
@@ -121,8 +121,18 @@ fn fictitious_mode_streams_one_step() {
     ]));
     assert_eq!(r["mode"], "fictitious");
     let steps = r["steps"].as_array().unwrap();
-    assert_eq!(steps.len(), 1);
-    assert!(steps[0]["new_points"].as_u64() < steps[0]["vertices"].as_u64());
+    assert!(steps.len() >= 6, "{} steps", steps.len());
+    let mut heights = 0;
+    for (k, st) in steps.iter().enumerate() {
+        let e = st["max_error_m"].as_f64().unwrap();
+        if k > 0 {
+            assert!(e <= st["threshold_m"].as_f64().unwrap(), "step {k}");
+        }
+        heights += st["new_points"].as_u64().unwrap();
+        assert!(st["bytes_per_triangle"].as_f64().unwrap() > 0.0);
+    }
+    assert!(heights < steps.last().unwrap()["vertices"].as_u64().unwrap());
+    assert!(steps.last().unwrap()["max_error_m"].as_f64().unwrap() <= 5.0);
     let ply = dir.path().join("f.ply");
     let d = json(&cota(&[
         "stream",
@@ -132,7 +142,33 @@ fn fictitious_mode_streams_one_step() {
         "-o",
         ply.to_str().unwrap(),
     ]));
-    assert_eq!(d["triangles"], steps[0]["triangles"]);
+    assert_eq!(d["triangles"], steps.last().unwrap()["triangles"]);
     assert!(d["max_error_m"].as_f64().unwrap() <= 5.0);
     assert!(ply.exists());
+    // Cut at a step by error: the report has every step used, with its size.
+    let d = json(&cota(&[
+        "stream",
+        "decode",
+        cs_s,
+        "--max-error",
+        "40",
+        "--json",
+    ]));
+    let used = d["steps"].as_array().unwrap();
+    assert!(used.len() < steps.len() && used.len() >= 2);
+    for (u, st) in used.iter().zip(steps) {
+        assert_eq!(u["triangles"], st["triangles"]);
+        assert_eq!(u["vertices"], st["vertices"]);
+        assert_eq!(u["total_bytes"], st["total_bytes"]);
+        assert_eq!(u["bytes_per_triangle"], st["bytes_per_triangle"]);
+    }
+    assert!(d["max_error_m"].as_f64().unwrap() <= 40.0);
+    // The text report prints a line per step.
+    let o = cota(&["stream", "decode", cs_s, "--max-error", "40"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(
+        text.contains("B/tri") && text.lines().count() >= used.len() + 3,
+        "{text}"
+    );
 }

@@ -116,7 +116,7 @@ pub(crate) fn parent(t: &Tri, n: u32) -> Option<Tri> {
 }
 
 /// The closure state: which points are selected and which triangles split.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Marks {
     hier: Hierarchy,
     closure: Closure,
@@ -142,6 +142,23 @@ impl Marks {
     /// The hierarchy's shape.
     pub fn hierarchy(&self) -> &Hierarchy {
         &self.hier
+    }
+
+    /// The closure rule these marks follow.
+    pub fn closure(&self) -> Closure {
+        self.closure
+    }
+
+    /// True when every point selected in `other` is selected here and every
+    /// triangle split in `other` is split here (`other` is a coarser step of
+    /// the same hierarchy).
+    pub fn contains(&self, other: &Marks) -> bool {
+        self.hier == other.hier
+            && self
+                .flags
+                .iter()
+                .zip(&other.flags)
+                .all(|(&a, &b)| b & !a == 0)
     }
 
     /// Selects the split points of every triangle straddling the grid's

@@ -186,6 +186,34 @@ pub fn refine_marks(
     let hier = crate::bitree::hierarchy_for(grid)?;
     let mut marks = Marks::new(hier, opts.mode.closure());
     marks.seed_border();
+    refine_marks_from(grid, criterion, opts, marks)
+}
+
+/// [`refine_marks`] continued from `marks`, closed marks of an earlier
+/// refinement of the same `grid` in the same mode (e.g. at a larger
+/// tolerance): points are only added, so the result's selection contains
+/// `marks`' selection, and at the fixed point every leaf meets `criterion`
+/// with its actual heights, as in [`refine`]. The progressive marks streams
+/// ([`crate::stream_marks`]) build their nested steps this way.
+///
+/// Marks made for a grid of another size are ignored: the refinement then
+/// starts from the border's points, as [`refine_marks`] does.
+///
+/// # Errors
+/// As [`refine`].
+pub fn refine_marks_from(
+    grid: &HeightGrid,
+    criterion: &dyn Criterion,
+    opts: &RefineOptions,
+    marks: Marks,
+) -> Result<(Refined, Marks), MeshError> {
+    let hier = crate::bitree::hierarchy_for(grid)?;
+    let mut marks = marks;
+    if *marks.hierarchy() != hier {
+        marks = Marks::new(hier, opts.mode.closure());
+        marks.seed_border();
+    }
+    marks.close();
     let mut accepted: HashSet<LeafKey, FastHash> = HashSet::default();
     let mut rounds = 0;
     loop {

@@ -64,9 +64,11 @@
 //! quantised grid, vertex for vertex.
 //!
 //! Meshes of other criteria and of the fictitious modes (`refine`'s `Marks`,
-//! where fictitious points cost a flag and no height) are streamed by
-//! [`encode_marks`] ([`crate::stream_marks`]) in one step, decoded by the
-//! same [`StreamDecoder`].
+//! where fictitious points cost a flag and no height) are streamed coarse to
+//! fine by [`encode_marks_progressive`] (vertical-error tolerances) or
+//! [`encode_marks_steps`] (any nested marks), [`crate::stream_marks`], and
+//! decoded step by step by the same [`StreamDecoder`]; their stated errors
+//! are measured exactly and need not decrease from step to step.
 
 use crate::bitree::{Bitree, MeshError};
 use crate::error_code::{decode, SplitRule, INFINITE};
@@ -77,7 +79,7 @@ use crate::mesh::{Mesh, MeshVertex};
 use crate::refine::Mode;
 use crate::stream_coder::{Bit, RangeDecoder, RangeEncoder, ResidualModel};
 
-pub use crate::stream_marks::encode_marks;
+pub use crate::stream_marks::{encode_marks, encode_marks_progressive, encode_marks_steps};
 
 /// Largest magnitude of a quantised height (`|q| < 2^40`).
 pub(crate) const MAX_Q: i64 = 1 << 40;
@@ -186,8 +188,8 @@ pub enum StreamKind {
     /// Steps of decreasing error threshold over the bitree's error map
     /// ([`encode`]); every prefix is `Bitree::extract(E_k)`.
     ErrorSteps,
-    /// One step holding a closed set of [`Marks`]
-    /// from [`crate::refine`] in this mode ([`encode_marks`]): fictitious
+    /// Steps of nested closed [`Marks`] from [`crate::refine`] in this mode
+    /// ([`encode_marks_progressive`], [`encode_marks_steps`]): fictitious
     /// points cost a flag and no height.
     Marks(Mode),
 }
@@ -484,6 +486,15 @@ pub(crate) struct Models {
     pub(crate) side: Vec<Bit>,
     /// Marks streams: per level "selected, not fictitious" bits.
     pub(crate) select: Vec<Bit>,
+    /// Marks streams, steps after the first: per (level, point already
+    /// present, triangle new in this step) split bits.
+    pub(crate) side_later: Vec<Bit>,
+    /// Marks streams, steps after the first: per level "a new point is
+    /// selected" bits.
+    pub(crate) select_later: Vec<Bit>,
+    /// Marks streams, steps after the first: per level "a fictitious point
+    /// becomes selected" bits.
+    pub(crate) promote: Vec<Bit>,
 }
 
 impl Models {
@@ -493,6 +504,9 @@ impl Models {
             residual: vec![ResidualModel::default(); LEVELS * STEPS],
             side: vec![Bit::default(); LEVELS * 2],
             select: vec![Bit::default(); LEVELS],
+            side_later: vec![Bit::default(); LEVELS * 4],
+            select_later: vec![Bit::default(); LEVELS],
+            promote: vec![Bit::default(); LEVELS],
         }
     }
 }
@@ -746,6 +760,24 @@ impl State {
         }
     }
 
+    /// Triangles and vertices of the current mesh (error-steps streams).
+    fn counts(&self) -> (usize, usize) {
+        let mut used = vec![false; self.split.len()];
+        let mut triangles = 0;
+        let mut vertices = 0;
+        self.leaves(|t| {
+            triangles += 1;
+            for p in [t.a, t.b, t.c] {
+                let i = self.hier.index(p);
+                if !used[i] {
+                    used[i] = true;
+                    vertices += 1;
+                }
+            }
+        });
+        (triangles, vertices)
+    }
+
     /// The current mesh: leaves counter-clockwise from above, vertices numbered
     /// row-major (as [`Bitree::extract`] numbers them).
     pub(crate) fn mesh(&self) -> Mesh {
@@ -799,6 +831,10 @@ pub struct StepInfo {
     pub new_points: usize,
     /// Bytes of the step's payload.
     pub payload_bytes: usize,
+    /// Triangles of the prefix's mesh.
+    pub triangles: usize,
+    /// Vertices of the prefix's mesh.
+    pub vertices: usize,
 }
 
 /// The receiving end: applies steps and yields the mesh of the prefix.
@@ -844,8 +880,9 @@ impl StreamDecoder {
     ///
     /// # Errors
     /// [`StreamError::BadStep`] when the payload is short, states an error that
-    /// is negative, NaN or above the previous step's, or its coded block is
-    /// truncated or corrupted.
+    /// is negative, NaN, above `f32::MAX` or (error-steps streams) above the
+    /// previous step's, or its coded block is truncated or corrupted (for
+    /// marks streams also: its points disagree with their closure).
     pub fn apply_step(&mut self, payload: &[u8]) -> Result<StepInfo, StreamError> {
         let index = self.steps.len();
         let bad = |expected: String, found: String| StreamError::BadStep {
@@ -860,7 +897,11 @@ impl StreamDecoder {
             ));
         };
         let stated = f32::from_le_bytes([e0, e1, e2, e3]) as f64;
-        let prev = self.max_error_m().unwrap_or(f64::INFINITY);
+        // Marks streams state exact measured errors, which need not decrease.
+        let prev = match self.header.kind {
+            StreamKind::ErrorSteps => self.max_error_m().unwrap_or(f64::INFINITY),
+            StreamKind::Marks(_) => f32::MAX as f64,
+        };
         if !(stated >= 0.0 && stated <= prev) {
             return Err(bad(
                 format!("a stated max error between 0 m and {prev} m"),
@@ -869,31 +910,28 @@ impl StreamDecoder {
         }
         let block = &payload[4..];
         if let StreamKind::Marks(mode) = self.header.kind {
-            if index > 0 {
-                return Err(bad(
-                    "one step in a marks stream".into(),
-                    format!("step {index}"),
-                ));
-            }
+            let saved = self.models.clone();
             let (mesh, new_points) = crate::stream_marks::decode(
                 &mut self.state,
                 &mut self.models,
                 &self.header,
                 mode,
+                index,
                 block,
             )
             .map_err(|found| {
-                self.state = State::new(&self.header);
-                self.models = Models::new();
+                self.models = saved;
                 bad("a decodable marks step".into(), found)
             })?;
-            self.marks_mesh = Some(mesh);
             let info = StepInfo {
                 index,
                 max_error_m: stated,
                 new_points,
                 payload_bytes: payload.len(),
+                triangles: mesh.triangle_count(),
+                vertices: mesh.vertex_count(),
             };
+            self.marks_mesh = Some(mesh);
             self.steps.push(info);
             return Ok(info);
         }
@@ -920,11 +958,14 @@ impl StreamDecoder {
             return Err(e);
         }
         self.state.journal.clear();
+        let (triangles, vertices) = self.state.counts();
         let info = StepInfo {
             index,
             max_error_m: stated,
             new_points,
             payload_bytes: payload.len(),
+            triangles,
+            vertices,
         };
         self.steps.push(info);
         Ok(info)
@@ -932,7 +973,8 @@ impl StreamDecoder {
 
     /// The mesh of the current prefix (empty before step 0), vertex heights
     /// `q · quantum_m` as `f32`: equal, vertex for vertex, to
-    /// `Bitree::extract(E_k)` on the quantised grid.
+    /// `Bitree::extract(E_k)` on the quantised grid (marks streams: to the
+    /// sender's `refine::triangulate` of step `k`'s marks).
     pub fn mesh(&self) -> Mesh {
         if self.steps.is_empty() {
             return Mesh::default();
