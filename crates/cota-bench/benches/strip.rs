@@ -14,6 +14,8 @@
 //! (N00E010, or the fixture when the shared data is absent) and `puget1025`,
 //! at E = 1 and 10 m.
 //!
+//! The report is printed when no filter is given, or with the filter `report`.
+//!
 //! Run: `cargo bench -p cota-bench --bench strip [-- strip/puget1025]`.
 
 #![allow(clippy::unwrap_used, reason = "benchmark harness")]

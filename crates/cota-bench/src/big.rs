@@ -391,3 +391,53 @@ pub fn seam_line(s: &SeamReport) -> String {
         s.compared, s.max_abs_diff_m, s.mean_abs_diff_m
     )
 }
+
+#[cfg(test)]
+mod test {
+    #![allow(clippy::unwrap_used, reason = "tests")]
+    use super::*;
+
+    #[test]
+    fn names_follow_srtm() {
+        assert_eq!(srtm_name(0, 10), "N00E010.hgt");
+        assert_eq!(srtm_name(-29, -72), "S29W072.hgt");
+        assert_eq!(srtm_name(1, 100), "N01E100.hgt");
+    }
+
+    /// Two copies of the bundled real tile written side by side come back as
+    /// one 2401×1201 mosaic holding the tile's own samples, with the seam
+    /// (the tile's east column against its west column) reported.
+    #[test]
+    fn relabelled_layout_reads_back_as_a_mosaic() {
+        let fixture = crate::repo_root().join("fixtures").join("S29W072.hgt.zip");
+        let tile = read_dem(&fixture, &ReadOptions::DEFAULT).unwrap().grid;
+        let dir = tempfile::tempdir().unwrap();
+        let files =
+            write_layout(dir.path(), std::slice::from_ref(&tile), &[[0, 0]], (1, 100)).unwrap();
+        let names: Vec<String> = files
+            .iter()
+            .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(names, ["N01E100.hgt", "N01E101.hgt"]);
+        let (g, seams, filled) = read_mosaic(&files).unwrap();
+        assert_eq!((g.width(), g.height()), (2 * TILE - 1, TILE));
+        assert_eq!(
+            filled,
+            2 * tile.void_count(),
+            "both copies' voids (none on the seam)"
+        );
+        let seams = seams.unwrap();
+        assert_eq!(seams.overlap_samples, TILE);
+        assert!(
+            seams.max_abs_diff_m > 0.0,
+            "west and east edges of a real tile differ"
+        );
+        for (col, row) in [(0, 0), (600, 17), (1199, 1200), (1300, 5)] {
+            let src = tile.get(col % (TILE - 1), row);
+            if !src.is_nan() {
+                assert_eq!(g.get(col, row), src, "sample ({col}, {row})");
+            }
+        }
+        assert!(hgt_bytes(&g).is_err() || g.heights().iter().all(|h| h.fract() == 0.0));
+    }
+}

@@ -485,6 +485,20 @@ mod test {
     }
 
     #[test]
+    fn filters_skip_only_what_they_exclude() {
+        let f = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        assert!(wanted(&[], "build/big4097"));
+        assert!(wanted(&f(&["big4097"]), "build/big4097"));
+        assert!(!wanted(&f(&["big4097"]), "build/fuji513"));
+        assert!(wanted(&f(&["extract/mosaic2/5"]), "extract/mosaic2"));
+        assert!(!wanted(&f(&["extract/mosaic2/5"]), "build/mosaic2"));
+        assert!(wanted(&f(&["build/"]), "build/mosaic2"));
+        // A function name or a regex may match anything.
+        assert!(wanted(&f(&["cota"]), "build/fuji513"));
+        assert!(wanted(&f(&["^build/(fuji|puget)"]), "build/fuji513"));
+    }
+
+    #[test]
     fn pad_and_crop() {
         let g = bumpy(5);
         let p = pad_to(&g, 7).expect("pad");
