@@ -17,6 +17,17 @@
 //! * `delatin/<grid>/<E>` for a few E: delatin `triangulate` (no separate
 //!   preparation) vs cota build + extract.
 //!
+//! Two more grids (see [`cota_bench::big`]): `mosaic2`, the real adjacent
+//! SRTM tiles N00E010 + N00E011 read and mosaicked (2401×1201, cota only, and
+//! delatin at 50 m), and `big4097`, a 4097² grid of real SRTM samples (by
+//! default relabelled tiles, artificial adjacency; real tiles from
+//! `$COTA_BIG_DATA` when given), where martini runs too, at E = 5 and 50 m
+//! only; `COTA_BENCH_FULL=1` adds the other tolerances and delatin at 50 m
+//! (about 14 s a run there), some 6 more minutes.
+//!
+//! A filter also skips the set-up (reading, building, martini's tables) of the
+//! grids it excludes, so `-- big4097` or `-- extract/mosaic2` start quickly.
+//!
 //! Run: `cargo bench -p cota-bench` (a filter such as `-- build/` selects
 //! groups); `cargo run --release -p cota-bench --bin criterion-table` then
 //! prints the medians as a markdown table.
@@ -26,9 +37,10 @@
 use std::hint::black_box;
 use std::time::Duration;
 
+use cota_bench::big::{big_files, load_big, load_mosaic2, seam_line};
 use cota_bench::{
-    delatin_mesh, heights_f64, load_cases, martini_raw, martini_threshold_for_budget, martini_tile,
-    TOLERANCES_M,
+    bench_filters, delatin_mesh, heights_f64, load_cases, martini_raw,
+    martini_threshold_for_budget, martini_tile, wanted, TOLERANCES_M,
 };
 use cota_core::{Bitree, ExtractOptions, HeightGrid};
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, Criterion, SamplingMode};
@@ -38,8 +50,10 @@ use martini::Martini;
 fn delatin_tolerances(grid: &HeightGrid) -> &'static [f64] {
     if grid.width() <= 513 {
         &[5.0, 20.0, 50.0]
-    } else {
+    } else if grid.len() <= 1025 * 1025 {
         &[20.0, 50.0]
+    } else {
+        &[50.0]
     }
 }
 
@@ -74,7 +88,13 @@ fn bench_build(c: &mut Criterion, name: &str, grid: &HeightGrid, with_martini: b
     g.finish();
 }
 
-fn bench_extract(c: &mut Criterion, name: &str, grid: &HeightGrid, with_martini: bool) {
+fn bench_extract(
+    c: &mut Criterion,
+    name: &str,
+    grid: &HeightGrid,
+    with_martini: bool,
+    tolerances: &[f64],
+) {
     let tree = Bitree::build(grid).unwrap();
     // Martini only takes 2^k+1 squares: not made at all for the others.
     let mut peer = with_martini.then(|| {
@@ -82,7 +102,7 @@ fn bench_extract(c: &mut Criterion, name: &str, grid: &HeightGrid, with_martini:
         let tile = martini_tile(&m, grid);
         (m, tile)
     });
-    for &e in &TOLERANCES_M {
+    for &e in tolerances {
         let mut g = c.benchmark_group(format!("extract/{name}/{e}"));
         short(&mut g);
         g.bench_function("cota", |b| {
@@ -146,7 +166,31 @@ fn bench_delatin(c: &mut Criterion, name: &str, grid: &HeightGrid) {
     }
 }
 
+/// True when `$COTA_BENCH_FULL` is `1`: every tolerance and delatin on
+/// `big4097` too (about 6 more minutes on 2 cores).
+fn full() -> bool {
+    std::env::var("COTA_BENCH_FULL").is_ok_and(|v| v == "1")
+}
+
+/// The groups of one grid, each only when the filters may want it.
+fn bench_grid(c: &mut Criterion, f: &[String], name: &str, grid: &HeightGrid, martini: bool) {
+    // On the 4097² grid one extraction takes seconds (martini's up to 8 s at
+    // 1 m): two tolerances unless COTA_BENCH_FULL=1.
+    let tolerances: &[f64] = if grid.len() > 2401 * 2401 && !full() {
+        &[5.0, 50.0]
+    } else {
+        &TOLERANCES_M
+    };
+    if wanted(f, &format!("build/{name}")) {
+        bench_build(c, name, grid, martini);
+    }
+    if wanted(f, &format!("extract/{name}")) || wanted(f, &format!("extract10k/{name}")) {
+        bench_extract(c, name, grid, martini, tolerances);
+    }
+}
+
 fn benches(c: &mut Criterion) {
+    let f = bench_filters();
     let cases = load_cases(|msg| eprintln!("cota-bench: {msg}"));
     for case in &cases {
         let grid = &case.square;
@@ -157,13 +201,49 @@ fn benches(c: &mut Criterion) {
             grid.height(),
             case.description
         );
-        bench_build(c, case.name, grid, true);
-        bench_extract(c, case.name, grid, true);
-        bench_delatin(c, case.name, grid);
+        bench_grid(c, &f, case.name, grid, true);
+        if wanted(&f, &format!("delatin/{}", case.name)) {
+            bench_delatin(c, case.name, grid);
+        }
         if let Some(native) = &case.native {
             let name = format!("srtm{}", native.width());
-            bench_build(c, &name, native, false);
-            bench_extract(c, &name, native, false);
+            bench_grid(c, &f, &name, native, false);
+        }
+    }
+    let kinds = ["build", "extract", "extract10k", "delatin"];
+    if kinds.iter().any(|k| wanted(&f, &format!("{k}/mosaic2"))) {
+        match load_mosaic2() {
+            Ok(m) => {
+                eprintln!("cota-bench: {}", m.description);
+                if let Some(s) = &m.seams {
+                    eprintln!("cota-bench: mosaic2 {}", seam_line(s));
+                }
+                bench_grid(c, &f, "mosaic2", &m.grid, false);
+                if wanted(&f, "delatin/mosaic2") {
+                    bench_delatin(c, "mosaic2", &m.grid);
+                }
+            }
+            Err(e) => eprintln!("cota-bench: skipping mosaic2: {e}"),
+        }
+    }
+    if kinds.iter().any(|k| wanted(&f, &format!("{k}/big4097"))) {
+        let scratch = tempfile::tempdir().unwrap();
+        let big = big_files(scratch.path(), |m| eprintln!("cota-bench: {m}"))
+            .and_then(|b| load_big("big4097", &b.big4097, &b.big4097_note));
+        match big {
+            Ok(b) => {
+                eprintln!("cota-bench: {}", b.description);
+                if let Some(s) = &b.seams {
+                    eprintln!("cota-bench: big4097 (before the crop) {}", seam_line(s));
+                }
+                drop(scratch);
+                bench_grid(c, &f, "big4097", &b.grid, true);
+                // delatin takes about 14 s per run at 50 m here.
+                if full() && wanted(&f, "delatin/big4097") {
+                    bench_delatin(c, "big4097", &b.grid);
+                }
+            }
+            Err(e) => eprintln!("cota-bench: skipping big4097: {e}"),
         }
     }
 }

@@ -8,20 +8,28 @@
 //! gets the mesh's triangles as extracted and, as its documentation advises,
 //! after `optimize_vertex_cache`, and joins its strips with degenerate
 //! triangles (no restart index), like cota. Then criterion timings
-//! (`strip/<E>`) of both.
+//! `strip/<grid>/<E>` of both (`cota`: `stripify_bitree`, guided;
+//! `meshopt`: `meshopt::stripify` of the triangles as extracted) on the same
+//! meshes, `Bitree::extract(max_error_m(E))` of the shared grids `srtm1201`
+//! (N00E010, or the fixture when the shared data is absent) and `puget1025`,
+//! at E = 1 and 10 m.
 //!
-//! Run: `cargo bench -p cota-bench --bench strip`.
+//! The report is printed when no filter is given, or with the filter `report`.
+//!
+//! Run: `cargo bench -p cota-bench --bench strip [-- strip/puget1025]`.
 
 #![allow(clippy::unwrap_used, reason = "benchmark harness")]
 
 use std::hint::black_box;
 use std::path::PathBuf;
 
+use cota_bench::{bench_filters, load_cases, wanted};
 use cota_core::refine::{refine, Mode, RefineOptions};
 use cota_core::strip::{stripify_bitree, stripify_bitree_with, StripMethod};
 use cota_core::voids::{fill_voids, FillOptions};
 use cota_core::{Bitree, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError, Mesh};
 use criterion::{criterion_group, criterion_main, Criterion};
+use std::time::Duration;
 
 fn srtm() -> HeightGrid {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/S29W072.hgt.zip");
@@ -112,23 +120,42 @@ fn report(g: &HeightGrid, tree: &Bitree<'_>) {
     row("full grid 257x257", &full);
 }
 
-fn bench(c: &mut Criterion) {
-    let g = srtm();
-    let tree = Bitree::build(&g).unwrap();
-    report(&g, &tree);
-    let mut group = c.benchmark_group("strip");
-    group.sample_size(10);
+fn bench_grid(c: &mut Criterion, name: &str, grid: &HeightGrid) {
+    let tree = Bitree::build(grid).unwrap();
     for e in [1.0, 10.0] {
         let mesh = tree.extract(&ExtractOptions::max_error_m(e)).unwrap().mesh;
         let idx = flat(&mesh);
-        group.bench_function(format!("cota/{e}"), |b| {
+        let mut group = c.benchmark_group(format!("strip/{name}/{e}"));
+        group
+            .sample_size(10)
+            .warm_up_time(Duration::from_millis(300))
+            .measurement_time(Duration::from_secs(1));
+        group.bench_function("cota", |b| {
             b.iter(|| stripify_bitree(black_box(&mesh)).unwrap())
         });
-        group.bench_function(format!("meshopt/{e}"), |b| {
+        group.bench_function("meshopt", |b| {
             b.iter(|| meshopt::stripify(black_box(&idx), mesh.vertices.len(), 0).unwrap())
         });
+        group.finish();
     }
-    group.finish();
+}
+
+fn bench(c: &mut Criterion) {
+    let f = bench_filters();
+    if f.is_empty() || f.iter().any(|x| x == "report") {
+        let g = srtm();
+        let tree = Bitree::build(&g).unwrap();
+        report(&g, &tree);
+    }
+    for case in load_cases(|m| eprintln!("cota-bench: {m}")) {
+        let (name, grid) = match &case.native {
+            Some(native) => (format!("srtm{}", native.width()), native),
+            None => (case.name.to_string(), &case.square),
+        };
+        if name != "fuji513" && wanted(&f, &format!("strip/{name}")) {
+            bench_grid(c, &name, grid);
+        }
+    }
 }
 
 criterion_group!(benches, bench);

@@ -19,6 +19,8 @@
 
 use std::path::{Path, PathBuf};
 
+pub mod big;
+
 use cota_core::voids::{fill_voids, FillOptions};
 use cota_core::{measure, HeightGrid, Mesh, MeshVertex};
 use cota_io::{read_dem, PngEncoding, ReadOptions};
@@ -48,6 +50,63 @@ pub fn data_dir() -> PathBuf {
         Some(d) => PathBuf::from(d),
         None => tidy(repo_root().join("..").join("shared").join("data")),
     }
+}
+
+/// The positional arguments of a criterion benchmark binary (its filters),
+/// skipping the values of criterion's options that take one. Used to skip the
+/// (costly) set-up of grids whose benchmarks a filter excludes.
+pub fn bench_filters() -> Vec<String> {
+    const WITH_VALUE: [&str; 19] = [
+        "--save-baseline",
+        "-s",
+        "--baseline",
+        "-b",
+        "--baseline-lenient",
+        "--load-baseline",
+        "--sample-size",
+        "--warm-up-time",
+        "--measurement-time",
+        "--nresamples",
+        "--noise-threshold",
+        "--confidence-level",
+        "--significance-level",
+        "--profile-time",
+        "--plotting-backend",
+        "--output-format",
+        "--color",
+        "-c",
+        "--format",
+    ];
+    let mut out = Vec::new();
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        if WITH_VALUE.contains(&a.as_str()) {
+            args.next();
+        } else if !a.starts_with('-') {
+            out.push(a);
+        }
+    }
+    out
+}
+
+/// Whether benchmarks whose ids start with `prefix` (e.g. `extract/big4097`)
+/// may match one of `filters` (all match when there is none). Criterion's
+/// filters are regular expressions; a filter with regex syntax beyond `.` is
+/// taken to match everything, and so is one without `/` naming no group kind
+/// or grid (e.g. a function name, `cota`); else it matches when it is part of
+/// `prefix` or starts with it.
+pub fn wanted(filters: &[String], prefix: &str) -> bool {
+    const KNOWN: [&str; 11] = [
+        "build", "extract", "delatin", "read", "strip", "stream", "fuji", "puget", "srtm",
+        "mosaic", "big",
+    ];
+    filters.is_empty()
+        || filters.iter().any(|f| {
+            f.chars().any(|c| "^$*+?()[]{}|\\".contains(c))
+                || (!f.contains('/') && !KNOWN.iter().any(|k| f.contains(k)))
+                || prefix.contains(f.as_str())
+                || f.starts_with(prefix)
+        })
 }
 
 /// The repository root (two levels above this crate's manifest).
@@ -423,6 +482,20 @@ mod test {
             assert!(low.threshold_m <= e);
             assert_eq!(measure(&g, &low.mesh).max_error_m, low.true_max_error_m);
         }
+    }
+
+    #[test]
+    fn filters_skip_only_what_they_exclude() {
+        let f = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        assert!(wanted(&[], "build/big4097"));
+        assert!(wanted(&f(&["big4097"]), "build/big4097"));
+        assert!(!wanted(&f(&["big4097"]), "build/fuji513"));
+        assert!(wanted(&f(&["extract/mosaic2/5"]), "extract/mosaic2"));
+        assert!(!wanted(&f(&["extract/mosaic2/5"]), "build/mosaic2"));
+        assert!(wanted(&f(&["build/"]), "build/mosaic2"));
+        // A function name or a regex may match anything.
+        assert!(wanted(&f(&["cota"]), "build/fuji513"));
+        assert!(wanted(&f(&["^build/(fuji|puget)"]), "build/fuji513"));
     }
 
     #[test]

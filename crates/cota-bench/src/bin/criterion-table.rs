@@ -1,7 +1,8 @@
 //! `criterion-table`: the medians of the last `cargo bench -p cota-bench` run as
 //! markdown tables, one per group kind (`build`, `extract`, `extract10k`,
-//! `delatin`), one row per group and one column per benchmarked function, plus
-//! the ratio cota/martini where both ran.
+//! `delatin`, `read`, `strip`, `stream`, then any other kind found), one row
+//! per group and one column per benchmarked function, plus the ratio
+//! cota / martini (or cota / meshopt) where both ran.
 //!
 //! Reads `<target>/criterion/**/new/{benchmark,estimates}.json`, where
 //! `<target>` is the first argument, else `$CARGO_TARGET_DIR`, else the
@@ -66,10 +67,19 @@ fn fmt_time(ns: f64) -> String {
 fn row_key(rest: &str) -> (usize, String, f64) {
     let mut parts = rest.splitn(2, '/');
     let grid = parts.next().unwrap_or("");
-    let order = ["fuji513", "puget1025", "srtm1025", "srtm1201"]
-        .iter()
-        .position(|g| *g == grid)
-        .unwrap_or(usize::MAX);
+    let order = [
+        "fuji513",
+        "puget1025",
+        "srtm1025",
+        "srtm1201",
+        "mosaic2",
+        "srtm3601",
+        "mosaic8",
+        "big4097",
+    ]
+    .iter()
+    .position(|g| *g == grid)
+    .unwrap_or(usize::MAX);
     let e = parts.next().and_then(|s| s.parse().ok()).unwrap_or(0.0);
     (order, grid.to_string(), e)
 }
@@ -113,13 +123,39 @@ fn main() {
         "cota_build_and_extract",
         "martini",
         "delatin",
+        "meshopt",
+        "read_dem",
+        "read_mosaic_fill",
+        "encode",
+        "decode",
     ];
-    for kind in ["build", "extract", "extract10k", "delatin"] {
+    let known = [
+        "build",
+        "extract",
+        "extract10k",
+        "delatin",
+        "read",
+        "strip",
+        "stream",
+    ];
+    let mut order: Vec<String> = known.iter().map(|k| k.to_string()).collect();
+    order.extend(
+        kinds
+            .keys()
+            .filter(|k| !known.contains(&k.as_str()))
+            .cloned(),
+    );
+    for kind in &order {
+        let kind = kind.as_str();
         let Some((funcs, rows)) = kinds.get_mut(kind) else {
             continue;
         };
         funcs.sort_by_key(|f| preferred.iter().position(|p| p == f).unwrap_or(usize::MAX));
-        let ratio = funcs.iter().any(|f| f == "cota") && funcs.iter().any(|f| f == "martini");
+        let peer = ["martini", "meshopt"]
+            .into_iter()
+            .find(|p| funcs.iter().any(|f| f == p));
+        let ratio = funcs.iter().any(|f| f == "cota") && peer.is_some();
+        let peer = peer.unwrap_or("");
         println!("### {kind}\n");
         let mut head = format!("| {kind} |");
         let mut rule = String::from("|---|");
@@ -128,7 +164,7 @@ fn main() {
             rule.push_str("---:|");
         }
         if ratio {
-            head.push_str(" cota / martini |");
+            head.push_str(&format!(" cota / {peer} |"));
             rule.push_str("---:|");
         }
         println!("{head}\n{rule}");
@@ -141,7 +177,7 @@ fn main() {
                 }
             }
             if ratio {
-                match (vals.get("cota"), vals.get("martini")) {
+                match (vals.get("cota"), vals.get(peer)) {
                     (Some(c), Some(m)) => line.push_str(&format!(" {:.2} |", c / m)),
                     _ => line.push_str(" - |"),
                 }
