@@ -581,36 +581,67 @@ fn span_error(heights: &[f32], w: usize, t: &Tri, ha: f64, hb: f64, hc: f64) -> 
     }
     let ymin = p.iter().map(|q| q[1]).min().unwrap_or(0) as i64;
     let ymax = p.iter().map(|q| q[1]).max().unwrap_or(0) as i64;
-    let bounds = &bounds[..nb];
-    let row_error = |y: i64| {
-        let (mut xl, mut xr) = (i64::MIN, i64::MAX);
-        for b in bounds {
-            let x = b.slope * y + b.intercept;
-            if b.is_left {
-                xl = xl.max(x);
-            } else {
-                xr = xr.min(x);
-            }
-        }
-        if xl > xr {
-            return 0.0;
-        }
-        let base = hs[0] + gx * (xl - x0) as f64 + gy * (y - y0) as f64;
-        let start = y as usize * w + xl as usize;
-        let row = &heights[start..=start + (xr - xl) as usize];
-        row_max_dev(row, base, gx)
+    let span = Span {
+        bounds: &bounds[..nb],
+        h0: hs[0],
+        gx,
+        gy,
+        x0,
+        y0,
+        w,
     };
     let rows = (ymax - ymin + 1) as u64;
     if rows * rows >= PARALLEL_SPAN_SAMPLES {
         // The coarsest levels have one or two triangles the size of the grid:
         // split their rows over the cores rather than leave one idle.
-        (ymin as usize..ymax as usize + 1)
+        let blocks = (ymax - ymin) as usize / 32 + 1;
+        (0..blocks)
             .into_par_iter()
-            .with_min_len(32)
-            .map(|y| row_error(y as i64))
+            .map(|k| {
+                let y = ymin + 32 * k as i64;
+                span.max_dev(heights, y, (y + 31).min(ymax))
+            })
             .reduce(|| 0.0, max_no_nan)
     } else {
-        (ymin..=ymax).map(row_error).fold(0.0, max_no_nan)
+        span.max_dev(heights, ymin, ymax)
+    }
+}
+
+/// A triangle's plane and row bounds, for [`span_error`].
+struct Span<'a> {
+    bounds: &'a [EdgeBound],
+    h0: f64,
+    gx: f64,
+    gy: f64,
+    x0: i64,
+    y0: i64,
+    w: usize,
+}
+
+impl Span<'_> {
+    /// Largest |plane − h| over the triangle's samples in rows `y0..=y1`.
+    #[inline]
+    fn max_dev(&self, heights: &[f32], y0: i64, y1: i64) -> f64 {
+        let mut e = 0f64;
+        for y in y0..=y1 {
+            let (mut xl, mut xr) = (i64::MIN, i64::MAX);
+            for b in self.bounds {
+                let x = b.slope * y + b.intercept;
+                if b.is_left {
+                    xl = xl.max(x);
+                } else {
+                    xr = xr.min(x);
+                }
+            }
+            if xl > xr {
+                continue;
+            }
+            let base = self.h0 + self.gx * (xl - self.x0) as f64 + self.gy * (y - self.y0) as f64;
+            let start = y as usize * self.w + xl as usize;
+            let row = &heights[start..=start + (xr - xl) as usize];
+            e = max_no_nan(e, row_max_dev(row, base, self.gx));
+        }
+        e
     }
 }
 

@@ -178,7 +178,8 @@ impl Bitree<'_> {
             // Vertices first (from the codes), then triangles straight in
             // vertex indices.
             let words = numbered(vertex_bits_from_codes(self, rule));
-            let tris = emit_tasks(self, rule, &tasks, |i| vertex_id(&words, i));
+            let expected = expected_triangles(self, &words);
+            let tris = emit_tasks(self, rule, &tasks, expected, |i| vertex_id(&words, i));
             let vertices = vertices(self, &words);
             Mesh {
                 vertices,
@@ -186,7 +187,7 @@ impl Bitree<'_> {
             }
         } else {
             // Triangles in sample indices, then their corners are the vertices.
-            let mut tris = emit_tasks(self, rule, &tasks, |i| i);
+            let mut tris = emit_tasks(self, rule, &tasks, 0, |i| i);
             let words = numbered(vertex_bits_from_triangles(self, &tris));
             tris.par_chunks_mut(4096).for_each(|chunk| {
                 for t in chunk {
@@ -454,9 +455,10 @@ fn emit_tasks(
     tree: &Bitree<'_>,
     rule: &SplitRule,
     tasks: &[Task],
+    expected: usize,
     id: impl Fn(u32) -> u32 + Sync,
 ) -> Vec<[u32; 3]> {
-    let mut tris: Vec<[u32; 3]> = Vec::new();
+    let mut tris: Vec<[u32; 3]> = Vec::with_capacity(expected);
     for window in tasks.chunks(WINDOW) {
         // Runs of 16 tasks share a buffer: fewer allocations on sparse meshes,
         // where most tasks are a single leaf.
@@ -475,7 +477,30 @@ fn emit_tasks(
             tris.extend_from_slice(&p);
         }
     }
+    // Growth may have left up to half the capacity unused: give it back
+    // (large blocks shrink in place).
+    tris.shrink_to_fit();
     tris
+}
+
+/// The triangle count of a triangulation of the grid rectangle whose vertices
+/// are `words`: Euler's `T = 2V − B − 2`, with `B` vertices on the border.
+fn expected_triangles(tree: &Bitree<'_>, words: &[Word]) -> usize {
+    let (w, h) = (tree.grid().width(), tree.grid().height());
+    let is_vertex = |i: usize| {
+        words
+            .get(i / 64)
+            .is_some_and(|wd| wd.bits >> (i % 64) & 1 == 1)
+    };
+    let v = words.last().map_or(0, |wd| wd.base + wd.bits.count_ones()) as usize;
+    let mut border = 0usize;
+    for x in 0..w {
+        border += usize::from(is_vertex(x)) + usize::from(is_vertex((h - 1) * w + x));
+    }
+    for y in 1..h.saturating_sub(1) {
+        border += usize::from(is_vertex(y * w)) + usize::from(is_vertex(y * w + w - 1));
+    }
+    (2 * v).saturating_sub(border + 2)
 }
 
 /// The mesh vertices of the numbered bitset, row-major, in parallel.
