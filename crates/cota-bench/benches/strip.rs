@@ -2,13 +2,16 @@
 //! meshoptimizer's `stripify` (through the `meshopt` crate, benchmarks only),
 //! on the same meshes of the bundled SRTM tile.
 //!
-//! First a report (stderr): references per triangle of both (cota's guided
-//! default and the papers' pure traversal order) at several
-//! tolerances, conforming and fictitious, and on a full grid; meshoptimizer
+//! First a report (stderr): references per triangle of cota's three methods
+//! (the default, rows of re-triangulated unit cells; the guided strip of the
+//! unchanged mesh; the papers' pure traversal order) at several tolerances,
+//! conforming and fictitious, and on a full grid; meshoptimizer
 //! gets the mesh's triangles as extracted and, as its documentation advises,
 //! after `optimize_vertex_cache`, and joins its strips with degenerate
-//! triangles (no restart index), like cota. Then criterion timings
-//! (`strip/<E>`) of both.
+//! triangles (no restart index), like cota. meshoptimizer strips the mesh
+//! as given: only cota's cells method changes diagonals. Then criterion
+//! timings (`strip/<E>`) of cota's cells and guided methods and
+//! meshoptimizer.
 //!
 //! Run: `cargo bench -p cota-bench --bench strip`.
 
@@ -67,14 +70,17 @@ fn meshopt_refs(mesh: &Mesh) -> (usize, usize) {
 
 fn row(label: &str, mesh: &Mesh) {
     let t = mesh.triangles.len() as f64;
-    let ours = stripify_bitree(mesh).unwrap();
+    let cells = stripify_bitree(mesh).unwrap();
+    let guided = stripify_bitree_with(mesh, StripMethod::Guided).unwrap();
     let traversal = stripify_bitree_with(mesh, StripMethod::Traversal).unwrap();
     let (raw, cached) = meshopt_refs(mesh);
     eprintln!(
-        "| {label} | {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+        "| {label} | {} | {:.3} | {} | {:.3} | {:.3} | {:.3} | {:.3} |",
         mesh.triangles.len(),
-        ours.refs_per_triangle(),
-        traversal.refs_per_triangle(),
+        cells.strip.refs_per_triangle(),
+        cells.flipped_cells,
+        guided.strip.refs_per_triangle(),
+        traversal.strip.refs_per_triangle(),
         raw as f64 / t,
         cached as f64 / t
     );
@@ -82,9 +88,9 @@ fn row(label: &str, mesh: &Mesh) {
 
 fn report(g: &HeightGrid, tree: &Bitree<'_>) {
     eprintln!(
-        "| mesh | triangles | cota guided refs/tri | cota traversal | meshopt | meshopt (cache-optimized) |"
+        "| mesh | triangles | cota cells refs/tri | cells flipped | cota guided | cota traversal | meshopt | meshopt (cache-optimized) |"
     );
-    eprintln!("|---|---|---|---|---|---|");
+    eprintln!("|---|---|---|---|---|---|---|---|");
     for e in [0.0, 1.0, 5.0, 20.0, 100.0] {
         let mesh = tree.extract(&ExtractOptions::max_error_m(e)).unwrap().mesh;
         row(&format!("conforming E={e} m"), &mesh);
@@ -121,8 +127,16 @@ fn bench(c: &mut Criterion) {
     for e in [1.0, 10.0] {
         let mesh = tree.extract(&ExtractOptions::max_error_m(e)).unwrap().mesh;
         let idx = flat(&mesh);
-        group.bench_function(format!("cota/{e}"), |b| {
-            b.iter(|| stripify_bitree(black_box(&mesh)).unwrap())
+        group.bench_function(format!("cota-cells/{e}"), |b| {
+            b.iter(|| stripify_bitree(black_box(&mesh)).unwrap().strip.refs())
+        });
+        group.bench_function(format!("cota-guided/{e}"), |b| {
+            b.iter(|| {
+                stripify_bitree_with(black_box(&mesh), StripMethod::Guided)
+                    .unwrap()
+                    .strip
+                    .refs()
+            })
         });
         group.bench_function(format!("meshopt/{e}"), |b| {
             b.iter(|| meshopt::stripify(black_box(&idx), mesh.vertices.len(), 0).unwrap())
