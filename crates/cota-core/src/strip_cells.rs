@@ -212,7 +212,8 @@ fn row_triangles(c: &Cell, east: bool) -> [[u32; 3]; 2] {
 /// Strips `mesh` (a bitree mesh, `order` its triangle slots in the
 /// hierarchy's order, as from [`crate::strip::bitree_order_ids`]) by rows
 /// of re-triangulated unit cells and the guided strip of the rest (module
-/// docs).
+/// docs). Slots missing from `order` or out of range are left out of the
+/// strip (not of [`CellStrip::triangles`]), so pass every slot once.
 pub fn stripify_cells(mesh: &Mesh, order: &[u32], opts: &CellOptions) -> CellStrip {
     let cells = unit_cells(mesh);
     let mut triangles = mesh.triangles.clone();
@@ -278,7 +279,7 @@ pub fn stripify_cells(mesh: &Mesh, order: &[u32], opts: &CellOptions) -> CellStr
     let mut s = crate::strip::strip_from_order(&row_order).indices;
     let rest: Vec<[u32; 3]> = order
         .iter()
-        .filter(|&&k| !in_row[k as usize])
+        .filter(|&&k| in_row.get(k as usize) == Some(&false))
         .map(|&k| triangles[k as usize])
         .collect();
     if !rest.is_empty() {
@@ -299,9 +300,13 @@ fn append(s: &mut Vec<u32>, t: &[u32]) {
         s.extend_from_slice(t);
         return;
     };
-    if q == u && !s.len().is_multiple_of(2) {
-        // Offset len − 1, even.
-        s.extend_from_slice(&t[1..]);
+    if q == u {
+        // `… p q` + `q t1 …`: (p, q, q) and (q, q, t1) are degenerate; one
+        // more `q` first when the offset would be odd.
+        if !s.len().is_multiple_of(2) {
+            s.push(q);
+        }
+        s.extend_from_slice(t);
         return;
     }
     s.push(q);
@@ -320,13 +325,25 @@ mod test {
 
     #[test]
     fn append_keeps_parity() {
-        // Two one-triangle strips of (0,1,2) and (3,4,5), both even.
-        for pre in [vec![0, 1, 2], vec![0, 0, 1, 2]] {
+        // A strip of (3,4,5), even, after prefixes of either length parity
+        // and one ending on its first vertex.
+        for pre in [
+            vec![0, 1, 2],
+            vec![0, 0, 1, 2],
+            vec![0, 1, 3],
+            vec![1, 0, 0, 3],
+        ] {
             let mut s = pre.clone();
             append(&mut s, &[3, 4, 5]);
+            let mut want: Vec<_> = strip_to_triangles(&pre)
+                .into_iter()
+                .map(canonical)
+                .collect();
+            want.push([3, 4, 5]);
             let mut got: Vec<_> = strip_to_triangles(&s).into_iter().map(canonical).collect();
+            want.sort_unstable();
             got.sort_unstable();
-            assert_eq!(got, vec![[0, 1, 2], [3, 4, 5]], "{s:?}");
+            assert_eq!(got, want, "{s:?}");
         }
     }
 
