@@ -2,17 +2,20 @@
 //! meshoptimizer's `stripify` (through the `meshopt` crate, benchmarks only),
 //! on the same meshes of the bundled SRTM tile.
 //!
-//! First a report (stderr): references per triangle of both (cota's guided
-//! default and the papers' pure traversal order) at several
-//! tolerances, conforming and fictitious, and on a full grid; meshoptimizer
+//! First a report (stderr): references per triangle of cota's three methods
+//! (the default, rows of re-triangulated unit cells; the guided strip of the
+//! unchanged mesh; the papers' pure traversal order) at several tolerances,
+//! conforming and fictitious, and on a full grid; meshoptimizer
 //! gets the mesh's triangles as extracted and, as its documentation advises,
 //! after `optimize_vertex_cache`, and joins its strips with degenerate
-//! triangles (no restart index), like cota. Then criterion timings
-//! `strip/<grid>/<E>` of both (`cota`: `stripify_bitree`, guided;
-//! `meshopt`: `meshopt::stripify` of the triangles as extracted) on the same
-//! meshes, `Bitree::extract(max_error_m(E))` of the shared grids `srtm1201`
-//! (N00E010, or the fixture when the shared data is absent) and `puget1025`,
-//! at E = 1 and 10 m.
+//! triangles (no restart index), like cota. meshoptimizer strips the mesh
+//! as given: only cota's cells method changes diagonals. Then criterion
+//! timings `strip/<grid>/<E>` of cota's cells (`cota-cells`, the default) and
+//! guided (`cota-guided`) methods and `meshopt::stripify` of the triangles as
+//! extracted (`meshopt`), on the same meshes,
+//! `Bitree::extract(max_error_m(E))` of the shared grids `srtm1201` (N00E010,
+//! or the fixture when the shared data is absent) and `puget1025`, at E = 1
+//! and 10 m.
 //!
 //! The report is printed when no filter is given, or with the filter `report`.
 //!
@@ -75,14 +78,17 @@ fn meshopt_refs(mesh: &Mesh) -> (usize, usize) {
 
 fn row(label: &str, mesh: &Mesh) {
     let t = mesh.triangles.len() as f64;
-    let ours = stripify_bitree(mesh).unwrap();
+    let cells = stripify_bitree(mesh).unwrap();
+    let guided = stripify_bitree_with(mesh, StripMethod::Guided).unwrap();
     let traversal = stripify_bitree_with(mesh, StripMethod::Traversal).unwrap();
     let (raw, cached) = meshopt_refs(mesh);
     eprintln!(
-        "| {label} | {} | {:.3} | {:.3} | {:.3} | {:.3} |",
+        "| {label} | {} | {:.3} | {} | {:.3} | {:.3} | {:.3} | {:.3} |",
         mesh.triangles.len(),
-        ours.refs_per_triangle(),
-        traversal.refs_per_triangle(),
+        cells.strip.refs_per_triangle(),
+        cells.flipped_cells,
+        guided.strip.refs_per_triangle(),
+        traversal.strip.refs_per_triangle(),
         raw as f64 / t,
         cached as f64 / t
     );
@@ -90,9 +96,9 @@ fn row(label: &str, mesh: &Mesh) {
 
 fn report(g: &HeightGrid, tree: &Bitree<'_>) {
     eprintln!(
-        "| mesh | triangles | cota guided refs/tri | cota traversal | meshopt | meshopt (cache-optimized) |"
+        "| mesh | triangles | cota cells refs/tri | cells flipped | cota guided | cota traversal | meshopt | meshopt (cache-optimized) |"
     );
-    eprintln!("|---|---|---|---|---|---|");
+    eprintln!("|---|---|---|---|---|---|---|---|");
     for e in [0.0, 1.0, 5.0, 20.0, 100.0] {
         let mesh = tree.extract(&ExtractOptions::max_error_m(e)).unwrap().mesh;
         row(&format!("conforming E={e} m"), &mesh);
@@ -130,8 +136,16 @@ fn bench_grid(c: &mut Criterion, name: &str, grid: &HeightGrid) {
             .sample_size(10)
             .warm_up_time(Duration::from_millis(300))
             .measurement_time(Duration::from_secs(1));
-        group.bench_function("cota", |b| {
-            b.iter(|| stripify_bitree(black_box(&mesh)).unwrap())
+        group.bench_function("cota-cells", |b| {
+            b.iter(|| stripify_bitree(black_box(&mesh)).unwrap().strip.refs())
+        });
+        group.bench_function("cota-guided", |b| {
+            b.iter(|| {
+                stripify_bitree_with(black_box(&mesh), StripMethod::Guided)
+                    .unwrap()
+                    .strip
+                    .refs()
+            })
         });
         group.bench_function("meshopt", |b| {
             b.iter(|| meshopt::stripify(black_box(&idx), mesh.vertices.len(), 0).unwrap())

@@ -141,12 +141,44 @@ pub struct MeshArgs {
     /// or also 2 halves without the centre where the bound allows.
     #[arg(long, value_enum, default_value_t = QuadVariant::Templates)]
     pub quadtree_leaves: QuadVariant,
-    /// Write the .glb as one triangle strip (mode 5) made by traversing the
-    /// bitree (papers 000, 001), and report its references.
+    /// Write the .glb as one triangle strip (mode 5) made from the bitree
+    /// (papers 000, 001), and report its references.
     #[arg(long)]
     pub strip: bool,
+    /// How the strip is made [default with --strip: cells]. cells: long
+    /// rows of 1x1 cells re-triangulated (diagonal flipped, the same error at
+    /// every sample) and stripped row by row, the rest guided; the fewest
+    /// references, the mesh written is then the re-triangulated one.
+    /// guided: greedy growth along the bitree traversal, mesh unchanged.
+    /// traversal: the papers' strip, the leaves in traversal order. Without
+    /// --strip, only reports the strip's references (strip_refs).
+    #[arg(long, value_enum)]
+    pub strip_method: Option<StripMethodArg>,
     #[command(flatten)]
     pub refine: RefineArgs,
+}
+
+/// How `cota mesh --strip` makes its strip (`cota_core::strip::StripMethod`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum StripMethodArg {
+    /// Rows of re-triangulated unit cells, the rest guided (the default).
+    Cells,
+    /// Greedy growth guided by the bitree traversal.
+    Guided,
+    /// The papers' strip: leaves in traversal order.
+    Traversal,
+}
+
+impl StripMethodArg {
+    /// The library's method.
+    pub fn method(self) -> cota_core::strip::StripMethod {
+        use cota_core::strip::StripMethod;
+        match self {
+            StripMethodArg::Cells => StripMethod::Cells,
+            StripMethodArg::Guided => StripMethod::Guided,
+            StripMethodArg::Traversal => StripMethod::Traversal,
+        }
+    }
 }
 
 /// The hierarchy `cota mesh` uses.
@@ -340,6 +372,12 @@ pub struct CompareArgs {
     /// Run the invariant checker on every mesh.
     #[arg(long)]
     pub check: bool,
+    /// How the bitree strips are made. guided (default) strips the meshes
+    /// as compared; cells re-triangulates unit cells of the bitree meshes
+    /// (fewer references, but the quadtree's are not), traversal is the
+    /// papers' strip.
+    #[arg(long, value_enum, default_value_t = StripMethodArg::Guided)]
+    pub strip_method: StripMethodArg,
     /// Print one JSON object instead of tables.
     #[arg(long)]
     pub json: bool,

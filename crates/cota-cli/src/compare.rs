@@ -9,7 +9,11 @@
 //!    extraction of `cota mesh`, and the fictitious-point refinement, watertight
 //!    or faithful to the paper) and the restricted quadtree, each with the
 //!    exact max-error criterion; optionally every mesh goes through the checker.
-//! 4. Strip references are a later issue: reported as `n/a` (`null` in JSON).
+//! 4. Strip references: one strip per mesh, `cota_core::strip` for the
+//!    bitree with `--strip-method` (default guided: the mesh as compared;
+//!    cells re-triangulates unit cells of the bitree mesh only, so it is not
+//!    a like-for-like comparison), `cota_core::strip_quadtree` for the
+//!    quadtree; `n/a` (`null` in JSON) when a mesh cannot be stripped.
 
 use std::fmt::Write as _;
 use std::process::ExitCode;
@@ -17,6 +21,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 use cota_core::quadtree::{QuadOptions, QuadTree};
 use cota_core::refine::{refine, Mode, RefineOptions};
+use cota_core::strip::StripMethod;
 use cota_core::{check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid};
 use cota_core::{measure, MaxVerticalError, Mesh};
 use serde::Serialize;
@@ -89,6 +94,8 @@ struct Report {
     checked: bool,
     modes: Vec<&'static str>,
     quadtree: Vec<&'static str>,
+    /// How the bitree strips were made (`cota_core::strip::StripMethod`).
+    strip_method: &'static str,
     rows: Vec<Row>,
 }
 
@@ -192,9 +199,8 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
     let (w, h) = (grid.width(), grid.height());
     let full_tris = 2 * (w - 1) * (h - 1);
     let full_mesh = cota_core::strip::full_bitree_mesh(w as u32, h as u32);
-    let full_strip_bt = cota_core::strip::stripify_bitree(&full_mesh)
-        .ok()
-        .map(|s| s.refs());
+    let method = a.strip_method.method();
+    let full_strip_bt = bitree_strip_refs(&full_mesh, method);
     let full_strip_qt = Some(cota_core::strip_quadtree::stripify_quadtree(&full_mesh).refs());
     let full = |hierarchy, mode| Entry {
         hierarchy,
@@ -251,7 +257,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
                         added_by_forced_splits: None,
                         line_triangles: 0,
                         separate_refs: 3 * c.triangles,
-                        strip_refs: bitree_strip_refs(&x.mesh),
+                        strip_refs: bitree_strip_refs(&x.mesh, method),
                         max_error_m: max_error(&grid, &x.mesh, conforming)?,
                     }
                 }
@@ -277,7 +283,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
                         added_by_forced_splits: None,
                         line_triangles: r.line_triangles,
                         separate_refs: 3 * tris,
-                        strip_refs: bitree_strip_refs(&r.mesh),
+                        strip_refs: bitree_strip_refs(&r.mesh, method),
                         max_error_m: max_error(&grid, &r.mesh, check)?,
                     }
                 }
@@ -326,6 +332,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
         checked: a.check,
         modes: modes.iter().map(|&m| mode_name(m)).collect(),
         quadtree: quads.iter().map(|&v| quad_name(v)).collect(),
+        strip_method: method.name(),
         rows,
     };
     if a.json {
@@ -420,9 +427,14 @@ fn text(r: &Report) -> String {
             let _ = writeln!(s);
         }
     }
+    let how = if r.strip_method == StripMethod::Guided.name() {
+        String::new()
+    } else {
+        format!(" (bitree strips: {} method)", r.strip_method)
+    };
     let _ = writeln!(
         s,
-        "Table 2, references: separate triangles (3 each) vs one triangle strip\n"
+        "Table 2, references: separate triangles (3 each) vs one triangle strip{how}\n"
     );
     let mut header = String::from("| tol |");
     let mut rule = String::from("|---|");
@@ -462,10 +474,10 @@ fn text(r: &Report) -> String {
 }
 
 /// The strip references of a bitree mesh (`None` if it cannot be stripped).
-fn bitree_strip_refs(mesh: &cota_core::Mesh) -> Option<usize> {
-    cota_core::strip::stripify_bitree(mesh)
+fn bitree_strip_refs(mesh: &cota_core::Mesh, method: StripMethod) -> Option<usize> {
+    cota_core::strip::stripify_bitree_with(mesh, method)
         .ok()
-        .map(|s| s.refs())
+        .map(|s| s.strip.refs())
 }
 
 /// A strip reference count for the tables.

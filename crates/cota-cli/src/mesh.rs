@@ -13,7 +13,7 @@ use cota_core::{check_mesh, measure, Bitree, CheckOptions, ExtractOptions, Mesh,
 use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use serde_json::json;
 
-use crate::args::{CoordsArg, HierarchyArg, MeshArgs, QuadVariant};
+use crate::args::{CoordsArg, HierarchyArg, MeshArgs, QuadVariant, StripMethodArg};
 use crate::input::load;
 use crate::progress;
 use crate::refine;
@@ -174,12 +174,24 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let measure_ms = ms(t);
 
     let t = Instant::now();
-    let strip = if a.strip || (a.json && !quadtree) {
-        Some(cota_core::strip::stripify_bitree(&mesh).context("triangle strip")?)
+    // Strips cost time and about 60 bytes per triangle of scratch: made only
+    // when asked for (--strip, or --strip-method to report the references).
+    let strip = if !quadtree && (a.strip || a.strip_method.is_some()) {
+        let method = a.strip_method.unwrap_or(StripMethodArg::Cells).method();
+        Some(cota_core::strip::stripify_bitree_with(&mesh, method).context("triangle strip")?)
     } else {
         None
     };
     let strip_ms = ms(t);
+    if let (Some(s), true) = (&strip, a.check) {
+        // The strip's own mesh when it re-triangulated unit cells: exact, so
+        // the same checks must pass.
+        if s.retriangulated() {
+            check_mesh(&grid, &s.mesh, &check_opts).context(
+                "the invariant checker rejected the strip's re-triangulated mesh (this is a bug in cota)",
+            )?;
+        }
+    }
 
     let mut write_ms = 0.0;
     if let Some(out) = &a.output {
@@ -193,7 +205,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         let t = Instant::now();
         match (&strip, a.strip) {
             (Some(s), true) => cota_io::export::write_atomically(out, |w| {
-                cota_io::export::write_glb_strip(w, &mesh, &s.indices, &grid, &eo)
+                cota_io::export::write_glb_strip(w, &s.mesh, &s.strip.indices, &grid, &eo)
             })?,
             _ => write_mesh(out, &mesh, &grid, &eo)?,
         }
@@ -230,9 +242,12 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "extract_ms": extract_ms,
         "measure_ms": measure_ms,
         "write_ms": write_ms,
-        "strip_refs": strip.as_ref().map(|s| s.refs()),
-        "strip_refs_per_triangle": strip.as_ref().map(|s| s.refs_per_triangle()),
-        "strip_degenerate": strip.as_ref().map(|s| s.degenerate),
+        "strip_method": strip.as_ref().map(|s| s.method.name()),
+        "strip_refs": strip.as_ref().map(|s| s.strip.refs()),
+        "strip_refs_per_triangle": strip.as_ref().map(|s| s.strip.refs_per_triangle()),
+        "strip_degenerate": strip.as_ref().map(|s| s.strip.degenerate),
+        "strip_retriangulated": strip.as_ref().map(|s| s.retriangulated()),
+        "strip_flipped_cells": strip.as_ref().map(|s| s.flipped_cells),
         "strip_ms": strip.as_ref().map(|_| strip_ms),
         "output": a.output.as_ref().map(|p| p.display().to_string()),
     });
@@ -292,9 +307,14 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::mosaic::SeamRepor
         f("volume_m3")
     );
     if let Some(refs) = r["strip_refs"].as_u64() {
+        let cells = match r["strip_flipped_cells"].as_u64() {
+            Some(n) if n > 0 => format!(", {n} unit cells re-triangulated (same error)"),
+            _ => String::new(),
+        };
         println!(
-            "strip       {refs} references ({:.3} per triangle), {} degenerate",
+            "strip       {refs} references ({:.3} per triangle, {}), {} degenerate{cells}",
             f("strip_refs_per_triangle"),
+            r["strip_method"].as_str().unwrap_or(""),
             r["strip_degenerate"]
         );
     }

@@ -33,6 +33,7 @@ pub mod stream;
 pub mod stream_coder;
 pub mod stream_marks;
 pub mod strip;
+pub mod strip_cells;
 pub mod strip_quadtree;
 pub mod view;
 pub mod voids;

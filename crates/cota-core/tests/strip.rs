@@ -1,17 +1,22 @@
 //! Triangle strips from the bitree traversal (papers 000 §4 and 001): on real
 //! data in every mode, the strip holds exactly the mesh's triangles with the
 //! mesh's orientation, degenerate triangles only as connectors, and few
-//! references per triangle.
+//! references per triangle. The cells strip (`cota_core::strip_cells`) holds
+//! exactly the triangles of the mesh it returns, which passes the invariant
+//! checker with the input's bound, and is never longer than the guided one.
 #![allow(clippy::unwrap_used, reason = "tests")]
 
 use std::path::PathBuf;
 
 use cota_core::refine::{refine, Mode, RefineOptions};
 use cota_core::strip::{
-    canonical, strip_to_triangles, stripify_bitree, stripify_bitree_with, Strip, StripMethod,
+    canonical, full_bitree_mesh, strip_to_triangles, stripify_bitree, stripify_bitree_with,
+    MeshStrip, Strip, StripMethod,
 };
 use cota_core::voids::{fill_voids, FillOptions};
-use cota_core::{Bitree, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError, Mesh};
+use cota_core::{
+    check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError, Mesh,
+};
 
 fn real() -> HeightGrid {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/S29W072.hgt.zip");
@@ -52,15 +57,66 @@ fn report(label: &str, mesh: &Mesh, strip: &Strip) {
     );
 }
 
-/// Both methods: same triangles; returns (traversal, guided) refs/triangle.
-fn both(label: &str, mesh: &Mesh) -> (f64, f64) {
+/// Every non-degenerate triangle of the strip, drawn with the strip's parity,
+/// is counter-clockwise seen from above; degenerate windows repeat an index.
+fn assert_winding(mesh: &Mesh, strip: &Strip) {
+    for (k, w) in strip.indices.windows(3).enumerate() {
+        if w[0] == w[1] || w[1] == w[2] || w[0] == w[2] {
+            continue;
+        }
+        let t = if k % 2 == 0 {
+            [w[0], w[1], w[2]]
+        } else {
+            [w[1], w[0], w[2]]
+        };
+        assert!(
+            mesh.signed_area2(t) > 0,
+            "window {k} {t:?} is not counter-clockwise"
+        );
+    }
+}
+
+/// The cells strip: its own mesh (same vertices, cells flipped) holds
+/// exactly its triangles, faces up, and passes `check`.
+fn assert_cells(grid: &HeightGrid, mesh: &Mesh, c: &MeshStrip<'_>, check: &CheckOptions) {
+    assert_eq!(c.method, StripMethod::Cells);
+    assert_eq!(c.mesh.vertices, mesh.vertices);
+    assert_eq!(c.mesh.triangles.len(), mesh.triangles.len());
+    assert_eq!(c.retriangulated(), c.flipped_cells > 0);
+    assert_same_triangles(&c.mesh, &c.strip);
+    assert_winding(&c.mesh, &c.strip);
+    let before = check_mesh(grid, mesh, check).unwrap().metrics;
+    let after = check_mesh(grid, &c.mesh, check).unwrap().metrics;
+    // Exact: no sample inside a unit cell, so every sample's error is kept.
+    assert_eq!(before.max_error_m, after.max_error_m);
+    assert_eq!(before.sse_m2, after.sse_m2);
+}
+
+/// All methods: same triangles; returns (traversal, guided, cells)
+/// refs/triangle, cells checked against `check` on `grid`.
+fn all(label: &str, grid: &HeightGrid, mesh: &Mesh, check: &CheckOptions) -> (f64, f64, f64) {
     let t = stripify_bitree_with(mesh, StripMethod::Traversal).unwrap();
-    let g = stripify_bitree(mesh).unwrap();
-    report(&format!("{label} traversal"), mesh, &t);
-    report(&format!("{label} guided"), mesh, &g);
-    assert_same_triangles(mesh, &t);
-    assert_same_triangles(mesh, &g);
-    (t.refs_per_triangle(), g.refs_per_triangle())
+    let g = stripify_bitree_with(mesh, StripMethod::Guided).unwrap();
+    let c = stripify_bitree(mesh).unwrap();
+    report(&format!("{label} traversal"), mesh, &t.strip);
+    report(&format!("{label} guided"), mesh, &g.strip);
+    report(
+        &format!("{label} cells ({} flipped)", c.flipped_cells),
+        mesh,
+        &c.strip,
+    );
+    for s in [&t, &g] {
+        assert!(!s.retriangulated());
+        assert_same_triangles(mesh, &s.strip);
+        assert_winding(mesh, &s.strip);
+    }
+    assert_cells(grid, mesh, &c, check);
+    assert!(c.strip.refs() <= g.strip.refs());
+    (
+        t.strip.refs_per_triangle(),
+        g.strip.refs_per_triangle(),
+        c.strip.refs_per_triangle(),
+    )
 }
 
 #[test]
@@ -68,12 +124,17 @@ fn conforming_real_data() {
     let g = real();
     let tree = Bitree::build(&g).unwrap();
     for e in [0.0, 1.0, 5.0, 20.0, 100.0] {
-        let mesh = tree.extract(&ExtractOptions::max_error_m(e)).unwrap().mesh;
-        let (t, guided) = both(&format!("conforming E={e}"), &mesh);
+        let x = tree.extract(&ExtractOptions::max_error_m(e)).unwrap();
+        let check = CheckOptions::conforming(x.threshold_m);
+        let (t, guided, cells) = all(&format!("conforming E={e}"), &g, &x.mesh, &check);
         // Measured: traversal 1.57–1.66 (paper 000: 1.64 at 0 %), guided
-        // 1.42–1.45.
+        // 1.42–1.45, cells 1.16 at 0 m, 1.33 at 1 m, 1.43–1.44 from 5 m.
         assert!(t < 1.67, "traversal {t}");
         assert!(guided < 1.46, "guided {guided}");
+        assert!(cells <= guided, "cells {cells}");
+        if e == 0.0 || e == 1.0 {
+            assert!(cells < guided - 0.1, "cells {cells}, guided {guided}");
+        }
     }
 }
 
@@ -91,11 +152,40 @@ fn fictitious_real_data() {
                 &RefineOptions::DEFAULT.with_mode(mode),
             )
             .unwrap();
-            let (t, guided) = both(&format!("{} E={e}", mode.name()), &r.mesh);
+            let check = CheckOptions::DEFAULT
+                .with_max_error_m(Some(e))
+                .with_allow_fictitious(true)
+                .with_conforming(mode == Mode::Fictitious { watertight: true });
+            let (t, guided, cells) = all(&format!("{} E={e}", mode.name()), &g, &r.mesh, &check);
             assert!(t < 1.67, "traversal {t}");
             assert!(guided < 1.46, "guided {guided}");
+            assert!(cells <= guided, "cells {cells}");
         }
     }
+}
+
+/// The full-resolution mesh of the real tile (every sample a vertex, with
+/// its height): the cells strip needs about (2W+1)/(2W−2) references per
+/// triangle, and its mesh has zero error.
+#[test]
+fn full_real_grid_cells() {
+    let g = real();
+    let (w, h) = (g.width() as u32, g.height() as u32);
+    let mut mesh = full_bitree_mesh(w, h);
+    for v in &mut mesh.vertices {
+        v.z_m = g.get(v.col as usize, v.row as usize);
+    }
+    let c = stripify_bitree(&mesh).unwrap();
+    report("full real grid cells", &mesh, &c.strip);
+    let tris = 2 * (w as usize - 1) * (h as usize - 1);
+    assert_eq!(c.strip.triangles, tris);
+    // Every unit cell of the "4-8" pattern is flipped in every other row.
+    assert!(c.flipped_cells >= tris / 4, "{}", c.flipped_cells);
+    assert_cells(&g, &mesh, &c, &CheckOptions::conforming(0.0));
+    // One row strip of 2W references per row of cells, and one more per row
+    // join (a repeated index fixing the parity).
+    assert_eq!(c.strip.refs(), (h as usize - 1) * (2 * w as usize + 1) - 1);
+    assert!(c.strip.refs_per_triangle() <= 1.05);
 }
 
 /// A rough `w × h` grid: E = 0 keeps (nearly) every unit triangle.
@@ -122,12 +212,18 @@ fn full_grid() {
         .unwrap()
         .mesh;
     assert_eq!(mesh.triangles.len(), 2 * (w - 1) * (h - 1));
-    let (t, guided) = both("full grid 129x97", &mesh);
+    let (t, guided, cells) = all(
+        "full grid 129x97",
+        &g,
+        &mesh,
+        &CheckOptions::conforming(0.0),
+    );
     // Paper 000's full grid: 13655 / 8192 = 1.667. The lower bound for any
-    // strip of this alternating-diagonal grid is 1.25 (module docs), so the
-    // 1.05 of a parallel-diagonal grid is out of reach.
+    // strip of this alternating-diagonal grid is 1.25 (module docs); the
+    // cells strip changes the diagonals: (H−1)(2W+1)−1 references.
     assert!(t < 1.67, "traversal {t}");
     assert!(guided < 1.52, "guided {guided}");
+    assert_eq!(cells, (96.0 * 259.0 - 1.0) / 24576.0, "cells {cells}");
 }
 
 #[test]
@@ -145,8 +241,12 @@ fn golden_3x3() {
         .unwrap()
         .mesh;
     assert_eq!(mesh.triangles.len(), 8);
-    let t = stripify_bitree_with(&mesh, StripMethod::Traversal).unwrap();
-    let gd = stripify_bitree(&mesh).unwrap();
+    let t = stripify_bitree_with(&mesh, StripMethod::Traversal)
+        .unwrap()
+        .strip;
+    let gd = stripify_bitree_with(&mesh, StripMethod::Guided)
+        .unwrap()
+        .strip;
     assert_same_triangles(&mesh, &t);
     assert_same_triangles(&mesh, &gd);
     assert_eq!(

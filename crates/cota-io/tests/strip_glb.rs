@@ -1,7 +1,8 @@
 //! GLB with one TRIANGLE_STRIP primitive (`write_glb_strip`): mode 5, the
 //! strip's indices, every drawn triangle facing up in both coordinate frames
-//! (a mirrored frame gets one leading repeated index), and the Khronos
-//! validator's verdict when tools/gltf-validate is installed.
+//! (a mirrored frame gets one leading repeated index), a strip refused with
+//! a mesh it does not encode, and the Khronos validator's verdict when
+//! tools/gltf-validate is installed.
 #![allow(clippy::unwrap_used, reason = "tests")]
 
 use std::path::Path;
@@ -9,7 +10,9 @@ use std::process::Command;
 
 use cota_core::strip::{strip_to_triangles, stripify_bitree};
 use cota_core::{Bitree, ExtractOptions, GeoRef, HeightGrid, Mesh};
-use cota_io::export::{write_atomically, write_glb_strip, Coords, ExportOptions, IndexWidth};
+use cota_io::export::{
+    write_atomically, write_glb_strip, Coords, ExportError, ExportOptions, IndexWidth,
+};
 
 fn grid(w: usize, h: usize) -> HeightGrid {
     let heights: Vec<f32> = (0..w * h)
@@ -87,14 +90,15 @@ fn read_back(bytes: &[u8]) -> (Vec<u32>, Vec<[f32; 3]>) {
 fn strip_glb_faces_up_in_both_frames() {
     let g = grid(37, 23);
     for e in [0.0, 3.0] {
-        let m = mesh(&g, e);
-        let strip = stripify_bitree(&m).unwrap();
+        let m0 = mesh(&g, e);
+        let s = stripify_bitree(&m0).unwrap();
+        let (m, strip) = (&*s.mesh, &s.strip);
         for coords in [Coords::LocalMetres, Coords::Grid] {
             for width in [IndexWidth::U16, IndexWidth::U32] {
                 let o = ExportOptions::DEFAULT
                     .with_coords(coords)
                     .with_index_width(width);
-                let (idx, pos) = read_back(&encode(&m, &strip.indices, &g, &o));
+                let (idx, pos) = read_back(&encode(m, &strip.indices, &g, &o));
                 assert!(idx == strip.indices || idx[1..] == strip.indices[..]);
                 let tris = strip_to_triangles(&idx);
                 assert_eq!(tris.len(), m.triangles.len());
@@ -109,6 +113,39 @@ fn strip_glb_faces_up_in_both_frames() {
             }
         }
     }
+}
+
+/// A strip of re-triangulated cells written with the mesh it was made from
+/// (not the one it encodes) is refused: its normals would be wrong.
+#[test]
+fn strip_glb_rejects_a_strip_of_another_mesh() {
+    let g = grid(37, 23);
+    let m = mesh(&g, 0.0);
+    let s = stripify_bitree(&m).unwrap();
+    assert!(s.retriangulated());
+    let mut out = Vec::new();
+    let err =
+        write_glb_strip(&mut out, &m, &s.strip.indices, &g, &ExportOptions::DEFAULT).unwrap_err();
+    match err {
+        ExportError::StripMismatch {
+            mesh_triangles,
+            strip_triangles,
+            foreign,
+        } => {
+            assert_eq!(mesh_triangles, m.triangles.len());
+            assert_eq!(strip_triangles, m.triangles.len());
+            assert_eq!(foreign, 2 * s.flipped_cells);
+        }
+        e => panic!("expected StripMismatch, found {e}"),
+    }
+    assert!(write_glb_strip(
+        &mut out,
+        &s.mesh,
+        &s.strip.indices,
+        &g,
+        &ExportOptions::DEFAULT
+    )
+    .is_ok());
 }
 
 #[test]
@@ -150,9 +187,12 @@ fn strip_glb_passes_the_khronos_validator() {
         ("u32.glb", &big, 0.0, ExportOptions::DEFAULT),
     ] {
         let m = mesh(g, e);
-        let strip = stripify_bitree(&m).unwrap();
+        let s = stripify_bitree(&m).unwrap();
         let path = dir.path().join(name);
-        write_atomically(&path, |w| write_glb_strip(w, &m, &strip.indices, g, &o)).unwrap();
+        write_atomically(&path, |w| {
+            write_glb_strip(w, &s.mesh, &s.strip.indices, g, &o)
+        })
+        .unwrap();
         files.push(path);
     }
     let out = Command::new("node")

@@ -204,7 +204,7 @@ fn run(big: BigGrid, read: Phase, es: &[f64]) -> anyhow::Result<()> {
         let (strip, mut ps) = measure(&format!("  strip of the {e} m mesh"), || {
             Ok(stripify_bitree(&x.mesh)?)
         })?;
-        ps.extra = format!("{} strip indices", strip.indices.len());
+        ps.extra = format!("{} strip indices", strip.strip.indices.len());
         drop(strip);
         phases.push(ps);
         let (_, pm) = measure(&format!("  measure of the {e} m mesh"), || {

@@ -59,6 +59,17 @@ pub enum ExportError {
     /// The glTF JSON could not be encoded.
     #[error("cannot encode the glTF JSON: {0}")]
     Json(String),
+    /// A strip does not encode the mesh given with it (normals would come
+    /// from other triangles): pass the mesh the strip was made for.
+    #[error("expected a strip of the mesh's {mesh_triangles} triangles (the mesh returned with the strip), found {strip_triangles} strip triangles of which {foreign} are not the mesh's")]
+    StripMismatch {
+        /// Triangles of the mesh.
+        mesh_triangles: usize,
+        /// Non-degenerate triangles of the strip.
+        strip_triangles: usize,
+        /// Strip triangles (with orientation) not in the mesh.
+        foreign: usize,
+    },
 }
 
 /// A failure to write a mesh file. Displays on one line and names the file.

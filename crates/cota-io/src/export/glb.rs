@@ -82,15 +82,21 @@ pub fn write_glb<W: Write>(
 }
 
 /// Writes `mesh` as a GLB whose primitive is one TRIANGLE_STRIP (mode 5) with
-/// the indices `strip` (a standard strip of `mesh`'s vertices, as made by
+/// the indices `strip` (a standard strip of `mesh`'s triangles, as made by
 /// `cota_core::strip::stripify_bitree`; odd triangles reversed, degenerate
-/// triangles as connectors). Everything else is as in [`write_glb`]. When
-/// the output frame is mirrored the strip gets one leading repeated index,
-/// which flips every triangle's parity and so keeps the front faces up.
+/// triangles as connectors). `mesh` must be the mesh the strip encodes:
+/// `MeshStrip::mesh`, which differs from the stripped mesh when unit cells
+/// were re-triangulated; its triangles give the normals, and they are
+/// checked to be exactly the strip's. Everything else is as in
+/// [`write_glb`]. When the output frame is mirrored the strip gets one
+/// leading repeated index, which flips every triangle's parity and so keeps
+/// the front faces up.
 ///
 /// # Errors
 /// As [`write_glb`]; [`ExportError::VertexOutOfRange`] for a strip index out
-/// of range (`triangle` is then the strip position minus 2).
+/// of range (`triangle` is then the strip position minus 2);
+/// [`ExportError::StripMismatch`] when the strip's triangles are not the
+/// mesh's.
 pub fn write_glb_strip<W: Write>(
     w: W,
     mesh: &Mesh,
@@ -99,6 +105,32 @@ pub fn write_glb_strip<W: Write>(
     opts: &ExportOptions,
 ) -> Result<(), ExportError> {
     write_glb_primitive(w, mesh, Some(strip), grid, opts)
+}
+
+/// [`ExportError::StripMismatch`] unless the strip's non-degenerate
+/// triangles, with their drawn orientation, are the mesh's triangles, each
+/// once. Indices are already known to be in range.
+fn check_strip_triangles(mesh: &Mesh, strip: &[u32]) -> Result<(), ExportError> {
+    use cota_core::strip::{canonical, strip_to_triangles};
+    let mut got: Vec<[u32; 3]> = strip_to_triangles(strip)
+        .into_iter()
+        .map(canonical)
+        .collect();
+    let mut want: Vec<[u32; 3]> = mesh.triangles.iter().copied().map(canonical).collect();
+    got.sort_unstable();
+    want.sort_unstable();
+    if got == want {
+        return Ok(());
+    }
+    let foreign = got
+        .iter()
+        .filter(|t| want.binary_search(t).is_err())
+        .count();
+    Err(ExportError::StripMismatch {
+        mesh_triangles: want.len(),
+        strip_triangles: got.len(),
+        foreign,
+    })
 }
 
 /// [`write_glb`] (`strip = None`) or [`write_glb_strip`].
@@ -128,6 +160,7 @@ fn write_glb_primitive<W: Write>(
                     triangle: k.saturating_sub(2),
                 });
             }
+            check_strip_triangles(mesh, s)?;
             let mut v = Vec::with_capacity(s.len() + 1);
             if frame.mirrored() {
                 v.extend(s.first().copied());
