@@ -422,6 +422,8 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, codes: &mut [u16
                     let fast = match level {
                         Level::B(2) => fine_b2(heights, hier, m),
                         Level::A(2) => fine_a2(heights, hier, m, codes),
+                        Level::B(4) => fine_b4(heights, hier, m, codes),
+                        Level::A(4) => fine_a4(heights, hier, m, codes),
                         _ => None,
                     };
                     out.push(fast.unwrap_or_else(|| diamond_error(heights, hier, level, m, codes)));
@@ -431,13 +433,23 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, codes: &mut [u16
             })
             .collect()
     };
+    // Write back in parallel, one grid row per task.
+    let mut by_row: Vec<Option<Vec<u16>>> = vec![None; h as usize];
     for (&y, row) in rows.iter().zip(computed) {
-        let base = y as usize * w as usize;
-        let x0 = first_col(level, y) as usize;
-        for (k, e) in row.into_iter().enumerate() {
-            codes[base + x0 + k * s as usize] = e;
-        }
+        by_row[y as usize] = Some(row);
     }
+    codes
+        .par_chunks_mut(w as usize)
+        .zip(by_row.into_par_iter())
+        .enumerate()
+        .for_each(|(y, (line, row))| {
+            if let Some(row) = row {
+                let x0 = first_col(level, y as u32) as usize;
+                for (slot, e) in line.iter_mut().skip(x0).step_by(s as usize).zip(row) {
+                    *slot = e;
+                }
+            }
+        });
 }
 
 /// `B(2)` away from the grid's border: both triangles of the diamond are inside
@@ -484,6 +496,91 @@ fn fine_a2(heights: &[f32], hier: &Hierarchy, m: Pt, codes: &[u16]) -> Option<u1
         y * w + x + 1,
         (y - 1) * w + x,
         (y + 1) * w + x,
+    ] {
+        code = code.max(codes[c]);
+    }
+    Some(code)
+}
+
+/// `B(4)` with both triangles inside the grid: each triangle's samples off
+/// its vertices are the three on the hypotenuse and the three of the row next
+/// to it (9 in the diamond), whose plane values are exact quarter sums of the
+/// corner heights; the children are the four `A(2)` points beside `m`. The
+/// same value as [`diamond_error`] (every value is exact), about 5× faster
+/// than the general row scan at this size.
+#[inline]
+fn fine_b4(heights: &[f32], hier: &Hierarchy, m: Pt, codes: &[u16]) -> Option<u16> {
+    let (w, h) = (hier.width() as usize, hier.height() as usize);
+    let [x, y] = [m[0] as usize, m[1] as usize];
+    // (along, across): unit steps along the hypotenuse and towards an apex.
+    let (along, across) = if y % 4 == 0 {
+        (y >= 2 && y + 2 < h && x + 2 < w).then_some((1isize, w as isize))?
+    } else {
+        (x >= 2 && x + 2 < w && y + 2 < h).then_some((w as isize, 1isize))?
+    };
+    let c = (y * w + x) as isize;
+    let hv = |i: isize| heights[i as usize] as f64;
+    let (ha, hb) = (hv(c - 2 * along), hv(c + 2 * along));
+    // The hypotenuse's three inner samples (shared by both triangles).
+    let mut e = (hv(c - along) - (3.0 * ha + hb) * 0.25).abs();
+    e = max_no_nan(e, (hv(c) - (ha + hb) * 0.5).abs());
+    e = max_no_nan(e, (hv(c + along) - (ha + 3.0 * hb) * 0.25).abs());
+    let mut code = 0u16;
+    for side in [-1isize, 1] {
+        let row = c + side * across;
+        let hc = hv(c + 2 * side * across);
+        e = max_no_nan(e, (hv(row - along) - (ha + hc) * 0.5).abs());
+        e = max_no_nan(e, (hv(row) - (ha + hb + 2.0 * hc) * 0.25).abs());
+        e = max_no_nan(e, (hv(row + along) - (hb + hc) * 0.5).abs());
+        code = code
+            .max(codes[(row - along) as usize])
+            .max(codes[(row + along) as usize]);
+    }
+    Some(code.max(encode_up(round_up_f32(e))))
+}
+
+/// `A(4)` with the whole 4×4 square inside the grid: the 25 samples of the
+/// square, each against the plane of the half it lies in (both halves for
+/// the diagonal, where the planes agree); the children are the `B(4)` points
+/// at the square's side midpoints. The same value as [`diamond_error`].
+#[inline]
+fn fine_a4(heights: &[f32], hier: &Hierarchy, m: Pt, codes: &[u16]) -> Option<u16> {
+    let (w, h) = (hier.width() as usize, hier.height() as usize);
+    let [x, y] = [m[0] as usize, m[1] as usize];
+    if x + 2 >= w || y + 2 >= h {
+        return None;
+    }
+    let (x0, y0) = (x - 2, y - 2);
+    let hv = |i: usize, j: usize| heights[(y0 + j) * w + x0 + i] as f64;
+    let (h00, h40, h04, h44) = (hv(0, 0), hv(4, 0), hv(0, 4), hv(4, 4));
+    let even = ((x0 / 4) + (y0 / 4)) % 2 == 0;
+    let mut e = 0f64;
+    for j in 0..=4usize {
+        for i in 0..=4usize {
+            let (fi, fj) = (i as f64, j as f64);
+            // Four times the plane, exactly.
+            let p4 = if even {
+                // Diagonal (0,0)–(4,4).
+                if j <= i {
+                    4.0 * h00 + fi * (h40 - h00) + fj * (h44 - h40)
+                } else {
+                    4.0 * h00 + fi * (h44 - h04) + fj * (h04 - h00)
+                }
+            } else if i + j >= 4 {
+                // Diagonal (4,0)–(0,4), south-east half.
+                4.0 * h44 + (4.0 - fi) * (h04 - h44) + (4.0 - fj) * (h40 - h44)
+            } else {
+                4.0 * h00 + fi * (h40 - h00) + fj * (h04 - h00)
+            };
+            e = max_no_nan(e, (hv(i, j) - p4 * 0.25).abs());
+        }
+    }
+    let mut code = encode_up(round_up_f32(e));
+    for c in [
+        y * w + x - 2,
+        y * w + x + 2,
+        (y - 2) * w + x,
+        (y + 2) * w + x,
     ] {
         code = code.max(codes[c]);
     }
@@ -752,17 +849,20 @@ mod test {
 
     #[test]
     fn fine_level_shortcuts_match_the_general_path() {
-        for (w, h) in [(17, 17), (20, 13), (2, 9), (33, 8)] {
+        for (w, h) in [(17, 17), (20, 13), (2, 9), (33, 8), (29, 37)] {
             let g = grid(w, h, |x, y| {
                 ((x * 37 + y * 11) % 13) as f32 * 1.7 - (x * y) as f32 * 0.03
             });
             let t = Bitree::build(&g).unwrap();
             let hier = t.hierarchy();
-            for level in [Level::B(2), Level::A(2)] {
+            for level in [Level::B(2), Level::A(2), Level::B(4), Level::A(4)] {
+                let s = match level {
+                    Level::A(s) | Level::B(s) => s,
+                };
                 for y in 0..h as u32 {
                     let on_row = match level {
-                        Level::A(_) => y % 2 == 1,
-                        _ => true,
+                        Level::A(_) => y % s == s / 2,
+                        Level::B(_) => y % (s / 2) == 0,
                     };
                     let mut x = first_col(level, y);
                     while on_row && x < w as u32 {
@@ -774,7 +874,7 @@ mod test {
                             general,
                             "{level:?} at {x},{y} on {w}x{h}"
                         );
-                        x += 2;
+                        x += s;
                     }
                 }
             }
