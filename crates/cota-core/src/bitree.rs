@@ -468,9 +468,7 @@ fn fine_b2(heights: &[f32], hier: &Hierarchy, m: Pt) -> Option<u16> {
         (x >= 1 && x + 1 < w && y + 1 < h).then(|| ((y - 1) * w + x, (y + 1) * w + x))?
     };
     let hv = |i: usize| heights[i] as f64;
-    Some(encode_up(round_up_f32(
-        (hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs(),
-    )))
+    Some(code_of((hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs()))
 }
 
 /// `A(2)` inside the grid: both square halves are inside; `err[m]` is the
@@ -490,7 +488,7 @@ fn fine_a2(heights: &[f32], hier: &Hierarchy, m: Pt, codes: &[u16]) -> Option<u1
     } else {
         ((y - 1) * w + x + 1, (y + 1) * w + x - 1)
     };
-    let mut code = encode_up(round_up_f32((hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs()));
+    let mut code = code_of((hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs());
     for c in [
         y * w + x - 1,
         y * w + x + 1,
@@ -536,7 +534,7 @@ fn fine_b4(heights: &[f32], hier: &Hierarchy, m: Pt, codes: &[u16]) -> Option<u1
             .max(codes[(row - along) as usize])
             .max(codes[(row + along) as usize]);
     }
-    Some(code.max(encode_up(round_up_f32(e))))
+    Some(code.max(code_of(e)))
 }
 
 /// `A(4)` with the whole 4×4 square inside the grid: the 25 samples of the
@@ -575,7 +573,7 @@ fn fine_a4(heights: &[f32], hier: &Hierarchy, m: Pt, codes: &[u16]) -> Option<u1
             e = max_no_nan(e, (hv(i, j) - p4 * 0.25).abs());
         }
     }
-    let mut code = encode_up(round_up_f32(e));
+    let mut code = code_of(e);
     for c in [
         y * w + x - 2,
         y * w + x + 2,
@@ -604,7 +602,14 @@ fn diamond_error(heights: &[f32], hier: &Hierarchy, level: Level, m: Pt, codes: 
             code = code.max(codes[hier.index(c1.mid())]);
         }
     }
-    code.max(encode_up(round_up_f32(e)))
+    code.max(code_of(e))
+}
+
+/// The stored code of an error computed in `f64`: rounded up to `f32`, then
+/// to a code, never understated.
+#[inline]
+fn code_of(e: f64) -> u16 {
+    encode_up(round_up_f32(e))
 }
 
 /// The smallest `f32` not below `e`.

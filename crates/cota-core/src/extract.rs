@@ -275,26 +275,10 @@ fn mid(a: u32, b: u32) -> u32 {
     (a >> 1) + (b >> 1) + (a & b & 1)
 }
 
-/// Leaves under `t` (the walk of [`emit_leaves`], counting).
+/// Leaves under `t`.
 fn count_leaves(tree: &Bitree<'_>, rule: &SplitRule, t: Task) -> usize {
-    let mut stack = [[0u32; 4]; STACK];
-    stack[0] = [t.a, t.b, t.c, t.depth];
-    let mut sp = 1;
     let mut n = 0;
-    while sp > 0 {
-        sp -= 1;
-        let [a, b, c, depth] = stack[sp];
-        if depth > 0 && sp + 2 <= STACK {
-            let m = mid(a, b);
-            if tree.splits_index(m as usize, rule) {
-                stack[sp] = [b, c, m, depth - 1];
-                stack[sp + 1] = [c, a, m, depth - 1];
-                sp += 2;
-                continue;
-            }
-        }
-        n += 1;
-    }
+    walk_task(tree, rule, t, |_, _, _| n += 1);
     n
 }
 
@@ -313,8 +297,6 @@ fn count_tasks(tree: &Bitree<'_>, rule: &SplitRule, tasks: &[Task], cap: usize) 
 }
 
 /// Appends the leaves under `t`, depth-first, corners mapped by `id`.
-/// Iterative, with an explicit stack: a task is at most [`TASK_DEPTH`] splits
-/// deep unless it does not split at all.
 fn emit_leaves(
     tree: &Bitree<'_>,
     rule: &SplitRule,
@@ -322,6 +304,14 @@ fn emit_leaves(
     id: &impl Fn(u32) -> u32,
     out: &mut Vec<[u32; 3]>,
 ) {
+    walk_task(tree, rule, t, |a, b, c| out.push([id(a), id(b), id(c)]));
+}
+
+/// Calls `leaf(a, b, c)` for every leaf under `t`, depth-first (the order of
+/// the sequential recursion). Iterative, with an explicit stack: a task is at
+/// most [`TASK_DEPTH`] splits deep unless it does not split at all.
+#[inline(always)]
+fn walk_task(tree: &Bitree<'_>, rule: &SplitRule, t: Task, mut leaf: impl FnMut(u32, u32, u32)) {
     let mut stack = [[0u32; 4]; STACK];
     stack[0] = [t.a, t.b, t.c, t.depth];
     let mut sp = 1;
@@ -338,7 +328,7 @@ fn emit_leaves(
                 continue;
             }
         }
-        out.push([id(a), id(b), id(c)]);
+        leaf(a, b, c);
     }
 }
 
