@@ -43,7 +43,9 @@ use cota_bench::{
     martini_threshold_for_budget, martini_tile, wanted, TOLERANCES_M,
 };
 use cota_core::{Bitree, ExtractOptions, HeightGrid};
-use criterion::{criterion_group, criterion_main, BenchmarkGroup, Criterion, SamplingMode};
+use criterion::{
+    criterion_group, criterion_main, BenchmarkGroup, Criterion, SamplingMode, Throughput,
+};
 use martini::Martini;
 
 /// Tolerances at which delatin runs (it is slow at small E on 1025² grids).
@@ -105,6 +107,14 @@ fn bench_extract(
     for &e in tolerances {
         let mut g = c.benchmark_group(format!("extract/{name}/{e}"));
         short(&mut g);
+        // Throughput in cota's output triangles (criterion-table turns it
+        // into the M triangles/s table).
+        let tris = tree
+            .extract(&ExtractOptions::max_error_m(e))
+            .unwrap()
+            .mesh
+            .triangle_count();
+        g.throughput(Throughput::Elements(tris as u64));
         g.bench_function("cota", |b| {
             b.iter(|| {
                 tree.extract(&ExtractOptions::max_error_m(black_box(e)))

@@ -115,6 +115,9 @@ pub struct Bitree<'g> {
     grid: &'g HeightGrid,
     hier: Hierarchy,
     codes: Vec<u16>,
+    /// The largest hierarchy triangles inside the grid, depth-first: where
+    /// every extraction starts (see [`crate::extract`]).
+    inside: Vec<Tri>,
 }
 
 /// A callback told `(levels_done, levels_total)` as the build progresses.
@@ -142,13 +145,22 @@ impl<'g> Bitree<'g> {
         progress: Progress<'_>,
     ) -> Result<Self, MeshError> {
         let hier = hierarchy_for(grid)?;
-        let mut codes = vec![0u16; grid.len()];
-        let levels = levels(hier.size());
-        for (k, level) in levels.iter().enumerate() {
-            build_level(grid.heights(), &hier, *level, &mut codes);
-            progress(k + 1, levels.len());
-        }
-        Ok(Bitree { grid, hier, codes })
+        let codes = crate::on_pool(|| {
+            let mut codes = vec![0u16; grid.len()];
+            let levels = levels(hier.size());
+            for (k, level) in levels.iter().enumerate() {
+                build_level(grid.heights(), &hier, *level, &mut codes);
+                progress(k + 1, levels.len());
+            }
+            codes
+        });
+        let inside = crate::extract::inside_roots(&hier);
+        Ok(Bitree {
+            grid,
+            hier,
+            codes,
+            inside,
+        })
     }
 
     /// The grid this bitree was built on.
@@ -159,6 +171,11 @@ impl<'g> Bitree<'g> {
     /// The hierarchy's shape.
     pub fn hierarchy(&self) -> &Hierarchy {
         &self.hier
+    }
+
+    /// The largest hierarchy triangles inside the grid, in depth-first order.
+    pub(crate) fn inside_roots(&self) -> &[Tri] {
+        &self.inside
     }
 
     /// The monotone error code of every split point, indexed like the grid's
@@ -404,6 +421,25 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, codes: &mut [u16
     let s = match level {
         Level::A(s) | Level::B(s) => s,
     };
+    if level == Level::B(2) {
+        // The finest level reads heights only (its children are unit
+        // triangles, with no split point): each row is computed straight
+        // into its codes, in parallel, with no buffer or write-back pass.
+        codes
+            .par_chunks_mut(w as usize)
+            .enumerate()
+            .for_each(|(y, line)| {
+                let y = y as u32;
+                let mut x = first_col(level, y);
+                while x < w {
+                    let m = [x, y];
+                    line[x as usize] = fine_b2(heights, hier, m)
+                        .unwrap_or_else(|| diamond_error(heights, hier, level, m, &[]));
+                    x += 2;
+                }
+            });
+        return;
+    }
     let half = s / 2;
     let rows: Vec<u32> = (0..h)
         .filter(|y| match level {

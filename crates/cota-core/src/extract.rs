@@ -10,25 +10,35 @@
 //! did, so the result is watertight with no T-junction, and every triangle left
 //! meets `e(T) ≤ E` at every sample it covers.
 //!
-//! 1. **Top of the tree** (sequential, tiny): walk from the two roots, skip
-//!    triangles outside the grid, split straddling ones; each triangle inside
-//!    the grid that stops splitting or is at most [`TASK_DEPTH`] splits above
-//!    the unit level becomes a *task*. Tasks are in depth-first order.
-//! 2. **Count** the leaves of every task (in parallel): split while
-//!    `err[mid] > E`. Inside the grid a triangle is just three sample indices:
-//!    the midpoint of the hypotenuse `a`–`b` is the sample `(a + b) / 2`
-//!    (indices are linear in the coordinates), and the children of `(a, b, c)`
-//!    are `(c, a, m)` and `(b, c, m)`, all counter-clockwise like the roots.
-//! 3. **Emit** every task's leaves into its own slice of the output (sizes from
-//!    step 2, so the triangle array is allocated once at its final size), in
-//!    parallel; the order is the sequential depth-first order.
-//! 4. **Number the vertices** row-major: a bitset of the samples that are
+//! 1. **Top of the tree** (sequential, tiny): the largest triangles inside
+//!    the grid (the roots split while they straddle its border, found once
+//!    per [`Bitree`]) are split while they split and are more than
+//!    [`TASK_DEPTH`] splits above the unit level; each triangle where this
+//!    stops becomes a *task*. Tasks are in depth-first order.
+//! 2. **Walk** every task (in parallel): split while `err[mid] > E`. Inside
+//!    the grid a triangle is just three sample indices: the midpoint of the
+//!    hypotenuse `a`–`b` is the sample `(a + b) / 2` (indices are linear in
+//!    the coordinates), and the children of `(a, b, c)` are `(c, a, m)` and
+//!    `(b, c, m)`, all counter-clockwise like the roots. The output order is
+//!    the sequential depth-first order.
+//! 3. **Number the vertices** row-major: a bitset of the samples that are
 //!    vertices, then a popcount prefix. The vertices are the split points that
 //!    split (every split point with `err > E` is reached, since `err` grows up
-//!    the tree) plus the root corners inside the grid: on dense meshes the
-//!    bitset comes from a parallel scan of the error codes, on sparse ones
-//!    from the triangles' corners. Triangle corners are then rewritten from
-//!    sample to vertex indices in parallel.
+//!    the tree) plus the root corners inside the grid.
+//!
+//! The order of 2 and 3 depends on the mesh's density (guessed from 1024
+//! scattered codes; only the speed depends on the guess):
+//! - **Dense** meshes: the bitset comes first, from a parallel scan of the
+//!   codes. Each task's leaf count then follows from the bitset alone, by
+//!   popcounts over the task's rows (see `leaves_from_bits`), so the output
+//!   is allocated once at its final size and each task writes its leaves, in
+//!   vertex indices, straight into its own slice.
+//! - **Sparse** meshes: runs of tasks are walked into their own buffers in
+//!   sample indices, the bitset comes from their corners, and the runs are
+//!   copied into place in vertex indices.
+//!
+//! Each call enters the rayon pool once (see `on_pool`): entering it per
+//! parallel section costs more than a sparse extraction.
 //!
 //! The split test reads 16-bit error codes ([`crate::error_code`]) and settles
 //! the rare ambiguous code exactly, so the mesh is the one of the exact errors.
@@ -48,7 +58,7 @@ use rayon::prelude::*;
 
 use crate::bitree::{Bitree, MeshError};
 use crate::error_code::{SplitRule, INFINITE};
-use crate::hierarchy::{Placement, Tri};
+use crate::hierarchy::{Hierarchy, Placement, Tri};
 use crate::mesh::{Mesh, MeshVertex};
 
 /// What to extract.
@@ -121,10 +131,10 @@ impl Bitree<'_> {
                 }
                 e
             }
-            Target::MaxTriangles(n) => self.threshold_for_budget(n)?,
+            Target::MaxTriangles(n) => crate::on_pool(|| self.threshold_for_budget(n))?,
         };
         Ok(Extraction {
-            mesh: self.extract_at(&SplitRule::new(threshold)),
+            mesh: crate::on_pool(|| self.extract_at(&SplitRule::new(threshold))),
             threshold_m: threshold,
         })
     }
@@ -132,8 +142,10 @@ impl Bitree<'_> {
     /// Number of triangles the mesh at threshold `e_m` has.
     pub fn count_at(&self, e_m: f64) -> usize {
         let rule = SplitRule::new(e_m);
-        let tasks = self.tasks(&rule);
-        count_tasks(self, &rule, &tasks, usize::MAX)
+        crate::on_pool(|| {
+            let tasks = self.tasks(&rule);
+            count_tasks(self, &rule, &tasks, usize::MAX)
+        })
     }
 
     /// The smallest code value `E` whose mesh has at most `n` triangles.
@@ -174,33 +186,58 @@ impl Bitree<'_> {
     /// Extracts the mesh of `rule`.
     fn extract_at(&self, rule: &SplitRule) -> Mesh {
         let tasks = self.tasks(rule);
-        if looks_dense(self, rule) {
-            // Vertices first (from the codes), then triangles straight in
-            // vertex indices.
-            let words = numbered(vertex_bits_from_codes(self, rule));
-            let expected = expected_triangles(self, &words);
-            let tris = emit_tasks(self, rule, &tasks, expected, |i| vertex_id(&words, i));
-            let vertices = vertices(self, &words);
-            Mesh {
-                vertices,
-                triangles: tris,
-            }
+        let share = vertex_share(self, rule);
+        if share >= 1.0 / 16.0 {
+            self.extract_dense(rule, &tasks)
         } else {
-            // Triangles in sample indices, then their corners are the vertices.
-            let mut tris = emit_tasks(self, rule, &tasks, 0, |i| i);
-            let words = numbered(vertex_bits_from_triangles(self, &tris));
-            tris.par_chunks_mut(4096).for_each(|chunk| {
-                for t in chunk {
-                    for i in t.iter_mut() {
-                        *i = vertex_id(&words, *i);
-                    }
-                }
-            });
-            let vertices = vertices(self, &words);
-            Mesh {
-                vertices,
-                triangles: tris,
+            // About two triangles per vertex.
+            let expected = 2.0 * share * self.grid().len() as f64;
+            self.extract_sparse(rule, &tasks, expected as usize)
+        }
+    }
+
+    /// Vertices first (from the codes), then each task's leaf count (from
+    /// the vertices), then the triangles straight in vertex indices, each
+    /// task into its own slice of the output.
+    fn extract_dense(&self, rule: &SplitRule, tasks: &[Task]) -> Mesh {
+        let words = numbered(vertex_bits_from_codes(self, rule));
+        let w = self.grid().width();
+        let counts: Vec<usize> = tasks
+            .par_iter()
+            .with_min_len(8)
+            .map(|t| leaves_from_bits(&words, w, t))
+            .collect();
+        debug_assert!(tasks
+            .iter()
+            .zip(&counts)
+            .all(|(t, &n)| count_leaves(self, rule, *t) == n));
+        let Some(triangles) = emit_tasks(self, rule, tasks, &counts, |i| vertex_id(&words, i))
+        else {
+            // A count that is not the walk's would be a bug: take the path
+            // that does not depend on counts rather than return a wrong mesh.
+            return self.extract_sparse(rule, tasks, 0);
+        };
+        Mesh {
+            vertices: vertices(self, &words),
+            triangles,
+        }
+    }
+
+    /// Triangles in sample indices, their corners are the vertices, then the
+    /// triangles are put in place in vertex indices.
+    fn extract_sparse(&self, rule: &SplitRule, tasks: &[Task], expected: usize) -> Mesh {
+        let parts = walk_runs(self, rule, tasks, expected);
+        let mut words = vec![Word::default(); self.grid().len().div_ceil(64)];
+        for t in parts.iter().flatten() {
+            for &i in t {
+                words[(i / 64) as usize].bits |= 1u64 << (i % 64);
             }
+        }
+        let words = numbered(words);
+        let triangles = place_runs(&parts, |i| vertex_id(&words, i));
+        Mesh {
+            vertices: vertices(self, &words),
+            triangles,
         }
     }
 
@@ -208,38 +245,52 @@ impl Bitree<'_> {
     /// walked as one task.
     fn tasks(&self, rule: &SplitRule) -> Vec<Task> {
         let mut out = Vec::new();
-        for r in self.hierarchy().roots() {
-            self.top(r, rule, &mut out);
+        for &t in self.inside_roots() {
+            self.top(t, rule, &mut out);
         }
         out
     }
 
+    /// Splits the inside triangle `t` while it splits and is more than
+    /// [`TASK_DEPTH`] splits deep.
     fn top(&self, t: Tri, rule: &SplitRule, out: &mut Vec<Task>) {
         let hier = self.hierarchy();
+        let depth = depth_of(&t);
+        if depth <= TASK_DEPTH || !self.splits_index(hier.index(t.mid()), rule) {
+            out.push(Task {
+                a: hier.index(t.a) as u32,
+                b: hier.index(t.b) as u32,
+                c: hier.index(t.c) as u32,
+                depth,
+            });
+        } else {
+            let (c0, c1) = t.children();
+            self.top(c0, rule, out);
+            self.top(c1, rule, out);
+        }
+    }
+}
+
+/// The largest triangles of the hierarchy inside the grid, in depth-first
+/// order: the roots, split while they straddle the grid's border. Computed
+/// once per [`Bitree`]; every extraction starts from them.
+pub(crate) fn inside_roots(hier: &Hierarchy) -> Vec<Tri> {
+    fn walk(hier: &Hierarchy, t: Tri, out: &mut Vec<Tri>) {
         match hier.place(&t) {
             Placement::Outside => {}
+            Placement::Inside => out.push(t),
             Placement::Straddling => {
                 let (c0, c1) = t.children();
-                self.top(c0, rule, out);
-                self.top(c1, rule, out);
-            }
-            Placement::Inside => {
-                let depth = depth_of(&t);
-                if depth <= TASK_DEPTH || !self.splits_index(hier.index(t.mid()), rule) {
-                    out.push(Task {
-                        a: hier.index(t.a) as u32,
-                        b: hier.index(t.b) as u32,
-                        c: hier.index(t.c) as u32,
-                        depth,
-                    });
-                } else {
-                    let (c0, c1) = t.children();
-                    self.top(c0, rule, out);
-                    self.top(c1, rule, out);
-                }
+                walk(hier, c0, out);
+                walk(hier, c1, out);
             }
         }
     }
+    let mut out = Vec::new();
+    for r in hier.roots() {
+        walk(hier, r, &mut out);
+    }
+    out
 }
 
 /// Inside triangles at most this many splits above the unit level are walked
@@ -294,17 +345,6 @@ fn count_tasks(tree: &Bitree<'_>, rule: &SplitRule, tasks: &[Task], cap: usize) 
         total.fetch_add(n, Ordering::Relaxed);
     });
     total.into_inner()
-}
-
-/// Appends the leaves under `t`, depth-first, corners mapped by `id`.
-fn emit_leaves(
-    tree: &Bitree<'_>,
-    rule: &SplitRule,
-    t: Task,
-    id: &impl Fn(u32) -> u32,
-    out: &mut Vec<[u32; 3]>,
-) {
-    walk_task(tree, rule, t, |a, b, c| out.push([id(a), id(b), id(c)]));
 }
 
 /// Calls `leaf(a, b, c)` for every leaf under `t`, depth-first (the order of
@@ -375,6 +415,13 @@ fn vertex_bits_from_codes(tree: &Bitree<'_>, rule: &SplitRule) -> Vec<Word> {
                 word.bits = bits;
             }
         });
+    set_root_corners(tree, &mut words);
+    words
+}
+
+/// Adds the roots' corners inside the grid to the vertex bitset: the only
+/// vertices that are no split point.
+fn set_root_corners(tree: &Bitree<'_>, words: &mut [Word]) {
     let hier = tree.hierarchy();
     let n = hier.size();
     for p in [[0, 0], [n, 0], [0, n], [n, n]] {
@@ -383,18 +430,6 @@ fn vertex_bits_from_codes(tree: &Bitree<'_>, rule: &SplitRule) -> Vec<Word> {
             words[i / 64].bits |= 1u64 << (i % 64);
         }
     }
-    words
-}
-
-/// The vertex bitset from the triangles' corners (sparse meshes).
-fn vertex_bits_from_triangles(tree: &Bitree<'_>, tris: &[[u32; 3]]) -> Vec<Word> {
-    let mut words = vec![Word::default(); tree.grid().len().div_ceil(64)];
-    for t in tris {
-        for &i in t {
-            words[(i / 64) as usize].bits |= 1u64 << (i % 64);
-        }
-    }
-    words
 }
 
 /// Fills in each word's `base`: the number of vertices before it.
@@ -416,81 +451,210 @@ fn vertex_id(words: &[Word], i: u32) -> u32 {
     }
 }
 
-/// Whether the mesh of `rule` is likely to have a vertex on at least one
-/// sample in sixteen: then scanning every code for the vertex set is cheaper
-/// than marking triangle corners. Looks at 1024 evenly spaced codes; only
-/// the path taken depends on it, never the mesh.
-fn looks_dense(tree: &Bitree<'_>, rule: &SplitRule) -> bool {
+/// The share of samples likely to be vertices of the mesh of `rule`, from
+/// 1024 scattered codes. At one sample in sixteen or more, scanning every
+/// code for the vertex set is cheaper than marking triangle corners. Only
+/// the path taken and buffer sizes depend on it, never the mesh.
+fn vertex_share(tree: &Bitree<'_>, rule: &SplitRule) -> f64 {
     let codes = tree.error_codes();
-    let n = codes.len() as u64;
-    // Scattered probes (Fibonacci hashing): a regular stride would follow the
-    // hierarchy's levels, which live on regular sub-lattices.
-    let hits = (0..1024u64)
+    let n = codes.len() as u128;
+    // Scattered probes (Fibonacci hashing, reduced to the range by a
+    // multiply): a regular stride would follow the hierarchy's levels, which
+    // live on regular sub-lattices.
+    let hits = (0..PROBES)
         .filter(|&j| {
-            let i = (j.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11) % n;
-            codes[i as usize] > rule.floor
+            let h = j.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            let i = ((u128::from(h) * n) >> 64) as usize;
+            codes[i] > rule.floor
         })
         .count();
-    hits * 16 >= 1024
+    hits as f64 / PROBES as f64
 }
 
-/// Tasks per parallel window: bounds the per-task buffers alive at once to
-/// `WINDOW · 2^TASK_DEPTH` triangles.
-const WINDOW: usize = 256;
+/// Codes looked at by [`vertex_share`].
+const PROBES: u64 = 1024;
 
-/// The leaves of every task in depth-first order, corners mapped by `id`.
-/// Windows of tasks are walked in parallel into per-task buffers, then
-/// appended in order.
+/// The leaves of every task in depth-first order, corners mapped by `id`,
+/// given each task's leaf count: the output is allocated once at its final
+/// size and every task writes its own slice of it, in parallel; nothing is
+/// copied. `None` if a task's walk does not have its count of leaves.
 fn emit_tasks(
     tree: &Bitree<'_>,
     rule: &SplitRule,
     tasks: &[Task],
-    expected: usize,
+    counts: &[usize],
     id: impl Fn(u32) -> u32 + Sync,
-) -> Vec<[u32; 3]> {
-    let mut tris: Vec<[u32; 3]> = Vec::with_capacity(expected);
-    for window in tasks.chunks(WINDOW) {
-        // Runs of 16 tasks share a buffer: fewer allocations on sparse meshes,
-        // where most tasks are a single leaf.
-        let parts: Vec<Vec<[u32; 3]>> = window
-            .par_chunks(16)
-            .map(|run| {
-                let mut out = Vec::new();
-                for t in run {
-                    emit_leaves(tree, rule, *t, &id, &mut out);
-                }
-                out
-            })
-            .collect();
-        tris.reserve(parts.iter().map(Vec::len).sum());
-        for p in parts {
-            tris.extend_from_slice(&p);
-        }
+) -> Option<Vec<[u32; 3]>> {
+    // Zeroed allocation: large blocks come from the OS already zero, so the
+    // pages are touched only once, by the writers.
+    let mut tris = vec![[0u32; 3]; counts.iter().sum()];
+    let mut slices = Vec::with_capacity(tasks.len());
+    let mut rest = tris.as_mut_slice();
+    for &n in counts {
+        let (head, tail) = rest.split_at_mut(n);
+        slices.push(head);
+        rest = tail;
     }
-    // Growth may have left up to half the capacity unused: give it back
-    // (large blocks shrink in place).
-    tris.shrink_to_fit();
+    let all_counted = tasks
+        .par_iter()
+        .zip(slices.into_par_iter())
+        .with_min_len(4)
+        .all(|(t, out)| {
+            let mut slots = out.iter_mut();
+            let mut over = false;
+            walk_task(tree, rule, *t, |a, b, c| match slots.next() {
+                Some(s) => *s = [id(a), id(b), id(c)],
+                None => over = true,
+            });
+            !over && slots.next().is_none()
+        });
+    all_counted.then_some(tris)
+}
+
+/// The leaves of every task in depth-first order, in sample indices, in one
+/// walk: runs of tasks are walked in parallel, each into its own buffer. For
+/// sparse meshes, where a counting walk would cost more than the copy in
+/// [`place_runs`] and the buffers are small.
+fn walk_runs(
+    tree: &Bitree<'_>,
+    rule: &SplitRule,
+    tasks: &[Task],
+    expected: usize,
+) -> Vec<Vec<[u32; 3]>> {
+    // Buffers sized for a run's share of the expected triangles, plus a
+    // quarter, so that few of them grow.
+    let per_task = expected / tasks.len().max(1);
+    tasks
+        .par_chunks(RUN)
+        .map(|run| {
+            let mut out = Vec::with_capacity(run.len() * (per_task + per_task / 4 + 4));
+            for t in run {
+                walk_task(tree, rule, *t, |a, b, c| out.push([a, b, c]));
+            }
+            out
+        })
+        .collect()
+}
+
+/// Tasks per run of [`walk_runs`].
+const RUN: usize = 16;
+
+/// The runs of [`walk_runs`] in order, corners mapped by `id`, copied into
+/// place in parallel.
+fn place_runs(parts: &[Vec<[u32; 3]>], id: impl Fn(u32) -> u32 + Sync) -> Vec<[u32; 3]> {
+    let mut tris = vec![[0u32; 3]; parts.iter().map(Vec::len).sum()];
+    let mut slices = Vec::with_capacity(parts.len());
+    let mut rest = tris.as_mut_slice();
+    for p in parts {
+        let (head, tail) = rest.split_at_mut(p.len());
+        slices.push(head);
+        rest = tail;
+    }
+    parts
+        .par_iter()
+        .zip(slices.into_par_iter())
+        .with_min_len(8)
+        .for_each(|(p, s)| {
+            for (d, t) in s.iter_mut().zip(p) {
+                *d = [id(t[0]), id(t[1]), id(t[2])];
+            }
+        });
     tris
 }
 
-/// The triangle count of a triangulation of the grid rectangle whose vertices
-/// are `words`: Euler's `T = 2V − B − 2`, with `B` vertices on the border.
-fn expected_triangles(tree: &Bitree<'_>, words: &[Word]) -> usize {
-    let (w, h) = (tree.grid().width(), tree.grid().height());
-    let is_vertex = |i: usize| {
-        words
-            .get(i / 64)
-            .is_some_and(|wd| wd.bits >> (i % 64) & 1 == 1)
-    };
-    let v = words.last().map_or(0, |wd| wd.base + wd.bits.count_ones()) as usize;
-    let mut border = 0usize;
-    for x in 0..w {
-        border += usize::from(is_vertex(x)) + usize::from(is_vertex((h - 1) * w + x));
+/// Leaves under task `t` of the mesh whose vertex set is `words` (grid
+/// width `w`), without walking it.
+///
+/// Every split inside the task adds one leaf, and a split is a vertex `v` of
+/// the mesh seen from one of the (at most two) triangles of its diamond. A
+/// diamond is a square around `v`, and the task is a bitree triangle coarser
+/// than it, so the diamond has both triangles in the task when `v` is inside
+/// it, one when `v` is on one of its edges (the task's own split point
+/// included), and none at its corners. So the leaves are
+/// `1 + 2·inside + on_edges = 1 + 2·closed − boundary − corners`, counted
+/// row by row with popcounts. A task deeper than [`TASK_DEPTH`] is made only
+/// when it does not split: one leaf.
+fn leaves_from_bits(words: &[Word], w: usize, t: &Task) -> usize {
+    if t.depth > TASK_DEPTH {
+        return 1;
     }
-    for y in 1..h.saturating_sub(1) {
-        border += usize::from(is_vertex(y * w)) + usize::from(is_vertex(y * w + w - 1));
+    let xy = |i: u32| ((i as usize % w) as i64, (i as usize / w) as i64);
+    let corners = [xy(t.a), xy(t.b), xy(t.c)];
+    // Per edge, the column bound it sets on a row: `x >= x_e(y)` or
+    // `x <= x_e(y)`, on the side of the opposite corner. Edges are
+    // horizontal, vertical or diagonal, so `x_e(y)` is an integer.
+    let mut lower: [Option<(i64, i64, i64)>; 3] = [None; 3];
+    let mut upper: [Option<(i64, i64, i64)>; 3] = [None; 3];
+    let mut flat = None;
+    for k in 0..3 {
+        let (p, q, r) = (corners[k], corners[(k + 1) % 3], corners[(k + 2) % 3]);
+        let (dx, dy) = (q.0 - p.0, q.1 - p.1);
+        if dy == 0 {
+            flat = Some(p.1);
+            continue;
+        }
+        let slope = dx / dy; // 0 or ±1
+        let at_r = p.0 + slope * (r.1 - p.1);
+        if r.0 > at_r {
+            lower[k] = Some((p.0, p.1, slope));
+        } else {
+            upper[k] = Some((p.0, p.1, slope));
+        }
     }
-    (2 * v).saturating_sub(border + 2)
+    let y0 = corners.iter().map(|c| c.1).min().unwrap_or(0);
+    let y1 = corners.iter().map(|c| c.1).max().unwrap_or(0);
+    let (mut closed, mut boundary) = (0usize, 0usize);
+    for y in y0..=y1 {
+        let bound = |e: &Option<(i64, i64, i64)>| e.map(|(px, py, s)| px + s * (y - py));
+        let l = lower.iter().filter_map(bound).max().unwrap_or(0);
+        let r = upper.iter().filter_map(bound).min().unwrap_or(w as i64 - 1);
+        if l > r {
+            continue;
+        }
+        let row = y as usize * w;
+        let (i, j) = (row + l as usize, row + r as usize);
+        let n = ones(words, i, j);
+        closed += n;
+        boundary += if flat == Some(y) {
+            n
+        } else {
+            usize::from(is_vertex(words, i))
+                + if j > i {
+                    usize::from(is_vertex(words, j))
+                } else {
+                    0
+                }
+        };
+    }
+    let at_corners: usize = [t.a, t.b, t.c]
+        .iter()
+        .map(|&i| usize::from(is_vertex(words, i as usize)))
+        .sum();
+    (1 + 2 * closed).saturating_sub(boundary + at_corners)
+}
+
+/// Whether sample `i` is a vertex.
+#[inline(always)]
+fn is_vertex(words: &[Word], i: usize) -> bool {
+    words
+        .get(i / 64)
+        .is_some_and(|wd| wd.bits >> (i % 64) & 1 == 1)
+}
+
+/// Vertices among samples `i..=j`.
+fn ones(words: &[Word], i: usize, j: usize) -> usize {
+    let (wi, wj) = (i / 64, j / 64);
+    let lo = !0u64 << (i % 64);
+    let hi = !0u64 >> (63 - j % 64);
+    let bits = |k: usize| words.get(k).map_or(0, |wd| wd.bits);
+    if wi == wj {
+        return (bits(wi) & lo & hi).count_ones() as usize;
+    }
+    let mut n = (bits(wi) & lo).count_ones() + (bits(wj) & hi).count_ones();
+    for k in wi + 1..wj {
+        n += bits(k).count_ones();
+    }
+    n as usize
 }
 
 /// The mesh vertices of the numbered bitset, row-major, in parallel.
@@ -522,10 +686,19 @@ fn vertices(tree: &Bitree<'_>, words: &[Word]) -> Vec<MeshVertex> {
         .enumerate()
         .for_each(|(k, (chunk, out))| {
             let mut slots = out.iter_mut();
+            // One division per chunk: the first sample of each word is
+            // advanced by 64 columns, wrapping rows, without dividing.
+            let start = (k * CHUNK * 64) as u32;
+            let (mut row0, mut col0) = (start / w, start % w);
             for (j, word) in chunk.iter().enumerate() {
-                let first = ((k * CHUNK + j) * 64) as u32;
-                // One division per word; columns advance without dividing.
-                let (row0, col0) = (first / w, first % w);
+                if j > 0 {
+                    col0 += 64;
+                    while col0 >= w {
+                        col0 -= w;
+                        row0 += 1;
+                    }
+                }
+                let first = start + 64 * j as u32;
                 let mut rest = word.bits;
                 while rest != 0 {
                     let bit = rest.trailing_zeros();
@@ -546,4 +719,62 @@ fn vertices(tree: &Bitree<'_>, words: &[Word]) -> Vec<MeshVertex> {
             }
         });
     vertices
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, reason = "tests unwrap to fail loudly")]
+
+    use super::*;
+    use crate::{GeoRef, HeightGrid};
+
+    /// Smooth hills plus seeded noise, so that errors vary across levels.
+    fn terrain(w: usize, h: usize, seed: u64) -> HeightGrid {
+        let mut s = seed | 1;
+        let v = (0..w * h)
+            .map(|i| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                let (x, y) = ((i % w) as f32, (i / w) as f32);
+                80.0 * (x * 0.031).sin() * (y * 0.047).cos()
+                    + 20.0 * (x * 0.19 + y * 0.07).sin()
+                    + (s % 1000) as f32 / 200.0
+            })
+            .collect();
+        HeightGrid::new(w, h, v, GeoRef::unreferenced(10.0)).unwrap()
+    }
+
+    /// Both paths give the same mesh at every density, and the leaf counts
+    /// from the vertex bitset are those of the walk, task by task.
+    #[test]
+    fn dense_and_sparse_paths_agree() {
+        for (w, h, seed) in [
+            (37, 23, 1),
+            (129, 65, 2),
+            (300, 170, 3),
+            (70, 301, 4),
+            (257, 257, 5),
+        ] {
+            let g = terrain(w, h, seed);
+            let tree = Bitree::build(&g).unwrap();
+            for e in [0.0, 0.3, 1.0, 2.5, 5.0, 10.0, 20.0, 40.0, 80.0, 1e9] {
+                let rule = SplitRule::new(e);
+                let tasks = tree.tasks(&rule);
+                let dense = tree.extract_dense(&rule, &tasks);
+                let sparse = tree.extract_sparse(&rule, &tasks, 0);
+                assert_eq!(dense.vertices, sparse.vertices, "{w}x{h} E={e}");
+                assert_eq!(dense.triangles, sparse.triangles, "{w}x{h} E={e}");
+                assert_eq!(dense.triangles.len(), tree.count_at(e), "{w}x{h} E={e}");
+                let words = numbered(vertex_bits_from_codes(&tree, &rule));
+                for t in &tasks {
+                    assert_eq!(
+                        leaves_from_bits(&words, w, t),
+                        count_leaves(&tree, &rule, *t),
+                        "{w}x{h} E={e} task {t:?}"
+                    );
+                }
+            }
+        }
+    }
 }

@@ -2,7 +2,9 @@
 //! markdown tables, one per group kind (`build`, `extract`, `extract10k`,
 //! `delatin`, `read`, `strip`, `stream`, then any other kind found), one row
 //! per group and one column per benchmarked function, plus the ratio
-//! cota / martini (or cota / meshopt) where both ran.
+//! cota / martini (or cota / meshopt) where both ran. Extraction groups that
+//! carry a throughput (cota's output triangles) also get a table of cota's
+//! rate in millions of triangles per second, grid by tolerance.
 //!
 //! Reads `<target>/criterion/**/new/{benchmark,estimates}.json`, where
 //! `<target>` is the first argument, else `$CARGO_TARGET_DIR`, else the
@@ -13,11 +15,12 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-/// One benchmark's id and median.
+/// One benchmark's id, median and throughput (elements per iteration).
 struct Entry {
     group: String,
     function: String,
     median_ns: f64,
+    elements: Option<u64>,
 }
 
 fn find(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -47,6 +50,10 @@ fn read(new_dir: &Path) -> Option<Entry> {
         group: bench.get("group_id")?.as_str()?.to_string(),
         function: bench.get("function_id")?.as_str()?.to_string(),
         median_ns: est.get("median")?.get("point_estimate")?.as_f64()?,
+        elements: bench
+            .get("throughput")
+            .and_then(|t| t.get("Elements"))
+            .and_then(serde_json::Value::as_u64),
     })
 }
 
@@ -101,6 +108,7 @@ fn main() {
         );
         std::process::exit(1);
     }
+    print_rates(&entries);
     // kind -> (functions in order, rows: rest -> function -> median)
     type Rows = BTreeMap<(usize, String, u64, String), BTreeMap<String, f64>>;
     let mut kinds: BTreeMap<String, (Vec<String>, Rows)> = BTreeMap::new();
@@ -186,4 +194,50 @@ fn main() {
         }
         println!();
     }
+}
+
+/// cota's extraction rate (M output triangles/s), one row per grid, one
+/// column per tolerance.
+fn print_rates(entries: &[Entry]) {
+    let mut grids: BTreeMap<(usize, String), BTreeMap<u64, f64>> = BTreeMap::new();
+    let mut tols: Vec<f64> = Vec::new();
+    for e in entries {
+        let Some(rest) = e.group.strip_prefix("extract/") else {
+            continue;
+        };
+        let (Some(n), "cota") = (e.elements, e.function.as_str()) else {
+            continue;
+        };
+        let (order, grid, tol) = row_key(rest);
+        if !tols.contains(&tol) {
+            tols.push(tol);
+        }
+        grids
+            .entry((order, grid))
+            .or_default()
+            .insert(tol.to_bits(), n as f64 / e.median_ns * 1e3);
+    }
+    if grids.is_empty() {
+        return;
+    }
+    tols.sort_by(f64::total_cmp);
+    println!("### extraction rate (M output triangles/s, cota, from the medians)\n");
+    let mut head = String::from("| grid |");
+    let mut rule = String::from("|---|");
+    for t in &tols {
+        head.push_str(&format!(" {t} m |"));
+        rule.push_str("---:|");
+    }
+    println!("{head}\n{rule}");
+    for ((_, grid), rates) in &grids {
+        let mut line = format!("| {grid} |");
+        for t in &tols {
+            match rates.get(&t.to_bits()) {
+                Some(r) => line.push_str(&format!(" {r:.0} |")),
+                None => line.push_str(" |"),
+            }
+        }
+        println!("{line}");
+    }
+    println!();
 }
