@@ -730,8 +730,9 @@ fn span_error(heights: &[f32], w: usize, t: &Tri, ha: f64, hb: f64, hc: f64) -> 
     };
     let rows = (ymax - ymin + 1) as u64;
     if rows * rows >= PARALLEL_SPAN_SAMPLES {
-        // The coarsest levels have one or two triangles the size of the grid:
-        // split their rows over the cores rather than leave one idle.
+        // Coarse levels have few rows of triangles (one or two triangles the
+        // size of the grid at the top): split each triangle's rows over the
+        // cores rather than leave one idle.
         let blocks = (ymax - ymin) as usize / 32 + 1;
         (0..blocks)
             .into_par_iter()
@@ -784,8 +785,8 @@ impl Span<'_> {
 }
 
 /// Triangles with at least about this many samples (a square of the row
-/// count) are scanned in parallel by rows.
-const PARALLEL_SPAN_SAMPLES: u64 = 1 << 16;
+/// count: 64 rows) are scanned in parallel, in blocks of 32 rows.
+const PARALLEL_SPAN_SAMPLES: u64 = 1 << 12;
 
 /// max_k |base + gx·k − row[k]|, with four independent maxima so the loop
 /// vectorises (the index runs as an exact `f64` counter, no int→float
