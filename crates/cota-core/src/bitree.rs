@@ -85,6 +85,20 @@ pub enum MeshError {
         /// Grid height.
         height: usize,
     },
+    /// Point marks made for a grid of another size.
+    #[error(
+        "expected point marks for the {width}x{height} grid being refined, found marks for a {marks_width}x{marks_height} grid"
+    )]
+    MarksSizeMismatch {
+        /// Grid width.
+        width: usize,
+        /// Grid height.
+        height: usize,
+        /// Width of the grid the marks were made for.
+        marks_width: usize,
+        /// Height of the grid the marks were made for.
+        marks_height: usize,
+    },
 }
 
 /// A bitree with the exact error of every split point, ready for extraction.

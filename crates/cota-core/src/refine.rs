@@ -196,11 +196,9 @@ pub fn refine_marks(
 /// with its actual heights, as in [`refine`]. The progressive marks streams
 /// ([`crate::stream_marks`]) build their nested steps this way.
 ///
-/// Marks made for a grid of another size are ignored: the refinement then
-/// starts from the border's points, as [`refine_marks`] does.
-///
 /// # Errors
-/// As [`refine`].
+/// As [`refine`], and [`MeshError::MarksSizeMismatch`] for marks made for a
+/// grid of another size.
 pub fn refine_marks_from(
     grid: &HeightGrid,
     criterion: &dyn Criterion,
@@ -210,8 +208,13 @@ pub fn refine_marks_from(
     let hier = crate::bitree::hierarchy_for(grid)?;
     let mut marks = marks;
     if *marks.hierarchy() != hier {
-        marks = Marks::new(hier, opts.mode.closure());
-        marks.seed_border();
+        let m = marks.hierarchy();
+        return Err(MeshError::MarksSizeMismatch {
+            width: grid.width(),
+            height: grid.height(),
+            marks_width: m.width() as usize,
+            marks_height: m.height() as usize,
+        });
     }
     marks.close();
     let mut accepted: HashSet<LeafKey, FastHash> = HashSet::default();

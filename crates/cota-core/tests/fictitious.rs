@@ -10,7 +10,7 @@ use cota_core::refine::{refine, triangulate, Mode, RefineOptions, Refined};
 use cota_core::voids::{fill_voids, FillOptions};
 use cota_core::{
     check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError,
-    Violation,
+    MeshError, Violation,
 };
 
 const MODES: [Mode; 3] = [
@@ -293,4 +293,32 @@ proptest::proptest! {
             run(&g, e, m);
         }
     }
+}
+
+/// Marks of one grid cannot continue the refinement of another: a clear
+/// error naming both sizes, where the marks used to be dropped silently.
+#[test]
+fn marks_of_another_grid_are_refused() {
+    use cota_core::refine::{refine_marks, refine_marks_from};
+    let g = real();
+    let crit = MaxVerticalError { max_error_m: 20.0 };
+    let opts = RefineOptions::DEFAULT.with_mode(Mode::Fictitious { watertight: true });
+    let (_, marks) = refine_marks(&g, &crit, &opts).unwrap();
+    let small = grid(33, 17, |x, y| (x * y) as f32);
+    let e = refine_marks_from(&small, &crit, &opts, marks.clone()).unwrap_err();
+    assert_eq!(
+        e,
+        MeshError::MarksSizeMismatch {
+            width: 33,
+            height: 17,
+            marks_width: g.width(),
+            marks_height: g.height(),
+        }
+    );
+    assert!(e.to_string().contains("33x17"), "{e}");
+    // The same grid continues fine, and only adds points.
+    let crit5 = MaxVerticalError { max_error_m: 5.0 };
+    let (_, finer) = refine_marks_from(&g, &crit5, &opts, marks.clone()).unwrap();
+    assert!(finer.contains(&marks));
+    assert!(!marks.contains(&finer));
 }
