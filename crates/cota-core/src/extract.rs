@@ -395,15 +395,9 @@ fn vertex_bits_from_codes(tree: &Bitree<'_>, rule: &SplitRule) -> Vec<Word> {
                 let first = (k * 256 + j) * 64;
                 let end = (first + 64).min(codes.len());
                 let span = &codes[first..end];
-                let mut bits = 0u64;
-                for (b, &code) in span.iter().enumerate() {
-                    bits |= u64::from(code > rule.floor) << b;
-                }
+                let mut bits = pack(span, |c| c > rule.floor);
                 if rule.ambiguous {
-                    let mut rest = 0u64;
-                    for (b, &code) in span.iter().enumerate() {
-                        rest |= u64::from(code == rule.tie) << b;
-                    }
+                    let mut rest = pack(span, |c| c == rule.tie);
                     while rest != 0 {
                         let b = rest.trailing_zeros();
                         rest &= rest - 1;
@@ -417,6 +411,32 @@ fn vertex_bits_from_codes(tree: &Bitree<'_>, rule: &SplitRule) -> Vec<Word> {
         });
     set_root_corners(tree, &mut words);
     words
+}
+
+/// Bit `b` set where `test(span[b])`, for a span of at most 64 codes. Full
+/// spans go through a byte per code (a loop the compiler vectorises) packed
+/// eight at a time by a multiply: byte `i` of `x · 0x0102…80` gathers the low
+/// bits of bytes `0..=i`, shifted, so the top byte is their 8-bit mask.
+#[inline(always)]
+fn pack(span: &[u16], test: impl Fn(u16) -> bool) -> u64 {
+    if span.len() != 64 {
+        return span
+            .iter()
+            .enumerate()
+            .fold(0u64, |bits, (b, &c)| bits | u64::from(test(c)) << b);
+    }
+    let mut bytes = [0u8; 64];
+    for (d, &c) in bytes.iter_mut().zip(span) {
+        *d = u8::from(test(c));
+    }
+    let mut bits = 0u64;
+    for (g, eight) in bytes.chunks_exact(8).enumerate() {
+        let mut le = [0u8; 8];
+        le.copy_from_slice(eight);
+        let x = u64::from_le_bytes(le);
+        bits |= (x.wrapping_mul(0x0102_0408_1020_4080) >> 56) << (8 * g);
+    }
+    bits
 }
 
 /// Adds the roots' corners inside the grid to the vertex bitset: the only
@@ -578,52 +598,49 @@ fn leaves_from_bits(words: &[Word], w: usize, t: &Task) -> usize {
     if t.depth > TASK_DEPTH {
         return 1;
     }
-    let xy = |i: u32| ((i as usize % w) as i64, (i as usize / w) as i64);
+    let w64 = w as i64;
+    let xy = |i: u32| (i64::from(i) % w64, i64::from(i) / w64);
     let corners = [xy(t.a), xy(t.b), xy(t.c)];
-    // Per edge, the column bound it sets on a row: `x >= x_e(y)` or
-    // `x <= x_e(y)`, on the side of the opposite corner. Edges are
-    // horizontal, vertical or diagonal, so `x_e(y)` is an integer.
-    let mut lower: [Option<(i64, i64, i64)>; 3] = [None; 3];
-    let mut upper: [Option<(i64, i64, i64)>; 3] = [None; 3];
-    let mut flat = None;
+    // Per edge, the line `x = s·y + b` it bounds a row by: from the left or
+    // from the right, on the side of the opposite corner. Edges are
+    // horizontal, vertical or diagonal, so `s` is 0 or ±1 and `x` an integer.
+    let (mut lower, mut upper) = ([(0i64, 0i64); 3], [(0i64, 0i64); 3]);
+    let (mut nl, mut nu) = (0, 0);
+    let mut flat = i64::MIN;
     for k in 0..3 {
         let (p, q, r) = (corners[k], corners[(k + 1) % 3], corners[(k + 2) % 3]);
         let (dx, dy) = (q.0 - p.0, q.1 - p.1);
         if dy == 0 {
-            flat = Some(p.1);
+            flat = p.1;
             continue;
         }
-        let slope = dx / dy; // 0 or ±1
-        let at_r = p.0 + slope * (r.1 - p.1);
-        if r.0 > at_r {
-            lower[k] = Some((p.0, p.1, slope));
+        let s = dx / dy;
+        let b = p.0 - s * p.1;
+        if r.0 > s * r.1 + b {
+            lower[nl] = (s, b);
+            nl += 1;
         } else {
-            upper[k] = Some((p.0, p.1, slope));
+            upper[nu] = (s, b);
+            nu += 1;
         }
     }
-    let y0 = corners.iter().map(|c| c.1).min().unwrap_or(0);
-    let y1 = corners.iter().map(|c| c.1).max().unwrap_or(0);
+    let (lower, upper) = (&lower[..nl], &upper[..nu]);
+    let y0 = corners[0].1.min(corners[1].1).min(corners[2].1);
+    let y1 = corners[0].1.max(corners[1].1).max(corners[2].1);
     let (mut closed, mut boundary) = (0usize, 0usize);
     for y in y0..=y1 {
-        let bound = |e: &Option<(i64, i64, i64)>| e.map(|(px, py, s)| px + s * (y - py));
-        let l = lower.iter().filter_map(bound).max().unwrap_or(0);
-        let r = upper.iter().filter_map(bound).min().unwrap_or(w as i64 - 1);
+        let l = lower.iter().fold(0, |l, &(s, b)| l.max(s * y + b));
+        let r = upper.iter().fold(w64 - 1, |r, &(s, b)| r.min(s * y + b));
         if l > r {
             continue;
         }
-        let row = y as usize * w;
-        let (i, j) = (row + l as usize, row + r as usize);
+        let (i, j) = ((y * w64 + l) as usize, (y * w64 + r) as usize);
         let n = ones(words, i, j);
         closed += n;
-        boundary += if flat == Some(y) {
+        boundary += if y == flat {
             n
         } else {
-            usize::from(is_vertex(words, i))
-                + if j > i {
-                    usize::from(is_vertex(words, j))
-                } else {
-                    0
-                }
+            usize::from(is_vertex(words, i)) + usize::from(j > i && is_vertex(words, j))
         };
     }
     let at_corners: usize = [t.a, t.b, t.c]
@@ -743,6 +760,28 @@ mod tests {
             })
             .collect();
         HeightGrid::new(w, h, v, GeoRef::unreferenced(10.0)).unwrap()
+    }
+
+    #[test]
+    fn pack_is_the_bit_by_bit_mask() {
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        for len in [64usize, 63, 1, 17] {
+            for _ in 0..200 {
+                let span: Vec<u16> = (0..len)
+                    .map(|_| {
+                        s ^= s << 13;
+                        s ^= s >> 7;
+                        s ^= s << 17;
+                        (s % 7) as u16
+                    })
+                    .collect();
+                let want = span
+                    .iter()
+                    .enumerate()
+                    .fold(0u64, |m, (b, &c)| m | u64::from(c > 3) << b);
+                assert_eq!(pack(&span, |c| c > 3), want, "{span:?}");
+            }
+        }
     }
 
     /// Both paths give the same mesh at every density, and the leaf counts
