@@ -43,7 +43,7 @@ use rayon::prelude::*;
 
 use crate::error_code::{self, encode_up, SplitRule, INFINITE};
 use crate::grid::HeightGrid;
-use crate::hierarchy::{Hierarchy, Placement, Pt, Tri};
+use crate::hierarchy::{Hierarchy, Placement, Pt, RowSpans, Tri};
 
 /// Errors from building or extracting a mesh.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
@@ -688,14 +688,6 @@ fn triangle_error(heights: &[f32], hier: &Hierarchy, level: Level, t: &Tri) -> f
     }
 }
 
-/// A span bound contributed by a non-horizontal edge: `x = slope·y + intercept`.
-#[derive(Clone, Copy)]
-struct EdgeBound {
-    slope: i64,
-    intercept: i64,
-    is_left: bool,
-}
-
 /// Largest |plane − h| over the samples of `t`, visited row by row.
 fn span_error(heights: &[f32], w: usize, t: &Tri, ha: f64, hb: f64, hc: f64) -> f64 {
     let p = [t.a, t.b, t.c];
@@ -708,33 +700,10 @@ fn span_error(heights: &[f32], w: usize, t: &Tri, ha: f64, hb: f64, hc: f64) -> 
     let gx = (dh1 * dy2 as f64 - dh2 * dy1 as f64) / det;
     let gy = (dx1 as f64 * dh2 - dx2 as f64 * dh1) / det;
 
-    let mut bounds = [EdgeBound {
-        slope: 0,
-        intercept: 0,
-        is_left: true,
-    }; 3];
-    let mut nb = 0;
-    for k in 0..3 {
-        let (q, r, o) = (p[k], p[(k + 1) % 3], p[(k + 2) % 3]);
-        let (qx, qy) = (q[0] as i64, q[1] as i64);
-        let (ex, ey) = (r[0] as i64 - qx, r[1] as i64 - qy);
-        if ey == 0 {
-            continue;
-        }
-        let slope = ex / ey; // 0 or ±1 in this hierarchy
-        let intercept = qx - slope * qy;
-        let x_at_o = slope * o[1] as i64 + intercept;
-        bounds[nb] = EdgeBound {
-            slope,
-            intercept,
-            is_left: (o[0] as i64) > x_at_o,
-        };
-        nb += 1;
-    }
-    let ymin = p.iter().map(|q| q[1]).min().unwrap_or(0) as i64;
-    let ymax = p.iter().map(|q| q[1]).max().unwrap_or(0) as i64;
+    let spans = RowSpans::new(p.map(|q| [i64::from(q[0]), i64::from(q[1])]));
+    let (ymin, ymax) = spans.rows();
     let span = Span {
-        bounds: &bounds[..nb],
+        spans,
         h0: hs[0],
         gx,
         gy,
@@ -761,8 +730,8 @@ fn span_error(heights: &[f32], w: usize, t: &Tri, ha: f64, hb: f64, hc: f64) -> 
 }
 
 /// A triangle's plane and row bounds, for [`span_error`].
-struct Span<'a> {
-    bounds: &'a [EdgeBound],
+struct Span {
+    spans: RowSpans,
     h0: f64,
     gx: f64,
     gy: f64,
@@ -771,21 +740,13 @@ struct Span<'a> {
     w: usize,
 }
 
-impl Span<'_> {
+impl Span {
     /// Largest |plane − h| over the triangle's samples in rows `y0..=y1`.
     #[inline]
     fn max_dev(&self, heights: &[f32], y0: i64, y1: i64) -> f64 {
         let mut e = 0f64;
         for y in y0..=y1 {
-            let (mut xl, mut xr) = (i64::MIN, i64::MAX);
-            for b in self.bounds {
-                let x = b.slope * y + b.intercept;
-                if b.is_left {
-                    xl = xl.max(x);
-                } else {
-                    xr = xr.min(x);
-                }
-            }
+            let (xl, xr) = self.spans.at(y);
             if xl > xr {
                 continue;
             }

@@ -58,7 +58,7 @@ use rayon::prelude::*;
 
 use crate::bitree::{Bitree, MeshError};
 use crate::error_code::{SplitRule, INFINITE};
-use crate::hierarchy::{Hierarchy, Placement, Tri};
+use crate::hierarchy::{Hierarchy, Placement, RowSpans, Tri};
 use crate::mesh::{Mesh, MeshVertex};
 
 /// What to extract.
@@ -508,13 +508,7 @@ fn emit_tasks(
     // Zeroed allocation: large blocks come from the OS already zero, so the
     // pages are touched only once, by the writers.
     let mut tris = vec![[0u32; 3]; counts.iter().sum()];
-    let mut slices = Vec::with_capacity(tasks.len());
-    let mut rest = tris.as_mut_slice();
-    for &n in counts {
-        let (head, tail) = rest.split_at_mut(n);
-        slices.push(head);
-        rest = tail;
-    }
+    let slices = split_lengths(&mut tris, counts.iter().copied());
     let all_counted = tasks
         .par_iter()
         .zip(slices.into_par_iter())
@@ -556,6 +550,19 @@ fn walk_runs(
         .collect()
 }
 
+/// `out` cut into consecutive slices of the given lengths (their sum at most
+/// `out.len()`), for parallel writers.
+fn split_lengths<T>(out: &mut [T], lens: impl IntoIterator<Item = usize>) -> Vec<&mut [T]> {
+    let mut slices = Vec::new();
+    let mut rest = out;
+    for n in lens {
+        let (head, tail) = rest.split_at_mut(n);
+        slices.push(head);
+        rest = tail;
+    }
+    slices
+}
+
 /// Tasks per run of [`walk_runs`].
 const RUN: usize = 16;
 
@@ -563,13 +570,7 @@ const RUN: usize = 16;
 /// place in parallel.
 fn place_runs(parts: &[Vec<[u32; 3]>], id: impl Fn(u32) -> u32 + Sync) -> Vec<[u32; 3]> {
     let mut tris = vec![[0u32; 3]; parts.iter().map(Vec::len).sum()];
-    let mut slices = Vec::with_capacity(parts.len());
-    let mut rest = tris.as_mut_slice();
-    for p in parts {
-        let (head, tail) = rest.split_at_mut(p.len());
-        slices.push(head);
-        rest = tail;
-    }
+    let slices = split_lengths(&mut tris, parts.iter().map(Vec::len));
     parts
         .par_iter()
         .zip(slices.into_par_iter())
@@ -599,45 +600,19 @@ fn leaves_from_bits(words: &[Word], w: usize, t: &Task) -> usize {
         return 1;
     }
     let w64 = w as i64;
-    let xy = |i: u32| (i64::from(i) % w64, i64::from(i) / w64);
-    let corners = [xy(t.a), xy(t.b), xy(t.c)];
-    // Per edge, the line `x = s·y + b` it bounds a row by: from the left or
-    // from the right, on the side of the opposite corner. Edges are
-    // horizontal, vertical or diagonal, so `s` is 0 or ±1 and `x` an integer.
-    let (mut lower, mut upper) = ([(0i64, 0i64); 3], [(0i64, 0i64); 3]);
-    let (mut nl, mut nu) = (0, 0);
-    let mut flat = i64::MIN;
-    for k in 0..3 {
-        let (p, q, r) = (corners[k], corners[(k + 1) % 3], corners[(k + 2) % 3]);
-        let (dx, dy) = (q.0 - p.0, q.1 - p.1);
-        if dy == 0 {
-            flat = p.1;
-            continue;
-        }
-        let s = dx / dy;
-        let b = p.0 - s * p.1;
-        if r.0 > s * r.1 + b {
-            lower[nl] = (s, b);
-            nl += 1;
-        } else {
-            upper[nu] = (s, b);
-            nu += 1;
-        }
-    }
-    let (lower, upper) = (&lower[..nl], &upper[..nu]);
-    let y0 = corners[0].1.min(corners[1].1).min(corners[2].1);
-    let y1 = corners[0].1.max(corners[1].1).max(corners[2].1);
+    let xy = |i: u32| [i64::from(i) % w64, i64::from(i) / w64];
+    let spans = RowSpans::new([xy(t.a), xy(t.b), xy(t.c)]);
+    let (y0, y1) = spans.rows();
     let (mut closed, mut boundary) = (0usize, 0usize);
     for y in y0..=y1 {
-        let l = lower.iter().fold(0, |l, &(s, b)| l.max(s * y + b));
-        let r = upper.iter().fold(w64 - 1, |r, &(s, b)| r.min(s * y + b));
+        let (l, r) = spans.at(y);
         if l > r {
             continue;
         }
         let (i, j) = ((y * w64 + l) as usize, (y * w64 + r) as usize);
         let n = ones(words, i, j);
         closed += n;
-        boundary += if y == flat {
+        boundary += if spans.horizontal() == Some(y) {
             n
         } else {
             usize::from(is_vertex(words, i)) + usize::from(j > i && is_vertex(words, j))
@@ -689,14 +664,12 @@ fn vertices(tree: &Bitree<'_>, words: &[Word]) -> Vec<MeshVertex> {
         total as usize
     ];
     const CHUNK: usize = 1024;
-    let mut slices = Vec::with_capacity(words.len().div_ceil(CHUNK));
-    let mut rest = vertices.as_mut_slice();
-    for chunk in words.chunks(CHUNK) {
-        let n: u32 = chunk.iter().map(|w| w.bits.count_ones()).sum();
-        let (head, tail) = rest.split_at_mut(n as usize);
-        slices.push(head);
-        rest = tail;
-    }
+    let slices = split_lengths(
+        &mut vertices,
+        words
+            .chunks(CHUNK)
+            .map(|chunk| chunk.iter().map(|w| w.bits.count_ones() as usize).sum()),
+    );
     words
         .par_chunks(CHUNK)
         .zip(slices.into_par_iter())
