@@ -109,6 +109,18 @@ pub fn wanted(filters: &[String], prefix: &str) -> bool {
         })
 }
 
+/// The median of `v` (the mean of the middle two for an even count; NaN when
+/// empty).
+pub fn median(v: &[f64]) -> f64 {
+    let mut v = v.to_vec();
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
 /// The repository root (two levels above this crate's manifest).
 pub fn repo_root() -> PathBuf {
     tidy(Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(".."))

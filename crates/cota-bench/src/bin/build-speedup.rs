@@ -20,7 +20,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use cota_bench::big::{big_files, load_big, load_mosaic2};
-use cota_bench::load_cases;
+use cota_bench::{load_cases, median};
 use cota_core::{Bitree, HeightGrid};
 
 /// Per-round times (seconds) of one grid.
@@ -57,19 +57,6 @@ fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::R
     Ok(p)
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        return f64::NAN;
-    }
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 fn row(name: &str, grid: &HeightGrid, p: &Pairs) {
     let ratios: Vec<f64> = p.one.iter().zip(&p.two).map(|(a, b)| a / b).collect();
     let best1 = p.one.iter().copied().fold(f64::INFINITY, f64::min);
@@ -77,7 +64,7 @@ fn row(name: &str, grid: &HeightGrid, p: &Pairs) {
     let (lo, hi) = ratios
         .iter()
         .fold((f64::INFINITY, 0f64), |(l, h), &r| (l.min(r), h.max(r)));
-    let (m1, m2) = (median(p.one.clone()), median(p.two.clone()));
+    let (m1, m2) = (median(&p.one), median(&p.two));
     println!(
         "| {name} | {}×{} | {} | {:.2} ms | {:.2} ms | **{:.2}** | {:.2} | {:.2}–{:.2} | {:.2} |",
         grid.width(),
@@ -85,7 +72,7 @@ fn row(name: &str, grid: &HeightGrid, p: &Pairs) {
         ratios.len(),
         m1 * 1e3,
         m2 * 1e3,
-        median(ratios.clone()),
+        median(&ratios),
         m1 / m2,
         lo,
         hi,
