@@ -26,16 +26,22 @@
 //!    split (every split point with `err > E` is reached, since `err` grows up
 //!    the tree) plus the root corners inside the grid.
 //!
-//! The order of 2 and 3 depends on the mesh's density (guessed from 1024
-//! scattered codes; only the speed depends on the guess):
-//! - **Dense** meshes: the bitset comes first, from a parallel scan of the
-//!   codes. Each task's leaf count then follows from the bitset alone, by
-//!   popcounts over the task's rows (see `leaves_from_bits`), so the output
-//!   is allocated once at its final size and each task writes its leaves, in
-//!   vertex indices, straight into its own slice.
-//! - **Sparse** meshes: runs of tasks are walked into their own buffers in
-//!   sample indices, the bitset comes from their corners, and the runs are
-//!   copied into place in vertex indices.
+//! The order of the steps depends on the mesh's density (guessed from 1024
+//! scattered codes; only the speed depends on the guess). Unless the mesh is
+//! scattered, step 3 comes first, from a parallel scan of the codes, so the
+//! walk writes vertex indices:
+//! - **Dense** meshes: each task's leaf count follows from the bitset alone,
+//!   by popcounts over the task's rows (see `leaves_from_bits`), so the
+//!   output is allocated once at its final size and each task writes its
+//!   leaves straight into its own slice.
+//! - **Sparse** meshes (fewer than one sample in 16 a vertex): runs of tasks
+//!   are walked into their own buffers, which are then copied into place;
+//!   the copy costs less than the per-task counts when the task rows hold
+//!   few vertices.
+//! - **Scattered** meshes (fewer than one in 64): the scan of every code
+//!   would cost more than the walk, so the runs are walked in sample indices,
+//!   the bitset comes from their corners, and the runs are renumbered while
+//!   they are copied into place.
 //!
 //! Each call enters the rayon pool once (see `on_pool`): entering it per
 //! parallel section costs more than a sparse extraction.
@@ -48,9 +54,9 @@
 //! parallel counting walk that stops once it passes `N`.
 //!
 //! # Runtime
-//! Proportional to the output (plus a scan of `W·H` codes, or `W·H/64` bitset
-//! words, for the numbering), on all cores; by budget about 16 counting walks
-//! of at most `N` triangles.
+//! Proportional to the output, plus a scan of the `W·H` codes (or, for
+//! scattered meshes, of `W·H/64` bitset words) for the numbering, on all
+//! cores; by budget about 16 counting walks of at most `N` triangles.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -187,12 +193,14 @@ impl Bitree<'_> {
     fn extract_at(&self, rule: &SplitRule) -> Mesh {
         let tasks = self.tasks(rule);
         let share = vertex_share(self, rule);
-        if share >= 1.0 / 16.0 {
+        // About two triangles per vertex.
+        let expected = (2.0 * share * self.grid().len() as f64) as usize;
+        if share >= DENSE_SHARE {
             self.extract_dense(rule, &tasks)
+        } else if share >= SPARSE_SHARE {
+            self.extract_sparse(rule, &tasks, expected)
         } else {
-            // About two triangles per vertex.
-            let expected = 2.0 * share * self.grid().len() as f64;
-            self.extract_sparse(rule, &tasks, expected as usize)
+            self.extract_scattered(rule, &tasks, expected)
         }
     }
 
@@ -223,21 +231,32 @@ impl Bitree<'_> {
         }
     }
 
-    /// Triangles in sample indices, their corners are the vertices, then the
-    /// triangles are put in place in vertex indices.
+    /// Vertices first (from the codes), then runs of tasks walked in
+    /// parallel into their own buffers in vertex indices, then the runs
+    /// copied into place.
     fn extract_sparse(&self, rule: &SplitRule, tasks: &[Task], expected: usize) -> Mesh {
-        let parts = walk_runs(self, rule, tasks, expected);
-        let mut words = vec![Word::default(); self.grid().len().div_ceil(64)];
-        for t in parts.iter().flatten() {
-            for &i in t {
-                words[(i / 64) as usize].bits |= 1u64 << (i % 64);
-            }
-        }
-        let words = numbered(words);
-        let triangles = place_runs(&parts, |i| vertex_id(&words, i));
+        let words = numbered(vertex_bits_from_codes(self, rule));
+        let parts = walk_runs(self, rule, tasks, expected, |i| vertex_id(&words, i));
         Mesh {
             vertices: vertices(self, &words),
-            triangles,
+            triangles: place_runs(&parts, |i| i),
+        }
+    }
+
+    /// Runs of tasks walked in parallel into their own buffers in sample
+    /// indices, the vertices from their corners, then the runs copied into
+    /// place in vertex indices: for meshes so sparse that scanning every code
+    /// for the vertices would cost more than marking the corners.
+    fn extract_scattered(&self, rule: &SplitRule, tasks: &[Task], expected: usize) -> Mesh {
+        let parts = walk_runs(self, rule, tasks, expected, |i| i);
+        let mut words = vec![Word::default(); self.grid().len().div_ceil(64)];
+        for &i in parts.iter().flatten().flatten() {
+            words[(i / 64) as usize].bits |= 1u64 << (i % 64);
+        }
+        let words = numbered(words);
+        Mesh {
+            vertices: vertices(self, &words),
+            triangles: place_runs(&parts, |i| vertex_id(&words, i)),
         }
     }
 
@@ -472,9 +491,8 @@ fn vertex_id(words: &[Word], i: u32) -> u32 {
 }
 
 /// The share of samples likely to be vertices of the mesh of `rule`, from
-/// 1024 scattered codes. At one sample in sixteen or more, scanning every
-/// code for the vertex set is cheaper than marking triangle corners. Only
-/// the path taken and buffer sizes depend on it, never the mesh.
+/// 1024 scattered codes. Only the path taken and buffer sizes depend on it,
+/// never the mesh.
 fn vertex_share(tree: &Bitree<'_>, rule: &SplitRule) -> f64 {
     let codes = tree.error_codes();
     let n = codes.len() as u128;
@@ -490,6 +508,16 @@ fn vertex_share(tree: &Bitree<'_>, rule: &SplitRule) -> f64 {
         .count();
     hits as f64 / PROBES as f64
 }
+
+/// At this share of vertices or more, counting each task's leaves from the
+/// vertex bitset costs less than copying walked runs into place.
+const DENSE_SHARE: f64 = 1.0 / 16.0;
+
+/// At this share of vertices or more, a scan of every code finds the
+/// vertices faster than marking the walked triangles' corners (measured on
+/// the benchmark grids: the scan costs about 0.15 ns a sample on 2 cores,
+/// the corners about 6 ns a triangle more).
+const SPARSE_SHARE: f64 = 1.0 / 64.0;
 
 /// Codes looked at by [`vertex_share`].
 const PROBES: u64 = 1024;
@@ -525,25 +553,29 @@ fn emit_tasks(
     all_counted.then_some(tris)
 }
 
-/// The leaves of every task in depth-first order, in sample indices, in one
-/// walk: runs of tasks are walked in parallel, each into its own buffer. For
-/// sparse meshes, where a counting walk would cost more than the copy in
-/// [`place_runs`] and the buffers are small.
+/// The leaves of every task in depth-first order, corners mapped by `id`, in
+/// one walk: runs of tasks are walked in parallel, each into its own buffer.
+/// For sparse meshes, where counting each task's leaves first would cost
+/// more than copying the buffers into place.
 fn walk_runs(
     tree: &Bitree<'_>,
     rule: &SplitRule,
     tasks: &[Task],
     expected: usize,
+    id: impl Fn(u32) -> u32 + Sync,
 ) -> Vec<Vec<[u32; 3]>> {
     // Buffers sized for a run's share of the expected triangles, plus a
     // quarter, so that few of them grow.
     let per_task = expected / tasks.len().max(1);
+    // At least RUNS_PER_THREAD runs per thread, so that uneven runs even out.
+    let threads = rayon::current_num_threads().max(1);
+    let run = (tasks.len() / (RUNS_PER_THREAD * threads)).clamp(1, RUN);
     tasks
-        .par_chunks(RUN)
+        .par_chunks(run)
         .map(|run| {
             let mut out = Vec::with_capacity(run.len() * (per_task + per_task / 4 + 4));
             for t in run {
-                walk_task(tree, rule, *t, |a, b, c| out.push([a, b, c]));
+                walk_task(tree, rule, *t, |a, b, c| out.push([id(a), id(b), id(c)]));
             }
             out
         })
@@ -563,9 +595,6 @@ fn split_lengths<T>(out: &mut [T], lens: impl IntoIterator<Item = usize>) -> Vec
     slices
 }
 
-/// Tasks per run of [`walk_runs`].
-const RUN: usize = 16;
-
 /// The runs of [`walk_runs`] in order, corners mapped by `id`, copied into
 /// place in parallel.
 fn place_runs(parts: &[Vec<[u32; 3]>], id: impl Fn(u32) -> u32 + Sync) -> Vec<[u32; 3]> {
@@ -577,11 +606,17 @@ fn place_runs(parts: &[Vec<[u32; 3]>], id: impl Fn(u32) -> u32 + Sync) -> Vec<[u
         .with_min_len(8)
         .for_each(|(p, s)| {
             for (d, t) in s.iter_mut().zip(p) {
-                *d = [id(t[0]), id(t[1]), id(t[2])];
+                *d = t.map(&id);
             }
         });
     tris
 }
+
+/// Most tasks per run of [`walk_runs`].
+const RUN: usize = 16;
+
+/// Fewest runs per thread in [`walk_runs`] (when there are tasks enough).
+const RUNS_PER_THREAD: usize = 16;
 
 /// Leaves under task `t` of the mesh whose vertex set is `words` (grid
 /// width `w`), without walking it.
@@ -757,10 +792,10 @@ mod tests {
         }
     }
 
-    /// Both paths give the same mesh at every density, and the leaf counts
+    /// The three paths give the same mesh at every density, and the leaf counts
     /// from the vertex bitset are those of the walk, task by task.
     #[test]
-    fn dense_and_sparse_paths_agree() {
+    fn dense_sparse_and_scattered_paths_agree() {
         for (w, h, seed) in [
             (37, 23, 1),
             (129, 65, 2),
@@ -775,8 +810,11 @@ mod tests {
                 let tasks = tree.tasks(&rule);
                 let dense = tree.extract_dense(&rule, &tasks);
                 let sparse = tree.extract_sparse(&rule, &tasks, 0);
+                let scattered = tree.extract_scattered(&rule, &tasks, 0);
                 assert_eq!(dense.vertices, sparse.vertices, "{w}x{h} E={e}");
                 assert_eq!(dense.triangles, sparse.triangles, "{w}x{h} E={e}");
+                assert_eq!(dense.vertices, scattered.vertices, "{w}x{h} E={e}");
+                assert_eq!(dense.triangles, scattered.triangles, "{w}x{h} E={e}");
                 assert_eq!(dense.triangles.len(), tree.count_at(e), "{w}x{h} E={e}");
                 let words = numbered(vertex_bits_from_codes(&tree, &rule));
                 for t in &tasks {
