@@ -7,7 +7,10 @@
 //! up. Exporters turn (column, row) into metres or grid units.
 
 /// A mesh vertex on a grid sample.
-#[derive(Debug, Clone, Copy, PartialEq)]
+///
+/// All-zero bytes are a valid vertex ([`bytemuck::Zeroable`]), so large
+/// vertex arrays can come zeroed from the allocator.
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Zeroable)]
 pub struct MeshVertex {
     /// Column of the sample (0 = west).
     pub col: u32,
