@@ -65,6 +65,16 @@ fn short<M: criterion::measurement::Measurement>(g: &mut BenchmarkGroup<'_, M>) 
         .measurement_time(Duration::from_secs(1));
 }
 
+/// The extraction groups: a 50 m extraction takes 0.2–40 ms and its first
+/// samples after a group change ran up to 1.5× slower here (workers asleep,
+/// allocator not yet at its steady size), so these warm up for 1 s and
+/// measure for 2 s.
+fn steady<M: criterion::measurement::Measurement>(g: &mut BenchmarkGroup<'_, M>) {
+    g.sample_size(10)
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(2));
+}
+
 fn one_thread_pool() -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -106,7 +116,7 @@ fn bench_extract(
     });
     for &e in tolerances {
         let mut g = c.benchmark_group(format!("extract/{name}/{e}"));
-        short(&mut g);
+        steady(&mut g);
         // Throughput in cota's output triangles (criterion-table turns it
         // into the M triangles/s table).
         let tris = tree
@@ -135,7 +145,7 @@ fn bench_extract(
         .unwrap()
         .threshold_m;
     let mut g = c.benchmark_group(format!("extract10k/{name}"));
-    short(&mut g);
+    steady(&mut g);
     g.bench_function("cota_by_error", |b| {
         b.iter(|| {
             tree.extract(&ExtractOptions::max_error_m(black_box(e10k)))

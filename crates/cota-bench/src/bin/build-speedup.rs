@@ -14,8 +14,13 @@
 //! Grids: the criterion grids (`fuji513`, `puget1025`, `srtm1025`, `srtm1201`,
 //! `mosaic2`), plus `big4097` with `--big`.
 //!
-//! Run: `cargo run --release -p cota-bench --bin build-speedup [-- --rounds N] [-- --big]`.
+//! With `--levels`, each grid's row is followed by the speed-up of each
+//! level of the build (from `Bitree::build_with_progress`, medians over the
+//! rounds): levels `B(2), A(2), B(4), A(4), …` (see `cota_core::hierarchy`).
+//!
+//! Run: `cargo run --release -p cota-bench --bin build-speedup [-- --rounds N] [-- --big] [-- --levels]`.
 
+use std::sync::Mutex;
 use std::time::Instant;
 
 use anyhow::Context;
@@ -23,18 +28,40 @@ use cota_bench::big::{big_files, load_big, load_mosaic2};
 use cota_bench::{load_cases, median};
 use cota_core::{Bitree, HeightGrid};
 
-/// Per-round times (seconds) of one grid.
+/// Per-round times (seconds) of one grid, whole builds and per level.
 struct Pairs {
     two: Vec<f64>,
     one: Vec<f64>,
+    two_levels: Vec<Vec<f64>>,
+    one_levels: Vec<Vec<f64>>,
 }
 
-fn time_build(grid: &HeightGrid) -> anyhow::Result<f64> {
+/// One build's time and its levels' times (the last level includes the
+/// work after it).
+fn time_build(grid: &HeightGrid) -> anyhow::Result<(f64, Vec<f64>)> {
+    let marks = Mutex::new(Vec::new());
     let t = Instant::now();
-    let tree = Bitree::build(grid).context("build")?;
+    let note = |_: usize, _: usize| {
+        if let Ok(mut m) = marks.lock() {
+            m.push(t.elapsed().as_secs_f64());
+        }
+    };
+    let tree = Bitree::build_with_progress(grid, &note).context("build")?;
     let s = t.elapsed().as_secs_f64();
     drop(tree);
-    Ok(s)
+    let mut marks = marks.into_inner().unwrap_or_default();
+    if let Some(last) = marks.last_mut() {
+        *last = s;
+    }
+    let levels = marks
+        .iter()
+        .scan(0.0, |prev, &m| {
+            let d = m - *prev;
+            *prev = m;
+            Some(d)
+        })
+        .collect();
+    Ok((s, levels))
 }
 
 fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::Result<Pairs> {
@@ -44,15 +71,21 @@ fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::R
     let mut p = Pairs {
         two: Vec::with_capacity(rounds),
         one: Vec::with_capacity(rounds),
+        two_levels: Vec::with_capacity(rounds),
+        one_levels: Vec::with_capacity(rounds),
     };
     for r in 0..rounds {
-        if r % 2 == 0 {
-            p.two.push(time_build(grid)?);
-            p.one.push(one.install(|| time_build(grid))?);
+        let (two, one) = if r % 2 == 0 {
+            let two = time_build(grid)?;
+            (two, one.install(|| time_build(grid))?)
         } else {
-            p.one.push(one.install(|| time_build(grid))?);
-            p.two.push(time_build(grid)?);
-        }
+            let one = one.install(|| time_build(grid))?;
+            (time_build(grid)?, one)
+        };
+        p.two.push(two.0);
+        p.two_levels.push(two.1);
+        p.one.push(one.0);
+        p.one_levels.push(one.1);
     }
     Ok(p)
 }
@@ -80,6 +113,28 @@ fn row(name: &str, grid: &HeightGrid, p: &Pairs) {
     );
 }
 
+/// One line: each level's 1-thread median over its 2-thread median.
+fn level_line(name: &str, p: &Pairs) {
+    let n = p.two_levels.iter().map(Vec::len).min().unwrap_or(0);
+    let per: Vec<String> = (0..n)
+        .map(|k| {
+            let one: Vec<f64> = p.one_levels.iter().map(|l| l[k]).collect();
+            let two: Vec<f64> = p.two_levels.iter().map(|l| l[k]).collect();
+            let size = 2u32 << (k / 2);
+            let kind = if k % 2 == 0 { "B" } else { "A" };
+            format!(
+                "{kind}({size}) {:.2} ({:.0} µs)",
+                median(&one) / median(&two),
+                median(&two) * 1e6
+            )
+        })
+        .collect();
+    println!(
+        "| {name} per level (speed-up, 2-thread median) | {} |",
+        per.join(", ")
+    );
+}
+
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
     let rounds = args
@@ -91,6 +146,13 @@ fn main() -> anyhow::Result<()> {
         .context("--rounds takes a whole number")?
         .unwrap_or(15);
     let big = args.iter().any(|a| a == "--big");
+    let levels = args.iter().any(|a| a == "--levels");
+    let show = |name: &str, grid: &HeightGrid, p: &Pairs| {
+        row(name, grid, p);
+        if levels {
+            level_line(name, p);
+        }
+    };
     let one = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -102,14 +164,14 @@ fn main() -> anyhow::Result<()> {
     println!("| grid | size | rounds | 1 thread (median) | 2 threads (median) | speed-up (median of ratios) | ratio of medians | ratio range | best / best |");
     println!("|---|---|---:|---:|---:|---:|---:|---:|---:|");
     for case in load_cases(|m| eprintln!("build-speedup: {m}")) {
-        row(case.name, &case.square, &pairs(&case.square, rounds, &one)?);
+        show(case.name, &case.square, &pairs(&case.square, rounds, &one)?);
         if let Some(native) = &case.native {
             let name = format!("srtm{}", native.width());
-            row(&name, native, &pairs(native, rounds, &one)?);
+            show(&name, native, &pairs(native, rounds, &one)?);
         }
     }
     match load_mosaic2() {
-        Ok(m) => row("mosaic2", &m.grid, &pairs(&m.grid, rounds, &one)?),
+        Ok(m) => show("mosaic2", &m.grid, &pairs(&m.grid, rounds, &one)?),
         Err(e) => eprintln!("build-speedup: skipping mosaic2: {e}"),
     }
     if big {
@@ -117,7 +179,7 @@ fn main() -> anyhow::Result<()> {
         let b = big_files(scratch.path(), |m| eprintln!("build-speedup: {m}"))
             .and_then(|b| load_big("big4097", &b.big4097, &b.big4097_note));
         match b {
-            Ok(b) => row(
+            Ok(b) => show(
                 "big4097",
                 &b.grid,
                 &pairs(&b.grid, rounds.div_ceil(3), &one)?,
