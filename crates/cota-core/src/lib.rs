@@ -39,6 +39,18 @@ pub mod view;
 pub mod voids;
 
 pub use bitree::{Bitree, MeshError};
+pub use check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
+pub use criteria::{
+    All, Any, Criterion, Element, EuclideanDistance, MaxVerticalError, RelativeSize,
+};
+pub use extract::{ExtractOptions, Extraction, Target};
+pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
+pub use mesh::{Mesh, MeshVertex};
+pub use metrics::{measure, Metrics};
+pub use mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy, SeamReport};
+pub use points::PointCounts;
+pub use quadtree::{QuadExtraction, QuadTree};
+pub use voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidError, VoidPolicy};
 
 /// Runs `f` on a rayon worker thread. A parallel section entered from outside
 /// the pool hands its work to the pool and waits to be woken (about 30 µs per
@@ -52,15 +64,3 @@ pub(crate) fn on_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
         rayon::scope(|_| f())
     }
 }
-pub use check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
-pub use criteria::{
-    All, Any, Criterion, Element, EuclideanDistance, MaxVerticalError, RelativeSize,
-};
-pub use extract::{ExtractOptions, Extraction, Target};
-pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
-pub use mesh::{Mesh, MeshVertex};
-pub use metrics::{measure, Metrics};
-pub use mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy, SeamReport};
-pub use points::PointCounts;
-pub use quadtree::{QuadExtraction, QuadTree};
-pub use voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidError, VoidPolicy};
