@@ -28,8 +28,13 @@
 //!
 //! The order of the steps depends on the mesh's density (guessed from 1024
 //! scattered codes; only the speed depends on the guess). Unless the mesh is
-//! scattered, step 3 comes first, from a parallel scan of the codes, so the
-//! walk writes vertex indices:
+//! scattered, step 3 comes first, from a parallel scan of the codes. The walk
+//! then writes vertex indices, and its split test reads the vertex bitset
+//! instead of the codes: a split point splits exactly when it is a vertex, and
+//! the bitset is an eighth of the codes' size (2 bits a sample with its
+//! numbering, against 16), so the walk's scattered reads miss the cache less.
+//! On the benchmark grids this made extraction 1.05–1.4× faster (the walk
+//! alone on big4097 at 50 m: 22 → 14 ms).
 //! - **Dense** meshes: each task's leaf count follows from the bitset alone,
 //!   by popcounts over the task's rows (see `leaves_from_bits`), so the
 //!   output is allocated once at its final size and each task writes its
@@ -47,7 +52,8 @@
 //! parallel section costs more than a sparse extraction.
 //!
 //! The split test reads 16-bit error codes ([`crate::error_code`]) and settles
-//! the rare ambiguous code exactly, so the mesh is the one of the exact errors.
+//! the rare ambiguous code exactly, so the mesh is the one of the exact errors;
+//! the scan for the bitset settles them the same way.
 //!
 //! By budget, a binary search over the error codes finds the smallest code
 //! value `E` whose mesh has at most `N` triangles (16 probes); each probe is a
@@ -219,7 +225,7 @@ impl Bitree<'_> {
             .iter()
             .zip(&counts)
             .all(|(t, &n)| count_leaves(self, rule, *t) == n));
-        let Some(triangles) = emit_tasks(self, rule, tasks, &counts, |i| vertex_id(&words, i))
+        let Some(triangles) = emit_tasks(&words, tasks, &counts, |i| vertex_id(&words, i))
         else {
             // A count that is not the walk's would be a bug: take the path
             // that does not depend on counts rather than return a wrong mesh.
@@ -236,7 +242,12 @@ impl Bitree<'_> {
     /// copied into place.
     fn extract_sparse(&self, rule: &SplitRule, tasks: &[Task], expected: usize) -> Mesh {
         let words = numbered(vertex_bits_from_codes(self, rule));
-        let parts = walk_runs(self, rule, tasks, expected, |i| vertex_id(&words, i));
+        let parts = walk_runs(
+            |m| is_vertex(&words, m as usize),
+            tasks,
+            expected,
+            |i| vertex_id(&words, i),
+        );
         Mesh {
             vertices: vertices(self, &words),
             triangles: place_runs(&parts, |i| i),
@@ -248,7 +259,7 @@ impl Bitree<'_> {
     /// place in vertex indices: for meshes so sparse that scanning every code
     /// for the vertices would cost more than marking the corners.
     fn extract_scattered(&self, rule: &SplitRule, tasks: &[Task], expected: usize) -> Mesh {
-        let parts = walk_runs(self, rule, tasks, expected, |i| i);
+        let parts = walk_runs(|m| self.splits_index(m as usize, rule), tasks, expected, |i| i);
         let mut words: Vec<Word> = bytemuck::zeroed_vec(self.grid().len().div_ceil(64));
         for &i in parts.iter().flatten().flatten() {
             words[(i / 64) as usize].bits |= 1u64 << (i % 64);
@@ -348,7 +359,7 @@ fn mid(a: u32, b: u32) -> u32 {
 /// Leaves under `t`.
 fn count_leaves(tree: &Bitree<'_>, rule: &SplitRule, t: Task) -> usize {
     let mut n = 0;
-    walk_task(tree, rule, t, |_, _, _| n += 1);
+    walk_task(t, |m| tree.splits_index(m as usize, rule), |_, _, _| n += 1);
     n
 }
 
@@ -370,7 +381,7 @@ fn count_tasks(tree: &Bitree<'_>, rule: &SplitRule, tasks: &[Task], cap: usize) 
 /// the sequential recursion). Iterative, with an explicit stack: a task is at
 /// most [`TASK_DEPTH`] splits deep unless it does not split at all.
 #[inline(always)]
-fn walk_task(tree: &Bitree<'_>, rule: &SplitRule, t: Task, mut leaf: impl FnMut(u32, u32, u32)) {
+fn walk_task(t: Task, splits: impl Fn(u32) -> bool, mut leaf: impl FnMut(u32, u32, u32)) {
     let mut stack = [[0u32; 4]; STACK];
     stack[0] = [t.a, t.b, t.c, t.depth];
     let mut sp = 1;
@@ -379,7 +390,7 @@ fn walk_task(tree: &Bitree<'_>, rule: &SplitRule, t: Task, mut leaf: impl FnMut(
         let [a, b, c, depth] = stack[sp];
         if depth > 0 && sp + 2 <= STACK {
             let m = mid(a, b);
-            if tree.splits_index(m as usize, rule) {
+            if splits(m) {
                 // Second child below the first: the first is walked first.
                 stack[sp] = [b, c, m, depth - 1];
                 stack[sp + 1] = [c, a, m, depth - 1];
@@ -529,8 +540,7 @@ const PROBES: u64 = 1024;
 /// size and every task writes its own slice of it, in parallel; nothing is
 /// copied. `None` if a task's walk does not have its count of leaves.
 fn emit_tasks(
-    tree: &Bitree<'_>,
-    rule: &SplitRule,
+    words: &[Word],
     tasks: &[Task],
     counts: &[usize],
     id: impl Fn(u32) -> u32 + Sync,
@@ -546,7 +556,7 @@ fn emit_tasks(
         .all(|(t, out)| {
             let mut slots = out.iter_mut();
             let mut over = false;
-            walk_task(tree, rule, *t, |a, b, c| match slots.next() {
+            walk_task(*t, |m| is_vertex(words, m as usize), |a, b, c| match slots.next() {
                 Some(s) => *s = [id(a), id(b), id(c)],
                 None => over = true,
             });
@@ -560,8 +570,7 @@ fn emit_tasks(
 /// For sparse meshes, where counting each task's leaves first would cost
 /// more than copying the buffers into place.
 fn walk_runs(
-    tree: &Bitree<'_>,
-    rule: &SplitRule,
+    splits: impl Fn(u32) -> bool + Sync,
     tasks: &[Task],
     expected: usize,
     id: impl Fn(u32) -> u32 + Sync,
@@ -577,7 +586,7 @@ fn walk_runs(
         .map(|run| {
             let mut out = Vec::with_capacity(run.len() * (per_task + per_task / 4 + 4));
             for t in run {
-                walk_task(tree, rule, *t, |a, b, c| out.push([id(a), id(b), id(c)]));
+                walk_task(*t, &splits, |a, b, c| out.push([id(a), id(b), id(c)]));
             }
             out
         })
