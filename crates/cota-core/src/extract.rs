@@ -225,8 +225,7 @@ impl Bitree<'_> {
             .iter()
             .zip(&counts)
             .all(|(t, &n)| count_leaves(self, rule, *t) == n));
-        let Some(triangles) = emit_tasks(&words, tasks, &counts, |i| vertex_id(&words, i))
-        else {
+        let Some(triangles) = emit_tasks(&words, tasks, &counts, |i| vertex_id(&words, i)) else {
             // A count that is not the walk's would be a bug: take the path
             // that does not depend on counts rather than return a wrong mesh.
             return self.extract_sparse(rule, tasks, 0);
@@ -259,7 +258,12 @@ impl Bitree<'_> {
     /// place in vertex indices: for meshes so sparse that scanning every code
     /// for the vertices would cost more than marking the corners.
     fn extract_scattered(&self, rule: &SplitRule, tasks: &[Task], expected: usize) -> Mesh {
-        let parts = walk_runs(|m| self.splits_index(m as usize, rule), tasks, expected, |i| i);
+        let parts = walk_runs(
+            |m| self.splits_index(m as usize, rule),
+            tasks,
+            expected,
+            |i| i,
+        );
         let mut words: Vec<Word> = bytemuck::zeroed_vec(self.grid().len().div_ceil(64));
         for &i in parts.iter().flatten().flatten() {
             words[(i / 64) as usize].bits |= 1u64 << (i % 64);
@@ -556,10 +560,14 @@ fn emit_tasks(
         .all(|(t, out)| {
             let mut slots = out.iter_mut();
             let mut over = false;
-            walk_task(*t, |m| is_vertex(words, m as usize), |a, b, c| match slots.next() {
-                Some(s) => *s = [id(a), id(b), id(c)],
-                None => over = true,
-            });
+            walk_task(
+                *t,
+                |m| is_vertex(words, m as usize),
+                |a, b, c| match slots.next() {
+                    Some(s) => *s = [id(a), id(b), id(c)],
+                    None => over = true,
+                },
+            );
             !over && slots.next().is_none()
         });
     all_counted.then_some(tris)
