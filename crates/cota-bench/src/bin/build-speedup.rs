@@ -14,6 +14,14 @@
 //! Grids: the criterion grids (`fuji513`, `puget1025`, `srtm1025`, `srtm1201`,
 //! `mosaic2`), plus `big4097` with `--big`.
 //!
+//! Each round also times, the same way, a **perfectly parallel reference**
+//! on the same grid: as many passes over the heights as the build has
+//! levels, one parallel section each (like the build's levels), every row
+//! reduced on its own (its largest second difference), with nothing shared
+//! between rows or passes. Its speed-up is what this machine gives
+//! level-synchronous passes over that grid with no serial part and no
+//! imbalance: the ceiling against which to read the build's.
+//!
 //! With `--levels`, each grid's row is followed by the speed-up of each
 //! level of the build (from `Bitree::build_with_progress`, medians over the
 //! rounds): levels `B(2), A(2), B(4), A(4), …` (see `cota_core::hierarchy`).
@@ -27,6 +35,7 @@ use anyhow::Context;
 use cota_bench::big::{big_files, load_big, load_mosaic2};
 use cota_bench::{load_cases, median};
 use cota_core::{Bitree, HeightGrid};
+use rayon::prelude::*;
 
 /// Per-round times (seconds) of one grid, whole builds and per level.
 struct Pairs {
@@ -34,6 +43,40 @@ struct Pairs {
     one: Vec<f64>,
     two_levels: Vec<Vec<f64>>,
     one_levels: Vec<Vec<f64>>,
+    /// The perfectly parallel reference, 2 threads and 1.
+    ref_two: Vec<f64>,
+    ref_one: Vec<f64>,
+}
+
+/// The perfectly parallel reference (see the module doc): `passes` parallel
+/// passes over the rows of the heights, entering the pool once as the build
+/// does. Returns seconds.
+fn time_reference(grid: &HeightGrid, passes: usize) -> f64 {
+    let w = grid.width();
+    let t = Instant::now();
+    let acc = rayon::scope(|_| {
+        let mut acc = 0f32;
+        for _ in 0..passes {
+            acc += grid
+                .heights()
+                .par_chunks(w)
+                .map(|row| {
+                    row.windows(3)
+                        .map(|x| (x[1] - 0.5 * (x[0] + x[2])).abs())
+                        .fold(0f32, f32::max)
+                })
+                .reduce(|| 0f32, f32::max);
+        }
+        acc
+    });
+    std::hint::black_box(acc);
+    t.elapsed().as_secs_f64()
+}
+
+/// The build's number of levels: `2·log2(N)` for the hierarchy's side `N`.
+fn level_count(grid: &HeightGrid) -> usize {
+    let side = (grid.width().max(grid.height()) - 1).next_power_of_two();
+    2 * side.trailing_zeros() as usize
 }
 
 /// One build's time and its levels' times (the last level includes the
@@ -73,7 +116,13 @@ fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::R
         one: Vec::with_capacity(rounds),
         two_levels: Vec::with_capacity(rounds),
         one_levels: Vec::with_capacity(rounds),
+        ref_two: Vec::with_capacity(rounds),
+        ref_one: Vec::with_capacity(rounds),
     };
+    let passes = level_count(grid);
+    time_reference(grid, passes);
+    one.install(|| time_reference(grid, passes));
+    let pool = one;
     for r in 0..rounds {
         let (two, one) = if r % 2 == 0 {
             let two = time_build(grid)?;
@@ -86,6 +135,15 @@ fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::R
         p.two_levels.push(two.1);
         p.one.push(one.0);
         p.one_levels.push(one.1);
+        let (ref_two, ref_one) = if r % 2 == 0 {
+            let t = time_reference(grid, passes);
+            (t, pool.install(|| time_reference(grid, passes)))
+        } else {
+            let t = pool.install(|| time_reference(grid, passes));
+            (time_reference(grid, passes), t)
+        };
+        p.ref_two.push(ref_two);
+        p.ref_one.push(ref_one);
     }
     Ok(p)
 }
@@ -98,8 +156,14 @@ fn row(name: &str, grid: &HeightGrid, p: &Pairs) {
         .iter()
         .fold((f64::INFINITY, 0f64), |(l, h), &r| (l.min(r), h.max(r)));
     let (m1, m2) = (median(&p.one), median(&p.two));
+    let ref_ratios: Vec<f64> = p
+        .ref_one
+        .iter()
+        .zip(&p.ref_two)
+        .map(|(a, b)| a / b)
+        .collect();
     println!(
-        "| {name} | {}×{} | {} | {:.2} ms | {:.2} ms | **{:.2}** | {:.2} | {:.2}–{:.2} | {:.2} |",
+        "| {name} | {}×{} | {} | {:.2} ms | {:.2} ms | **{:.2}** | {:.2} | {:.2}–{:.2} | {:.2} | {:.2} ({:.2} ms) |",
         grid.width(),
         grid.height(),
         ratios.len(),
@@ -110,6 +174,8 @@ fn row(name: &str, grid: &HeightGrid, p: &Pairs) {
         lo,
         hi,
         best1 / best2,
+        median(&ref_ratios),
+        median(&p.ref_two) * 1e3,
     );
 }
 
@@ -161,8 +227,8 @@ fn main() -> anyhow::Result<()> {
         "Paired build rounds: {} rayon threads vs 1 (median of per-round ratios).\n",
         rayon::current_num_threads()
     );
-    println!("| grid | size | rounds | 1 thread (median) | 2 threads (median) | speed-up (median of ratios) | ratio of medians | ratio range | best / best |");
-    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|");
+    println!("| grid | size | rounds | 1 thread (median) | 2 threads (median) | speed-up (median of ratios) | ratio of medians | ratio range | best / best | perfectly parallel reference: speed-up (2-thread median) |");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for case in load_cases(|m| eprintln!("build-speedup: {m}")) {
         show(case.name, &case.square, &pairs(&case.square, rounds, &one)?);
         if let Some(native) = &case.native {
