@@ -230,7 +230,7 @@ impl Bitree<'_> {
         let Some(triangles) = emit_tasks(&words, tasks, &counts) else {
             // A count that is not the walk's would be a bug: take the path
             // that does not depend on counts rather than return a wrong mesh.
-            return self.extract_sparse(rule, tasks, 0);
+            return self.sparse_from(words, tasks, 0);
         };
         Mesh {
             vertices: vertices(self, &words),
@@ -242,7 +242,15 @@ impl Bitree<'_> {
     /// parallel into their own buffers in vertex indices, then the runs
     /// copied into place.
     fn extract_sparse(&self, rule: &SplitRule, tasks: &[Task], expected: usize) -> Mesh {
-        let words = numbered(vertex_bits_from_codes(self, rule));
+        self.sparse_from(
+            numbered(vertex_bits_from_codes(self, rule)),
+            tasks,
+            expected,
+        )
+    }
+
+    /// [`Bitree::extract_sparse`] given the numbered vertex bitset.
+    fn sparse_from(&self, words: Vec<Word>, tasks: &[Task], expected: usize) -> Mesh {
         let parts = walk_runs(tasks, expected, |t, out| {
             walk_task_ids(t, &words, |tri| out.push(tri));
         });
@@ -428,9 +436,8 @@ fn walk_task_ids(t: Task, words: &[Word], mut leaf: impl FnMut([u32; 3])) {
         if depth > 0 && sp + 2 <= STACK {
             let m = mid(a, b);
             if let Some(w) = words.get((m / 64) as usize) {
-                let bit = 1u64 << (m % 64);
-                if w.bits & bit != 0 {
-                    let im = w.base + (w.bits & (bit - 1)).count_ones();
+                if w.bits >> (m % 64) & 1 == 1 {
+                    let im = w.rank(m % 64);
                     stack[sp] = [b, c, m, depth - 1, ib, ic, im, 0];
                     stack[sp + 1] = [c, a, m, depth - 1, ic, ia, im, 0];
                     sp += 2;
@@ -452,6 +459,15 @@ const STACK: usize = 2 * TASK_DEPTH as usize + 2;
 struct Word {
     bits: u64,
     base: u32,
+}
+
+impl Word {
+    /// The vertex number of bit `b` of this word (set or not: the vertices
+    /// before it).
+    #[inline(always)]
+    fn rank(&self, b: u32) -> u32 {
+        self.base + (self.bits & ((1u64 << b) - 1)).count_ones()
+    }
 }
 
 /// The vertex bitset from the error codes: every split point that splits,
@@ -538,7 +554,7 @@ fn numbered(mut words: Vec<Word>) -> Vec<Word> {
 #[inline(always)]
 fn vertex_id(words: &[Word], i: u32) -> u32 {
     match words.get((i / 64) as usize) {
-        Some(w) => w.base + (w.bits & ((1u64 << (i % 64)) - 1)).count_ones(),
+        Some(w) => w.rank(i % 64),
         None => 0,
     }
 }
