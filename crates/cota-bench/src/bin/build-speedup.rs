@@ -73,10 +73,19 @@ fn time_reference(grid: &HeightGrid, passes: usize) -> f64 {
     t.elapsed().as_secs_f64()
 }
 
-/// The build's number of levels: `2·log2(N)` for the hierarchy's side `N`.
-fn level_count(grid: &HeightGrid) -> usize {
-    let side = (grid.width().max(grid.height()) - 1).next_power_of_two();
-    2 * side.trailing_zeros() as usize
+/// `f` on the global pool and on the one-thread pool `one`, back to back,
+/// the global pool first in even rounds: `(two threads, one thread)`.
+fn paired<T>(round: usize, one: &rayon::ThreadPool, f: impl Fn() -> T + Send + Sync) -> (T, T)
+where
+    T: Send,
+{
+    if round.is_multiple_of(2) {
+        let two = f();
+        (two, one.install(&f))
+    } else {
+        let single = one.install(&f);
+        (f(), single)
+    }
 }
 
 /// One build's time and its levels' times (the last level includes the
@@ -108,8 +117,9 @@ fn time_build(grid: &HeightGrid) -> anyhow::Result<(f64, Vec<f64>)> {
 }
 
 fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::Result<Pairs> {
-    // One warm-up of each.
-    time_build(grid)?;
+    // One warm-up of each; the reference makes as many passes as the build
+    // has levels.
+    let passes = time_build(grid)?.1.len();
     one.install(|| time_build(grid))?;
     let mut p = Pairs {
         two: Vec::with_capacity(rounds),
@@ -119,29 +129,16 @@ fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::R
         ref_two: Vec::with_capacity(rounds),
         ref_one: Vec::with_capacity(rounds),
     };
-    let passes = level_count(grid);
     time_reference(grid, passes);
     one.install(|| time_reference(grid, passes));
-    let pool = one;
     for r in 0..rounds {
-        let (two, one) = if r % 2 == 0 {
-            let two = time_build(grid)?;
-            (two, one.install(|| time_build(grid))?)
-        } else {
-            let one = one.install(|| time_build(grid))?;
-            (time_build(grid)?, one)
-        };
-        p.two.push(two.0);
-        p.two_levels.push(two.1);
-        p.one.push(one.0);
-        p.one_levels.push(one.1);
-        let (ref_two, ref_one) = if r % 2 == 0 {
-            let t = time_reference(grid, passes);
-            (t, pool.install(|| time_reference(grid, passes)))
-        } else {
-            let t = pool.install(|| time_reference(grid, passes));
-            (time_reference(grid, passes), t)
-        };
+        let (two, single) = paired(r, one, || time_build(grid));
+        let ((two, two_levels), (single, single_levels)) = (two?, single?);
+        p.two.push(two);
+        p.two_levels.push(two_levels);
+        p.one.push(single);
+        p.one_levels.push(single_levels);
+        let (ref_two, ref_one) = paired(r, one, || time_reference(grid, passes));
         p.ref_two.push(ref_two);
         p.ref_one.push(ref_one);
     }
