@@ -27,23 +27,48 @@
 //! the mesh is exactly the one of the unquantised errors.
 //!
 //! # Build
-//! Fine to coarse, one level at a time (`B(2), A(2), B(4), A(4), …`), each level
-//! in parallel over rows of split points (rayon). A triangle's samples are
-//! visited row by row: every edge is horizontal, vertical or at 45°, so each row
-//! is one span found without division, and the plane is evaluated with exact
-//! power-of-two arithmetic. Each level touches every sample about once, so the
-//! build is `O(n log n)` for `n` samples, about `2·log2(N)` streaming passes.
-//! The two finest levels have one interior sample per triangle and take a
-//! shortcut.
+//! Fine to coarse (`B(2), A(2), B(4), A(4), …`): a split point's code needs its
+//! children's. A triangle's samples are visited row by row: every edge is
+//! horizontal, vertical or at 45°, so each row is one span found without
+//! division, and the plane is evaluated with exact power-of-two arithmetic.
+//! Each level touches every sample about once, so the build is `O(n log n)`
+//! for `n` samples, about `2·log2(N)` passes.
+//!
+//! * **The fine levels** (up to `A(16)`, `A(32)` or `A(64)` as the grid's
+//!   height allows: 8 to 12 levels, most of the split points) are
+//!   built together in one cache-blocked pass (`build_fused`): the rows are
+//!   cut into segments swept in parallel, and in each segment every level
+//!   follows a few rows behind the one below it, so it reads rows that are
+//!   still in cache. The seams between segments are filled by a second
+//!   parallel pass. Their triangles are small, so each level has a shortcut
+//!   that scans its diamond directly, without building triangles or spans,
+//!   and the two finest levels are computed a row at a time.
+//! * **The coarse levels** are built one at a time, each in parallel over its
+//!   rows of split points; a triangle of 64 rows or more is itself split over
+//!   the cores.
+//!
+//! **Legs.** The shortcuts skip the samples on a triangle's legs. A leg of an
+//! inside triangle is the hypotenuse of one of its children, the plane along
+//! it is the same linear interpolation of its two ends, and the child's
+//! `e(T)`, which covers every sample on its hypotenuse, is in the child's
+//! code, which the parent's code includes: those samples cannot change the
+//! parent's code. (The general path scans them anyway; the codes are
+//! identical, which the tests check.)
 //!
 //! # Runtime
-//! About `2·log2(max(W, H))` passes over the grid; see `bench/README.md`.
+//! About `2·log2(max(W, H))` passes over the grid, the first 8 to 12 of them
+//! fused into one; see `bench/README.md`.
+
+mod fused;
+mod kernels;
 
 use rayon::prelude::*;
 
 use crate::error_code::{self, encode_up, SplitRule, INFINITE};
 use crate::grid::HeightGrid;
 use crate::hierarchy::{Hierarchy, Placement, Pt, RowSpans, Tri};
+use fused::{build_fused, SWEEP_ROWS};
+use kernels::{fine_a2, fine_a4, fine_b2, fine_b4, small_a, small_b, SMALL_MAX};
 
 /// Errors from building or extracting a mesh.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
@@ -162,7 +187,18 @@ impl<'g> Bitree<'g> {
         let codes = crate::on_pool(|| {
             let mut codes = vec![0u16; grid.len()];
             let levels = levels(hier.size());
-            for (k, level) in levels.iter().enumerate() {
+            let threads = rayon::current_num_threads() as u32;
+            let (fine, segment_rows) = fused::plan(&levels, hier.height(), threads);
+            build_fused(
+                grid.heights(),
+                &hier,
+                fine,
+                segment_rows,
+                SWEEP_ROWS,
+                &mut codes,
+            );
+            progress(fine.len(), levels.len());
+            for (k, level) in levels.iter().enumerate().skip(fine.len()) {
                 build_level(grid.heights(), &hier, *level, &mut codes);
                 progress(k + 1, levels.len());
             }
@@ -429,54 +465,21 @@ pub(crate) fn diamond(level: Level, m: Pt, n: u32) -> [Option<Tri>; 2] {
     }
 }
 
-/// Computes `err` for every split point of `level` and writes it into `errors`.
+/// Computes `err` for every split point of a coarse `level` (above
+/// `fused::plan`) and writes it into `codes`, in parallel over its rows.
 fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, codes: &mut [u16]) {
     let (w, h) = (hier.width(), hier.height());
-    let s = match level {
-        Level::A(s) | Level::B(s) => s,
-    };
-    if level == Level::B(2) {
-        // The finest level reads heights only (its children are unit
-        // triangles, with no split point): each row is computed straight
-        // into its codes, in parallel, with no buffer or write-back pass.
-        codes
-            .par_chunks_mut(w as usize)
-            .enumerate()
-            .for_each(|(y, line)| {
-                let y = y as u32;
-                let mut x = first_col(level, y);
-                while x < w {
-                    let m = [x, y];
-                    line[x as usize] = fine_b2(heights, hier, m)
-                        .unwrap_or_else(|| diamond_error(heights, hier, level, m, &[]));
-                    x += 2;
-                }
-            });
-        return;
-    }
-    let half = s / 2;
-    let rows: Vec<u32> = (0..h)
-        .filter(|y| match level {
-            Level::A(_) => y % s == half,
-            Level::B(_) => y.is_multiple_of(half),
-        })
-        .collect();
+    let (first, step) = level_rows(level);
+    let rows: Vec<u32> = (first..h).step_by(step as usize).collect();
+    let s = level_side(level);
     let computed: Vec<Vec<u16>> = {
-        let codes: &[u16] = codes;
+        let codes = Codes { c: codes, base: 0 };
         rows.par_iter()
             .map(|&y| {
                 let mut out = Vec::with_capacity((w / s + 1) as usize);
                 let mut x = first_col(level, y);
                 while x < w {
-                    let m = [x, y];
-                    let fast = match level {
-                        Level::B(2) => fine_b2(heights, hier, m),
-                        Level::A(2) => fine_a2(heights, hier, m, codes),
-                        Level::B(4) => fine_b4(heights, hier, m, codes),
-                        Level::A(4) => fine_a4(heights, hier, m, codes),
-                        _ => None,
-                    };
-                    out.push(fast.unwrap_or_else(|| diamond_error(heights, hier, level, m, codes)));
+                    out.push(point_code(heights, hier, level, [x, y], codes));
                     x += s;
                 }
                 out
@@ -502,141 +505,57 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, codes: &mut [u16
         });
 }
 
-/// `B(2)` away from the grid's border: both triangles of the diamond are inside
-/// and their only off-vertex sample is `m`, so `err[m] = |h(m) − mean(ends)|`.
-/// The same value [`diamond_error`] computes, without building triangles.
-/// `None` near the border (the general path decides there).
-#[inline]
-fn fine_b2(heights: &[f32], hier: &Hierarchy, m: Pt) -> Option<u16> {
-    let (w, h) = (hier.width() as usize, hier.height() as usize);
-    let [x, y] = [m[0] as usize, m[1] as usize];
-    let (a, b) = if y % 2 == 0 {
-        // Horizontal side; apexes above and below.
-        (y >= 1 && y + 1 < h && x + 1 < w).then(|| (y * w + x - 1, y * w + x + 1))?
-    } else {
-        // Vertical side; apexes left and right.
-        (x >= 1 && x + 1 < w && y + 1 < h).then(|| ((y - 1) * w + x, (y + 1) * w + x))?
-    };
-    let hv = |i: usize| heights[i] as f64;
-    Some(code_of((hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs()))
+/// The side `s` of `A(s)` or `B(s)`.
+fn level_side(level: Level) -> u32 {
+    match level {
+        Level::A(s) | Level::B(s) => s,
+    }
 }
 
-/// `A(2)` inside the grid: both square halves are inside; `err[m]` is the
-/// deviation of the centre from its diagonal and the four side midpoints'
-/// errors (the children). The same value as [`diamond_error`].
-#[inline]
-fn fine_a2(heights: &[f32], hier: &Hierarchy, m: Pt, codes: &[u16]) -> Option<u16> {
-    let (w, h) = (hier.width() as usize, hier.height() as usize);
-    let [x, y] = [m[0] as usize, m[1] as usize];
-    if x + 1 >= w || y + 1 >= h {
-        return None;
+/// The rows holding split points of `level`: `(first_row, row_step)`.
+fn level_rows(level: Level) -> (u32, u32) {
+    match level {
+        Level::A(s) => (s / 2, s),
+        Level::B(s) => (0, (s / 2).max(1)),
     }
-    let hv = |i: usize| heights[i] as f64;
-    let even = ((x - 1) / 2 + (y - 1) / 2) % 2 == 0;
-    let (a, b) = if even {
-        ((y - 1) * w + x - 1, (y + 1) * w + x + 1)
-    } else {
-        ((y - 1) * w + x + 1, (y + 1) * w + x - 1)
-    };
-    let mut code = code_of((hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs());
-    for c in [
-        y * w + x - 1,
-        y * w + x + 1,
-        (y - 1) * w + x,
-        (y + 1) * w + x,
-    ] {
-        code = code.max(codes[c]);
-    }
-    Some(code)
 }
 
-/// `B(4)` with both triangles inside the grid: each triangle's samples off
-/// its vertices are the three on the hypotenuse and the three of the row next
-/// to it (9 in the diamond), whose plane values are exact quarter sums of the
-/// corner heights; the children are the four `A(2)` points beside `m`. The
-/// same value as [`diamond_error`] (every value is exact), about 5× faster
-/// than the general row scan at this size.
+/// The code of the split point `m` of `level`: a shortcut where one applies,
+/// else the general path. Every child's code must be final.
 #[inline]
-fn fine_b4(heights: &[f32], hier: &Hierarchy, m: Pt, codes: &[u16]) -> Option<u16> {
-    let (w, h) = (hier.width() as usize, hier.height() as usize);
-    let [x, y] = [m[0] as usize, m[1] as usize];
-    // (along, across): unit steps along the hypotenuse and towards an apex.
-    let (along, across) = if y % 4 == 0 {
-        (y >= 2 && y + 2 < h && x + 2 < w).then_some((1isize, w as isize))?
-    } else {
-        (x >= 2 && x + 2 < w && y + 2 < h).then_some((w as isize, 1isize))?
+fn point_code(heights: &[f32], hier: &Hierarchy, level: Level, m: Pt, codes: Codes<'_>) -> u16 {
+    let fast = match level {
+        Level::B(2) => fine_b2(heights, hier, m),
+        Level::A(2) => fine_a2(heights, hier, m, codes),
+        Level::B(4) => fine_b4(heights, hier, m, codes),
+        Level::A(4) => fine_a4(heights, hier, m, codes),
+        Level::B(s) if s <= SMALL_MAX => small_b(heights, hier, s, m, codes),
+        Level::A(s) if s <= SMALL_MAX => small_a(heights, hier, s, m, codes),
+        _ => None,
     };
-    let c = (y * w + x) as isize;
-    let hv = |i: isize| heights[i as usize] as f64;
-    let (ha, hb) = (hv(c - 2 * along), hv(c + 2 * along));
-    // The hypotenuse's three inner samples (shared by both triangles).
-    let mut e = (hv(c - along) - (3.0 * ha + hb) * 0.25).abs();
-    e = max_no_nan(e, (hv(c) - (ha + hb) * 0.5).abs());
-    e = max_no_nan(e, (hv(c + along) - (ha + 3.0 * hb) * 0.25).abs());
-    let mut code = 0u16;
-    for side in [-1isize, 1] {
-        let row = c + side * across;
-        let hc = hv(c + 2 * side * across);
-        e = max_no_nan(e, (hv(row - along) - (ha + hc) * 0.5).abs());
-        e = max_no_nan(e, (hv(row) - (ha + hb + 2.0 * hc) * 0.25).abs());
-        e = max_no_nan(e, (hv(row + along) - (hb + hc) * 0.5).abs());
-        code = code
-            .max(codes[(row - along) as usize])
-            .max(codes[(row + along) as usize]);
-    }
-    Some(code.max(code_of(e)))
+    fast.unwrap_or_else(|| diamond_error(heights, hier, level, m, codes))
 }
 
-/// `A(4)` with the whole 4×4 square inside the grid: the 25 samples of the
-/// square, each against the plane of the half it lies in (both halves for
-/// the diagonal, where the planes agree); the children are the `B(4)` points
-/// at the square's side midpoints. The same value as [`diamond_error`].
-#[inline]
-fn fine_a4(heights: &[f32], hier: &Hierarchy, m: Pt, codes: &[u16]) -> Option<u16> {
-    let (w, h) = (hier.width() as usize, hier.height() as usize);
-    let [x, y] = [m[0] as usize, m[1] as usize];
-    if x + 2 >= w || y + 2 >= h {
-        return None;
+/// A read-only view of the codes of grid rows `base / W ..`: indexed by
+/// grid-wide sample index, so the per-point code reads the same whether it
+/// sees the whole array or one segment of it.
+#[derive(Clone, Copy)]
+struct Codes<'a> {
+    c: &'a [u16],
+    base: usize,
+}
+
+impl std::ops::Index<usize> for Codes<'_> {
+    type Output = u16;
+    #[inline]
+    fn index(&self, i: usize) -> &u16 {
+        &self.c[i - self.base]
     }
-    let (x0, y0) = (x - 2, y - 2);
-    let hv = |i: usize, j: usize| heights[(y0 + j) * w + x0 + i] as f64;
-    let (h00, h40, h04, h44) = (hv(0, 0), hv(4, 0), hv(0, 4), hv(4, 4));
-    let even = ((x0 / 4) + (y0 / 4)) % 2 == 0;
-    let mut e = 0f64;
-    for j in 0..=4usize {
-        for i in 0..=4usize {
-            let (fi, fj) = (i as f64, j as f64);
-            // Four times the plane, exactly.
-            let p4 = if even {
-                // Diagonal (0,0)–(4,4).
-                if j <= i {
-                    4.0 * h00 + fi * (h40 - h00) + fj * (h44 - h40)
-                } else {
-                    4.0 * h00 + fi * (h44 - h04) + fj * (h04 - h00)
-                }
-            } else if i + j >= 4 {
-                // Diagonal (4,0)–(0,4), south-east half.
-                4.0 * h44 + (4.0 - fi) * (h04 - h44) + (4.0 - fj) * (h40 - h44)
-            } else {
-                4.0 * h00 + fi * (h40 - h00) + fj * (h04 - h00)
-            };
-            e = max_no_nan(e, (hv(i, j) - p4 * 0.25).abs());
-        }
-    }
-    let mut code = code_of(e);
-    for c in [
-        y * w + x - 2,
-        y * w + x + 2,
-        (y - 2) * w + x,
-        (y + 2) * w + x,
-    ] {
-        code = code.max(codes[c]);
-    }
-    Some(code)
 }
 
 /// The code of `err` of the split point `m` (see the module docs).
-fn diamond_error(heights: &[f32], hier: &Hierarchy, level: Level, m: Pt, codes: &[u16]) -> u16 {
+#[inline(never)]
+fn diamond_error(heights: &[f32], hier: &Hierarchy, level: Level, m: Pt, codes: Codes<'_>) -> u16 {
     let mut e = 0f64;
     let mut code = 0u16;
     for t in diamond(level, m, hier.size()).into_iter().flatten() {
@@ -802,7 +721,7 @@ mod test {
     use super::*;
     use crate::grid::GeoRef;
 
-    fn grid(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> HeightGrid {
+    pub(super) fn grid(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> HeightGrid {
         let v = (0..w * h).map(|i| f(i % w, i / w)).collect();
         HeightGrid::new(w, h, v, GeoRef::unreferenced(1.0)).unwrap()
     }
@@ -859,40 +778,6 @@ mod test {
                         }
                     }
                     x += s;
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn fine_level_shortcuts_match_the_general_path() {
-        for (w, h) in [(17, 17), (20, 13), (2, 9), (33, 8), (29, 37)] {
-            let g = grid(w, h, |x, y| {
-                ((x * 37 + y * 11) % 13) as f32 * 1.7 - (x * y) as f32 * 0.03
-            });
-            let t = Bitree::build(&g).unwrap();
-            let hier = t.hierarchy();
-            for level in [Level::B(2), Level::A(2), Level::B(4), Level::A(4)] {
-                let s = match level {
-                    Level::A(s) | Level::B(s) => s,
-                };
-                for y in 0..h as u32 {
-                    let on_row = match level {
-                        Level::A(_) => y % s == s / 2,
-                        Level::B(_) => y % (s / 2) == 0,
-                    };
-                    let mut x = first_col(level, y);
-                    while on_row && x < w as u32 {
-                        let general =
-                            diamond_error(g.heights(), hier, level, [x, y], t.error_codes());
-                        let i = hier.index([x, y]);
-                        assert_eq!(
-                            t.error_codes()[i],
-                            general,
-                            "{level:?} at {x},{y} on {w}x{h}"
-                        );
-                        x += s;
-                    }
                 }
             }
         }

@@ -23,8 +23,9 @@
 //! imbalance: the ceiling against which to read the build's.
 //!
 //! With `--levels`, each grid's row is followed by the speed-up of each
-//! level of the build (from `Bitree::build_with_progress`, medians over the
-//! rounds): levels `B(2), A(2), B(4), A(4), …` (see `cota_core::hierarchy`).
+//! step of the build (from `Bitree::build_with_progress`, medians over the
+//! rounds): the fused fine levels `B(2)–A(s)` as one step, then each coarser
+//! level `B(2s), A(2s), …` (see `cota_core::hierarchy`).
 //!
 //! Run: `cargo run --release -p cota-bench --bin build-speedup [-- --rounds N] [-- --big] [-- --levels]`.
 
@@ -41,6 +42,8 @@ use rayon::prelude::*;
 struct Pairs {
     two: Vec<f64>,
     one: Vec<f64>,
+    /// Levels done after each reported step.
+    done: Vec<usize>,
     two_levels: Vec<Vec<f64>>,
     one_levels: Vec<Vec<f64>>,
     /// The perfectly parallel reference, 2 threads and 1.
@@ -88,14 +91,15 @@ where
     }
 }
 
-/// One build's time and its levels' times (the last level includes the
-/// work after it).
-fn time_build(grid: &HeightGrid) -> anyhow::Result<(f64, Vec<f64>)> {
+/// One build's time, the time of each step it reported (the fused fine
+/// levels are one step; the last step includes the work after it) with the
+/// number of levels done after it, and its number of levels.
+fn time_build(grid: &HeightGrid) -> anyhow::Result<(f64, Vec<f64>, Vec<usize>, usize)> {
     let marks = Mutex::new(Vec::new());
     let t = Instant::now();
-    let note = |_: usize, _: usize| {
+    let note = |done: usize, total: usize| {
         if let Ok(mut m) = marks.lock() {
-            m.push(t.elapsed().as_secs_f64());
+            m.push((t.elapsed().as_secs_f64(), done, total));
         }
     };
     let tree = Bitree::build_with_progress(grid, &note).context("build")?;
@@ -103,25 +107,28 @@ fn time_build(grid: &HeightGrid) -> anyhow::Result<(f64, Vec<f64>)> {
     drop(tree);
     let mut marks = marks.into_inner().unwrap_or_default();
     if let Some(last) = marks.last_mut() {
-        *last = s;
+        last.0 = s;
     }
-    let levels = marks
+    let steps = marks
         .iter()
-        .scan(0.0, |prev, &m| {
+        .scan(0.0, |prev, &(m, _, _)| {
             let d = m - *prev;
             *prev = m;
             Some(d)
         })
         .collect();
-    Ok((s, levels))
+    let done = marks.iter().map(|m| m.1).collect();
+    let total = marks.last().map_or(0, |m| m.2);
+    Ok((s, steps, done, total))
 }
 
 fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::Result<Pairs> {
     // One warm-up of each; the reference makes as many passes as the build
     // has levels.
-    let passes = time_build(grid)?.1.len();
+    let (_, _, done, passes) = time_build(grid)?;
     one.install(|| time_build(grid))?;
     let mut p = Pairs {
+        done,
         two: Vec::with_capacity(rounds),
         one: Vec::with_capacity(rounds),
         two_levels: Vec::with_capacity(rounds),
@@ -133,7 +140,7 @@ fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::R
     one.install(|| time_reference(grid, passes));
     for r in 0..rounds {
         let (two, single) = paired(r, one, || time_build(grid));
-        let ((two, two_levels), (single, single_levels)) = (two?, single?);
+        let ((two, two_levels, _, _), (single, single_levels, _, _)) = (two?, single?);
         p.two.push(two);
         p.two_levels.push(two_levels);
         p.one.push(single);
@@ -183,10 +190,19 @@ fn level_line(name: &str, p: &Pairs) {
         .map(|k| {
             let one: Vec<f64> = p.one_levels.iter().map(|l| l[k]).collect();
             let two: Vec<f64> = p.two_levels.iter().map(|l| l[k]).collect();
-            let size = 2u32 << (k / 2);
-            let kind = if k % 2 == 0 { "B" } else { "A" };
+            let name = |i: usize| {
+                let kind = if i.is_multiple_of(2) { "B" } else { "A" };
+                format!("{kind}({})", 2u32 << (i / 2))
+            };
+            let first = if k == 0 { 0 } else { p.done[k - 1] };
+            let last = p.done.get(k).copied().unwrap_or(first + 1).max(first + 1) - 1;
+            let step = if last > first {
+                format!("{}–{}", name(first), name(last))
+            } else {
+                name(first)
+            };
             format!(
-                "{kind}({size}) {:.2} ({:.0} µs)",
+                "{step} {:.2} ({:.0} µs)",
                 median(&one) / median(&two),
                 median(&two) * 1e6
             )
