@@ -127,7 +127,7 @@ pub(super) fn build_fused(
     let lags = Lags::new(levels);
     debug_assert!(segment_rows >= lags.seam_rows().max(1));
     codes
-        .par_chunks_mut((segment_rows * w) as usize)
+        .par_chunks_mut(segment_rows as usize * w as usize)
         .enumerate()
         .for_each(|(k, chunk)| {
             let y0 = k as u32 * segment_rows;
@@ -162,8 +162,9 @@ pub(super) fn build_fused(
     let mut y = segment_rows;
     while y < h && margin > 0 {
         let (r0, r1) = (y - margin, (y + margin).min(h));
-        let (_, tail) = std::mem::take(&mut rest).split_at_mut(((r0 - rest_row) * w) as usize);
-        let (seam, tail) = tail.split_at_mut(((r1 - r0) * w) as usize);
+        let (_, tail) =
+            std::mem::take(&mut rest).split_at_mut((r0 - rest_row) as usize * w as usize);
+        let (seam, tail) = tail.split_at_mut((r1 - r0) as usize * w as usize);
         seams.push((r0, seam));
         rest = tail;
         rest_row = r1;
@@ -329,7 +330,7 @@ impl Rows<'_> {
         let w = self.hier.width();
         let s = level_side(self.level);
         let (first, step) = level_rows(self.level);
-        let base = (self.row0 * w) as usize;
+        let base = self.row0 as usize * w as usize;
         // The first row of the level at or after `rows.start`.
         let start = self.rows.start;
         let mut y = if start <= first {
@@ -345,7 +346,7 @@ impl Rows<'_> {
                 let code = fast(m, codes).unwrap_or_else(|| {
                     diamond_error(self.heights, self.hier, self.level, m, codes)
                 });
-                chunk[(y * w + x) as usize - base] = code;
+                chunk[y as usize * w as usize + x as usize - base] = code;
                 x += s;
             }
             y += step;
