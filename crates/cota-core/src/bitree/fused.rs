@@ -8,7 +8,7 @@
 //! are swept in parallel, every level following a few rows behind the one
 //! below it while those rows are still in cache; the seams between segments
 //! are filled by a second parallel pass. Every split point is computed once,
-//! by the same per-point code as the level-by-level build, so the codes are
+//! with the same kernels as the level-by-level build, and the codes are
 //! identical (tested on synthetic and real grids, segment and sweep sizes).
 //!
 //! # Runtime
@@ -113,8 +113,9 @@ pub(super) const SWEEP_ROWS: u32 = 16;
 /// Near the boundary between two segments a level's children lie on both
 /// sides, so each segment leaves `lag[l]` rows of level `l` on its side of
 /// the boundary; a second parallel pass fills these *seams* level by level.
-/// Every split point is computed once, by the same [`point_code`] as the
-/// level-by-level build, so the codes are identical.
+/// Every split point is computed once, with the same kernels as the
+/// level-by-level build (the two finest levels a row at a time), and the
+/// tests check that the codes are identical.
 pub(super) fn build_fused(
     heights: &[f32],
     hier: &Hierarchy,
