@@ -52,16 +52,8 @@ pub(super) fn fine_a2(heights: &[f32], hier: &Hierarchy, m: Pt, codes: Codes<'_>
     } else {
         ((y - 1) * w + x + 1, (y + 1) * w + x - 1)
     };
-    let mut code = code_of((hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs());
-    for c in [
-        y * w + x - 1,
-        y * w + x + 1,
-        (y - 1) * w + x,
-        (y + 1) * w + x,
-    ] {
-        code = code.max(codes[c]);
-    }
-    Some(code)
+    let own = code_of((hv(y * w + x) - 0.5 * (hv(a) + hv(b))).abs());
+    Some(own.max(side_children(codes, w, x, y, 1)))
 }
 
 /// `B(4)` with both triangles inside the grid: the samples to scan are the
@@ -136,16 +128,7 @@ pub(super) fn fine_a4(heights: &[f32], hier: &Hierarchy, m: Pt, codes: Codes<'_>
             e = max_no_nan(e, (hv(i, j) - p4 * 0.25).abs());
         }
     }
-    let mut code = code_of(e);
-    for c in [
-        y * w + x - 2,
-        y * w + x + 2,
-        (y - 2) * w + x,
-        (y + 2) * w + x,
-    ] {
-        code = code.max(codes[c]);
-    }
-    Some(code)
+    Some(code_of(e).max(side_children(codes, w, x, y, 2)))
 }
 
 /// The largest side handled by [`small_b`] and [`small_a`]: above it the
@@ -299,16 +282,17 @@ pub(super) fn small_a(
             e = max_no_nan(e, row_max_dev(&heights[row + split..row + s], base2, g2));
         }
     }
-    let mut code = code_of(e);
-    for c in [
-        y * w + x - h,
-        y * w + x + h,
-        (y - h) * w + x,
-        (y + h) * w + x,
-    ] {
-        code = code.max(codes[c]);
-    }
-    Some(code)
+    Some(code_of(e).max(side_children(codes, w, x, y, h)))
+}
+
+/// The largest code of the four children of an `A` split point `(x, y)`:
+/// the `B` points at its square's side midpoints, `d` samples away.
+#[inline]
+fn side_children(codes: Codes<'_>, w: usize, x: usize, y: usize, d: usize) -> u16 {
+    codes[y * w + x - d]
+        .max(codes[y * w + x + d])
+        .max(codes[(y - d) * w + x])
+        .max(codes[(y + d) * w + x])
 }
 
 #[cfg(test)]
