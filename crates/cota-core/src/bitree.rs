@@ -43,9 +43,14 @@
 //!   parallel pass. Their triangles are small, so each level has a shortcut
 //!   that scans its diamond directly, without building triangles or spans,
 //!   and the two finest levels are computed a row at a time.
-//! * **The coarse levels** are built one at a time, each in parallel over its
-//!   rows of split points; a triangle of 64 rows or more is itself split over
-//!   the cores.
+//! * **The coarse levels** (above `A(64)`) are built in two steps
+//!   (`build_banded`): one parallel pass over bands of rows that fit in a
+//!   core's cache computes every coarse split point's own error, all levels
+//!   at once, so the heights are read from memory once rather than once per
+//!   level; then, level by level, each code takes the maximum with its
+//!   children's (a few thousand points).
+//! * On grids too short to fuse up to `A(64)`, the levels in between are
+//!   built one at a time, each in parallel over its rows of split points.
 //!
 //! **Legs.** The shortcuts skip the samples on a triangle's legs. A leg of an
 //! inside triangle is the hypotenuse of one of its children, the plane along
@@ -56,9 +61,12 @@
 //! identical, which the tests check.)
 //!
 //! # Runtime
-//! About `2·log2(max(W, H))` passes over the grid, the first 8 to 12 of them
-//! fused into one; see `bench/README.md`.
+//! `O(n log n)`: about `2·log2(max(W, H))` levels, each visiting every sample
+//! once, in two passes over the heights (the fused fine levels, the banded
+//! coarse ones) plus, on short grids, one per level in between; see
+//! `bench/README.md`.
 
+mod coarse;
 mod fused;
 mod kernels;
 
@@ -67,6 +75,7 @@ use rayon::prelude::*;
 use crate::error_code::{self, encode_up, SplitRule, INFINITE};
 use crate::grid::HeightGrid;
 use crate::hierarchy::{Hierarchy, Placement, Pt, RowSpans, Tri};
+use coarse::build_banded;
 use fused::{build_fused, SWEEP_ROWS};
 use kernels::{fine_a2, fine_a4, fine_b2, fine_b4, small_a, small_b, SMALL_MAX};
 
@@ -170,7 +179,9 @@ impl<'g> Bitree<'g> {
     /// [`MeshError::Voids`] when a sample is NaN (fill voids first).
     ///
     /// # Runtime
-    /// `O(n log n)`, about `2·log2(max(W, H))` passes over the samples, in parallel.
+    /// `O(n log n)`: `2·log2(max(W, H))` levels, each visiting every sample
+    /// once, in parallel, in about two passes over the heights (see the
+    /// module docs).
     pub fn build(grid: &'g HeightGrid) -> Result<Self, MeshError> {
         Self::build_with_progress(grid, &|_, _| {})
     }
@@ -198,9 +209,20 @@ impl<'g> Bitree<'g> {
                 &mut codes,
             );
             progress(fine.len(), levels.len());
-            for (k, level) in levels.iter().enumerate().skip(fine.len()) {
+            // The levels between the fused ones and the banded ones (only on
+            // grids too short to fuse up to `A(SMALL_MAX)`) keep their
+            // shortcuts, one level at a time.
+            let banded = levels
+                .iter()
+                .take_while(|l| level_side(**l) <= SMALL_MAX)
+                .count();
+            for (k, level) in levels.iter().enumerate().take(banded).skip(fine.len()) {
                 build_level(grid.heights(), &hier, *level, &mut codes);
                 progress(k + 1, levels.len());
+            }
+            if banded < levels.len() {
+                build_banded(grid.heights(), &hier, &levels[banded..], &mut codes);
+                progress(levels.len(), levels.len());
             }
             codes
         });
@@ -465,9 +487,23 @@ pub(crate) fn diamond(level: Level, m: Pt, n: u32) -> [Option<Tri>; 2] {
     }
 }
 
-/// Computes `err` for every split point of a coarse `level` (above
-/// `fused::plan`) and writes it into `codes`, in parallel over its rows.
+/// Computes `err` for every split point of `level` and writes it into
+/// `codes`, in parallel over its rows: the level-by-level build, for the
+/// levels neither fused nor banded (see [`Bitree::build`]) and for the tests.
 fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, codes: &mut [u16]) {
+    fill_level(hier, level, codes, |m, codes| {
+        point_code(heights, hier, level, m, codes)
+    });
+}
+
+/// Writes `code(m, codes)` for every split point `m` of `level` into `codes`,
+/// computed in parallel over its rows from a read-only view of the codes.
+fn fill_level(
+    hier: &Hierarchy,
+    level: Level,
+    codes: &mut [u16],
+    code: impl Fn(Pt, Codes<'_>) -> u16 + Sync,
+) {
     let (w, h) = (hier.width(), hier.height());
     let (first, step) = level_rows(level);
     let rows: Vec<u32> = (first..h).step_by(step as usize).collect();
@@ -479,7 +515,7 @@ fn build_level(heights: &[f32], hier: &Hierarchy, level: Level, codes: &mut [u16
                 let mut out = Vec::with_capacity((w / s + 1) as usize);
                 let mut x = first_col(level, y);
                 while x < w {
-                    out.push(point_code(heights, hier, level, [x, y], codes));
+                    out.push(code([x, y], codes));
                     x += s;
                 }
                 out
@@ -609,32 +645,13 @@ fn triangle_error(heights: &[f32], hier: &Hierarchy, level: Level, t: &Tri) -> f
 
 /// Largest |plane − h| over the samples of `t`, visited row by row.
 fn span_error(heights: &[f32], w: usize, t: &Tri, ha: f64, hb: f64, hc: f64) -> f64 {
-    let p = [t.a, t.b, t.c];
-    let hs = [ha, hb, hc];
-    let (x0, y0) = (p[0][0] as i64, p[0][1] as i64);
-    let (dx1, dy1) = (p[1][0] as i64 - x0, p[1][1] as i64 - y0);
-    let (dx2, dy2) = (p[2][0] as i64 - x0, p[2][1] as i64 - y0);
-    let det = (dx1 * dy2 - dx2 * dy1) as f64; // ±power of two: exact division
-    let (dh1, dh2) = (hs[1] - hs[0], hs[2] - hs[0]);
-    let gx = (dh1 * dy2 as f64 - dh2 * dy1 as f64) / det;
-    let gy = (dx1 as f64 * dh2 - dx2 as f64 * dh1) / det;
-
-    let spans = RowSpans::new(p.map(|q| [i64::from(q[0]), i64::from(q[1])]));
-    let (ymin, ymax) = spans.rows();
-    let span = Span {
-        spans,
-        h0: hs[0],
-        gx,
-        gy,
-        x0,
-        y0,
-        w,
-    };
+    let span = Span::new(w, t, [ha, hb, hc]);
+    let (ymin, ymax) = span.rows();
     let rows = (ymax - ymin + 1) as u64;
     if rows * rows >= PARALLEL_SPAN_SAMPLES {
-        // Coarse levels have few rows of triangles (one or two triangles the
-        // size of the grid at the top): split each triangle's rows over the
-        // cores rather than leave one idle.
+        // A large triangle (the own error of a coarse split point, recomputed
+        // by `exact_within` or `own_error_at`): split its rows over the cores
+        // rather than leave one idle.
         let blocks = (ymax - ymin) as usize / 32 + 1;
         (0..blocks)
             .into_par_iter()
@@ -660,6 +677,33 @@ struct Span {
 }
 
 impl Span {
+    /// The plane through `t`'s corners at heights `hs` (`a`, `b`, `c`), on a
+    /// grid `w` samples wide.
+    fn new(w: usize, t: &Tri, hs: [f64; 3]) -> Self {
+        let p = [t.a, t.b, t.c];
+        let (x0, y0) = (p[0][0] as i64, p[0][1] as i64);
+        let (dx1, dy1) = (p[1][0] as i64 - x0, p[1][1] as i64 - y0);
+        let (dx2, dy2) = (p[2][0] as i64 - x0, p[2][1] as i64 - y0);
+        let det = (dx1 * dy2 - dx2 * dy1) as f64; // ±power of two: exact division
+        let (dh1, dh2) = (hs[1] - hs[0], hs[2] - hs[0]);
+        let gx = (dh1 * dy2 as f64 - dh2 * dy1 as f64) / det;
+        let gy = (dx1 as f64 * dh2 - dx2 as f64 * dh1) / det;
+        Span {
+            spans: RowSpans::new(p.map(|q| [i64::from(q[0]), i64::from(q[1])])),
+            h0: hs[0],
+            gx,
+            gy,
+            x0,
+            y0,
+            w,
+        }
+    }
+
+    /// The triangle's first and last rows.
+    fn rows(&self) -> (i64, i64) {
+        self.spans.rows()
+    }
+
     /// Largest |plane − h| over the triangle's samples in rows `y0..=y1`.
     #[inline]
     fn max_dev(&self, heights: &[f32], y0: i64, y1: i64) -> f64 {
@@ -724,6 +768,20 @@ mod test {
     pub(super) fn grid(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> HeightGrid {
         let v = (0..w * h).map(|i| f(i % w, i / w)).collect();
         HeightGrid::new(w, h, v, GeoRef::unreferenced(1.0)).unwrap()
+    }
+
+    /// A real grid from the bundled fixtures, as this crate's own type.
+    pub(super) fn fixture(name: &str) -> HeightGrid {
+        let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .join("../../fixtures")
+            .join(name);
+        let g = cota_io::read_dem(&p, &cota_io::ReadOptions::DEFAULT)
+            .unwrap()
+            .grid;
+        let (w, h) = (g.width(), g.height());
+        let mut g = HeightGrid::new(w, h, g.heights().to_vec(), GeoRef::unreferenced(1.0)).unwrap();
+        crate::voids::fill_voids(&mut g, &crate::voids::FillOptions::DEFAULT).unwrap();
+        g
     }
 
     /// Brute force e(T) by testing every sample of the bounding box.

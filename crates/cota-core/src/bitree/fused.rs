@@ -357,24 +357,9 @@ impl Rows<'_> {
 
 #[cfg(test)]
 mod test {
-    use super::super::test::grid;
+    use super::super::test::{fixture, grid};
     use super::super::{build_level, levels};
     use super::*;
-    use crate::grid::{GeoRef, HeightGrid};
-
-    /// A real grid from the bundled fixtures, as this crate's own type.
-    fn fixture(name: &str) -> HeightGrid {
-        let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../fixtures")
-            .join(name);
-        let g = cota_io::read_dem(&p, &cota_io::ReadOptions::DEFAULT)
-            .unwrap()
-            .grid;
-        let (w, h) = (g.width(), g.height());
-        let mut g = HeightGrid::new(w, h, g.heights().to_vec(), GeoRef::unreferenced(1.0)).unwrap();
-        crate::voids::fill_voids(&mut g, &crate::voids::FillOptions::DEFAULT).unwrap();
-        g
-    }
 
     /// The fused build of the fine levels, cut into segments with seams
     /// between them, computes exactly the codes of the level-by-level build,

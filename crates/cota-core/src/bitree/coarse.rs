@@ -1,0 +1,334 @@
+//! The coarse levels of the bitree build, in one banded pass over the rows.
+//!
+//! Paper `000_ebf7e3a88dffd361.txt` §2 (the bitree) and
+//! `001_49f2c365e8c41172.txt` (the error of a split point, monotone up the
+//! tree). A split point's code is the larger of two things (see the
+//! [`super`] module docs): its *own* error, the largest `e(T)` of its
+//! diamond's triangles, and its children's codes. Only the second ties a level
+//! to the one below it. The own errors of the coarse levels, the levels above
+//! the ones [`super::fused`] builds, are what costs: each of those levels
+//! reads every sample once, and on a grid larger than the cache, built level by
+//! level, each would be one more pass streaming the heights from memory
+//! (`2·log2(N)` of them in all, 12 on a 4097² grid).
+//!
+//! So the build is split in two:
+//! 1. **Own errors, banded.** The rows are cut into bands that fit in a
+//!    core's L2 cache, swept in parallel. In each band, every coarse level
+//!    scans the part of each of its inside triangles that lies in the band,
+//!    row by row exactly as [`super::span_error`] does, and keeps the largest
+//!    deviation per split point (an atomic maximum over the bands): the
+//!    heights are read from memory once for all the coarse levels.
+//! 2. **Closure, level by level.** Fine to coarse, each split point's code
+//!    is the maximum of its children's codes and its own error's code, `+∞`
+//!    where a triangle of its diamond straddles the grid's border. A few
+//!    thousand points on a 4097² grid.
+//!
+//! The codes are the level-by-level build's, bit for bit: a maximum is exact
+//! whatever the order it is taken in, and every row is evaluated by the same
+//! code with the same plane (tested against the level-by-level build).
+//!
+//! # Runtime
+//! One pass over the grid for all the banded levels, `O(n log n)` plane
+//! evaluations (each level visits every sample once) but `O(n)` reads from
+//! memory; the closure is `O(n / 64²)`.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use rayon::prelude::*;
+
+use super::{code_of, diamond, fill_level, first_col, level_rows, level_side, Level, Span};
+use crate::error_code::INFINITE;
+use crate::hierarchy::{Hierarchy, Placement, Pt};
+
+/// About this many bytes of heights per band: half a core's L2 cache on the
+/// machines measured (1 MiB), so the band stays there while every coarse
+/// level scans it.
+const BAND_BYTES: usize = 512 << 10;
+
+/// Bands are at least this many rows (very wide grids)…
+const BAND_MIN_ROWS: u32 = 4;
+
+/// …and at most this many (narrow grids, whose bands would otherwise be few).
+const BAND_MAX_ROWS: u32 = 64;
+
+/// Rows per band for a grid `width` samples wide.
+fn band_rows(width: u32) -> u32 {
+    let rows = BAND_BYTES / (4 * width as usize).max(1);
+    (rows as u32).clamp(BAND_MIN_ROWS, BAND_MAX_ROWS)
+}
+
+/// The split points of one level inside the grid, numbered row by row.
+struct Lattice {
+    level: Level,
+    /// First row and row step of the level's split points.
+    first: u32,
+    step: u32,
+    /// Number of the first point of each row of split points, and the total
+    /// at the end.
+    starts: Vec<usize>,
+}
+
+impl Lattice {
+    fn new(level: Level, hier: &Hierarchy) -> Self {
+        let (w, h) = (hier.width(), hier.height());
+        let (first, step) = level_rows(level);
+        let s = level_side(level);
+        let mut starts = vec![0];
+        let mut y = first;
+        let mut n = 0;
+        while y < h {
+            let x0 = first_col(level, y);
+            n += if x0 < w {
+                ((w - 1 - x0) / s + 1) as usize
+            } else {
+                0
+            };
+            starts.push(n);
+            y += step;
+        }
+        Lattice {
+            level,
+            first,
+            step,
+            starts,
+        }
+    }
+
+    /// Number of split points.
+    fn len(&self) -> usize {
+        self.starts.last().copied().unwrap_or(0)
+    }
+
+    /// The number of the split point `m`, which must be on the lattice.
+    fn index(&self, m: Pt) -> usize {
+        let k = ((m[1] - self.first) / self.step) as usize;
+        let x0 = first_col(self.level, m[1]);
+        self.starts[k] + ((m[0] - x0) / level_side(self.level)) as usize
+    }
+}
+
+/// Builds `levels` (consecutive, fine to coarse, every finer level's codes
+/// already in `codes`): own errors in one banded pass, then the closure.
+pub(super) fn build_banded(heights: &[f32], hier: &Hierarchy, levels: &[Level], codes: &mut [u16]) {
+    for (lattice, own) in own_errors(heights, hier, levels) {
+        fill_level(hier, lattice.level, codes, |m, codes| {
+            let mut code = 0u16;
+            for t in diamond(lattice.level, m, hier.size()).into_iter().flatten() {
+                match hier.place(&t) {
+                    Placement::Outside => continue,
+                    Placement::Straddling => return INFINITE,
+                    Placement::Inside => {}
+                }
+                let (c0, c1) = t.children();
+                code = code.max(codes[hier.index(c0.mid())]);
+                code = code.max(codes[hier.index(c1.mid())]);
+            }
+            let e = f64::from_bits(own[lattice.index(m)].load(Ordering::Relaxed));
+            code.max(code_of(e))
+        });
+    }
+}
+
+/// The own error of every split point of `levels`, as `f64` bits (0 where a
+/// triangle of its diamond straddles the border), from one banded pass.
+fn own_errors(
+    heights: &[f32],
+    hier: &Hierarchy,
+    levels: &[Level],
+) -> Vec<(Lattice, Vec<AtomicU64>)> {
+    // Non-negative `f64`s order like their bits, so an atomic maximum of
+    // the bits is the maximum of the errors.
+    let own: Vec<(Lattice, Vec<AtomicU64>)> = levels
+        .iter()
+        .map(|&l| {
+            let lattice = Lattice::new(l, hier);
+            let errors = (0..lattice.len()).map(|_| AtomicU64::new(0)).collect();
+            (lattice, errors)
+        })
+        .collect();
+    let rows = band_rows(hier.width());
+    let bands = hier.height().div_ceil(rows);
+    (0..bands).into_par_iter().for_each(|b| {
+        let r0 = b * rows;
+        let r1 = (r0 + rows - 1).min(hier.height() - 1);
+        for (lattice, errors) in &own {
+            scan_band(heights, hier, lattice, errors, r0, r1);
+        }
+    });
+    own
+}
+
+/// Folds into `own` the largest deviation, over rows `r0..=r1`, of the inside
+/// triangles of every split point of `lattice` whose diamond meets those rows.
+/// Diamonds with a triangle straddling the border are skipped: their code is
+/// `+∞` whatever their own error.
+fn scan_band(
+    heights: &[f32],
+    hier: &Hierarchy,
+    lattice: &Lattice,
+    own: &[AtomicU64],
+    r0: u32,
+    r1: u32,
+) {
+    let (w, h) = (hier.width(), hier.height());
+    let s = level_side(lattice.level);
+    let hv = |p: Pt| f64::from(heights[p[1] as usize * w as usize + p[0] as usize]);
+    // A diamond of `A(s)` or `B(s)` spans the rows `s/2` either side of its
+    // split point.
+    let lo = r0.saturating_sub(s / 2);
+    let hi = (r1 + s / 2).min(h - 1);
+    let mut k = lo.saturating_sub(lattice.first).div_ceil(lattice.step);
+    loop {
+        let y = lattice.first + k * lattice.step;
+        if y > hi {
+            break;
+        }
+        k += 1;
+        let mut x = first_col(lattice.level, y);
+        while x < w {
+            let m = [x, y];
+            x += s;
+            let tris = diamond(lattice.level, m, hier.size());
+            let places = tris.map(|t| t.map(|t| hier.place(&t)));
+            if places.contains(&Some(Placement::Straddling)) {
+                continue;
+            }
+            let mut e = 0f64;
+            for (t, place) in tris.iter().zip(places) {
+                let (Some(t), Some(Placement::Inside)) = (t, place) else {
+                    continue;
+                };
+                let span = Span::new(w as usize, t, [hv(t.a), hv(t.b), hv(t.c)]);
+                let (ymin, ymax) = span.rows();
+                let (a, b) = (ymin.max(i64::from(r0)), ymax.min(i64::from(r1)));
+                if a <= b {
+                    e = e.max(span.max_dev(heights, a, b));
+                }
+            }
+            if e > 0.0 {
+                own[lattice.index(m)].fetch_max(e.to_bits(), Ordering::Relaxed);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod test {
+    use super::super::test::{fixture, grid};
+    use super::super::{build_level, fused, levels, span_error};
+    use super::*;
+
+    /// The banded build gives the level-by-level build's codes on every
+    /// banded level, on synthetic and real grids of several shapes (square,
+    /// tall, wide, one band's worth of rows, with diamonds straddling the
+    /// borders), banding the levels above `A(64)` as the build does and above
+    /// `A(16)`, where each band meets more and smaller triangles.
+    #[test]
+    fn banded_levels_match_the_level_by_level_build() {
+        let f = |x: usize, y: usize| {
+            ((x * 37 + y * 11) % 13) as f32 * 1.7 - (x * y) as f32 * 0.03 + (y as f32 * 0.1).sin()
+        };
+        let grids = [
+            grid(300, 260, f),
+            grid(513, 513, f),
+            grid(129, 700, f),
+            grid(1100, 140, f),
+            grid(200, 40, f),
+            fixture("boulder_srtmgl3_240x144.asc"),
+            fixture("bijou_gully_subset_5m_edit_dx_filled.asc"),
+            fixture("S29W072.hgt.zip"),
+        ];
+        let mut banded_levels = 0;
+        for g in &grids {
+            let hier = Hierarchy::new(g.width() as u32, g.height() as u32);
+            let all = levels(hier.size());
+            let mut expected = vec![0u16; g.len()];
+            for &level in &all {
+                build_level(g.heights(), &hier, level, &mut expected);
+            }
+            for fine_max in [16, 64] {
+                let fine = fused::up_to(&all, fine_max);
+                let mut banded = expected.clone();
+                let coarse = &all[fine.len()..];
+                // Clear the banded levels' codes, so that stale ones cannot pass.
+                for &level in coarse {
+                    fill_level(&hier, level, &mut banded, |_, _| 0);
+                }
+                build_banded(g.heights(), &hier, coarse, &mut banded);
+                banded_levels += coarse.len();
+                assert!(
+                    banded == expected,
+                    "{}x{} grid, levels above A({fine_max}): banded codes differ",
+                    g.width(),
+                    g.height()
+                );
+            }
+        }
+        assert!(banded_levels >= 40, "only {banded_levels} levels banded");
+    }
+
+    /// Each banded own error is exactly the largest `e(T)` of the diamond's
+    /// inside triangles, each scanned whole: a band that misses rows, or a
+    /// diamond missed by a band, shows here even where the children's codes
+    /// would hide it.
+    #[test]
+    fn banded_own_errors_are_the_whole_triangles_errors() {
+        let grids = [
+            grid(300, 260, |x, y| {
+                ((x * 7 + y * 13) % 29) as f32 * 0.9 + (x as f32 * 0.05).sin() * 40.0
+            }),
+            fixture("boulder_srtmgl3_240x144.asc"),
+            fixture("bijou_gully_subset_5m_edit_dx_filled.asc"),
+        ];
+        let mut checked = 0;
+        for g in &grids {
+            let hier = Hierarchy::new(g.width() as u32, g.height() as u32);
+            let all = levels(hier.size());
+            let coarse = &all[fused::up_to(&all, 16).len()..];
+            let w = hier.width() as usize;
+            let hv = |p: Pt| f64::from(g.heights()[p[1] as usize * w + p[0] as usize]);
+            for (lattice, errors) in own_errors(g.heights(), &hier, coarse) {
+                let mut y = lattice.first;
+                while y < hier.height() {
+                    let mut x = first_col(lattice.level, y);
+                    while x < hier.width() {
+                        let m = [x, y];
+                        let tris = diamond(lattice.level, m, hier.size());
+                        let mut e = 0f64;
+                        for t in tris.iter().flatten() {
+                            match hier.place(t) {
+                                Placement::Inside => {
+                                    let whole =
+                                        span_error(g.heights(), w, t, hv(t.a), hv(t.b), hv(t.c));
+                                    e = e.max(whole);
+                                }
+                                Placement::Straddling => {
+                                    e = 0.0;
+                                    break;
+                                }
+                                Placement::Outside => {}
+                            }
+                        }
+                        let got = f64::from_bits(errors[lattice.index(m)].load(Ordering::Relaxed));
+                        assert_eq!(got, e, "{:?} at {m:?}", lattice.level);
+                        checked += usize::from(e > 0.0);
+                        x += level_side(lattice.level);
+                    }
+                    y += lattice.step;
+                }
+            }
+        }
+        assert!(checked >= 300, "only {checked} non-zero own errors checked");
+    }
+
+    #[test]
+    fn bands_fit_the_cache_and_stay_within_bounds() {
+        for w in [1025, 3601, 4097, 10_001] {
+            let bytes = band_rows(w) as usize * w as usize * 4;
+            assert!(bytes <= BAND_BYTES && 2 * bytes > BAND_BYTES, "{w} wide");
+        }
+        assert_eq!(band_rows(513), BAND_MAX_ROWS);
+        assert_eq!(band_rows(200_000), BAND_MIN_ROWS);
+        assert_eq!(band_rows(1), BAND_MAX_ROWS);
+    }
+}
