@@ -36,7 +36,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use rayon::prelude::*;
 
-use super::{code_of, diamond, fill_level, first_col, level_rows, level_side, Level, Span};
+use super::{code_of, diamond, first_col, level_rows, level_side, Level, Span};
 use crate::error_code::INFINITE;
 use crate::hierarchy::{Hierarchy, Placement, Pt};
 
@@ -94,6 +94,18 @@ impl Lattice {
         }
     }
 
+    /// The split points, in their numbering's order.
+    fn points<'h>(&self, hier: &'h Hierarchy) -> impl Iterator<Item = Pt> + 'h {
+        let (level, s) = (self.level, level_side(self.level));
+        (self.first..hier.height())
+            .step_by(self.step as usize)
+            .flat_map(move |y| {
+                (first_col(level, y)..hier.width())
+                    .step_by(s as usize)
+                    .map(move |x| [x, y])
+            })
+    }
+
     /// Number of split points.
     fn len(&self) -> usize {
         self.starts.last().copied().unwrap_or(0)
@@ -110,22 +122,27 @@ impl Lattice {
 /// Builds `levels` (consecutive, fine to coarse, every finer level's codes
 /// already in `codes`): own errors in one banded pass, then the closure.
 pub(super) fn build_banded(heights: &[f32], hier: &Hierarchy, levels: &[Level], codes: &mut [u16]) {
+    // The closure is sequential: a few thousand points on a 4097² grid, fewer
+    // than the cost of two parallel sections a level on a small one.
     for (lattice, own) in own_errors(heights, hier, levels) {
-        fill_level(hier, lattice.level, codes, |m, codes| {
-            let mut code = 0u16;
+        for (m, e) in lattice.points(hier).zip(own) {
+            let mut code = code_of(f64::from_bits(e.into_inner()));
             for t in diamond(lattice.level, m, hier.size()).into_iter().flatten() {
                 match hier.place(&t) {
                     Placement::Outside => continue,
-                    Placement::Straddling => return INFINITE,
+                    Placement::Straddling => {
+                        code = INFINITE;
+                        break;
+                    }
                     Placement::Inside => {}
                 }
+                // The children are a finer level's split points: final.
                 let (c0, c1) = t.children();
                 code = code.max(codes[hier.index(c0.mid())]);
                 code = code.max(codes[hier.index(c1.mid())]);
             }
-            let e = f64::from_bits(own[lattice.index(m)].load(Ordering::Relaxed));
-            code.max(code_of(e))
-        });
+            codes[hier.index(m)] = code;
+        }
     }
 }
 
@@ -215,7 +232,7 @@ fn scan_band(
 #[cfg(test)]
 mod test {
     use super::super::test::{fixture, grid};
-    use super::super::{build_level, fused, levels, span_error};
+    use super::super::{build_level, fill_level, fused, levels, span_error};
     use super::*;
 
     /// The banded build gives the level-by-level build's codes on every
@@ -319,6 +336,23 @@ mod test {
             }
         }
         assert!(checked >= 300, "only {checked} non-zero own errors checked");
+    }
+
+    /// The lattice numbers its points `0..len` in the order it lists them.
+    #[test]
+    fn lattice_numbers_its_points_in_order() {
+        for (w, h) in [(1025, 1025), (300, 260), (1100, 140), (129, 700)] {
+            let hier = Hierarchy::new(w, h);
+            for level in levels(hier.size()) {
+                let lattice = Lattice::new(level, &hier);
+                let points: Vec<Pt> = lattice.points(&hier).collect();
+                assert_eq!(points.len(), lattice.len(), "{w}x{h} {level:?}");
+                for (k, &m) in points.iter().enumerate() {
+                    assert!(m[0] < w && m[1] < h);
+                    assert_eq!(lattice.index(m), k, "{w}x{h} {level:?} {m:?}");
+                }
+            }
+        }
     }
 
     #[test]
