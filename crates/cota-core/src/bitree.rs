@@ -194,8 +194,9 @@ impl<'g> Bitree<'g> {
         grid: &'g HeightGrid,
         progress: Progress<'_>,
     ) -> Result<Self, MeshError> {
-        let hier = hierarchy_for(grid)?;
-        let codes = crate::on_pool(|| {
+        // One pool entry for the whole build, the void check included.
+        let (hier, codes) = crate::on_pool(|| -> Result<_, MeshError> {
+            let hier = hierarchy_for(grid)?;
             let mut codes = vec![0u16; grid.len()];
             let levels = levels(hier.size());
             let threads = rayon::current_num_threads() as u32;
@@ -224,8 +225,8 @@ impl<'g> Bitree<'g> {
                 build_banded(grid.heights(), &hier, &levels[banded..], &mut codes);
                 progress(levels.len(), levels.len());
             }
-            codes
-        });
+            Ok((hier, codes))
+        })?;
         let inside = crate::extract::inside_roots(&hier);
         Ok(Bitree {
             grid,
