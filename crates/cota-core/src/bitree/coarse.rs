@@ -237,7 +237,7 @@ mod test {
 
     /// The banded build gives the level-by-level build's codes on every
     /// banded level, on synthetic and real grids of several shapes (square,
-    /// tall, wide, one band's worth of rows, with diamonds straddling the
+    /// tall, wide, one band's worth of rows, two samples across, with diamonds straddling the
     /// borders), banding the levels above `A(64)` as the build does and above
     /// `A(16)`, where each band meets more and smaller triangles.
     #[test]
@@ -251,6 +251,8 @@ mod test {
             grid(129, 700, f),
             grid(1100, 140, f),
             grid(200, 40, f),
+            grid(3000, 2, f),
+            grid(2, 3000, f),
             fixture("boulder_srtmgl3_240x144.asc"),
             fixture("bijou_gully_subset_5m_edit_dx_filled.asc"),
             fixture("S29W072.hgt.zip"),
