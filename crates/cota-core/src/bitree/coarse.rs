@@ -237,9 +237,10 @@ mod test {
 
     /// The banded build gives the level-by-level build's codes on every
     /// banded level, on synthetic and real grids of several shapes (square,
-    /// tall, wide, one band's worth of rows, two samples across, with diamonds straddling the
-    /// borders), banding the levels above `A(64)` as the build does and above
-    /// `A(16)`, where each band meets more and smaller triangles.
+    /// tall, wide, one band's worth of rows, two samples across, with
+    /// diamonds straddling the borders), banding the levels above `A(64)` as
+    /// the build does and above `A(16)`, where each band meets more and
+    /// smaller triangles.
     #[test]
     fn banded_levels_match_the_level_by_level_build() {
         let f = |x: usize, y: usize| {
