@@ -24,8 +24,9 @@
 //!
 //! With `--levels`, each grid's row is followed by the speed-up of each
 //! step of the build (from `Bitree::build_with_progress`, medians over the
-//! rounds): the fused fine levels `B(2)–A(s)` as one step, then each coarser
-//! level `B(2s), A(2s), …` (see `cota_core::hierarchy`).
+//! rounds): the fused fine levels `B(2)–A(s)` as one step, each level up to
+//! `A(64)` that the grid was too short to fuse, then the banded coarse levels
+//! `B(128)–A(N)` as one step (see `cota_core::hierarchy`).
 //!
 //! Run: `cargo run --release -p cota-bench --bin build-speedup [-- --rounds N] [-- --big] [-- --levels]`.
 
@@ -92,7 +93,8 @@ where
 }
 
 /// One build's time, the time of each step it reported (the fused fine
-/// levels are one step; the last step includes the work after it) with the
+/// levels are one step, the banded coarse levels another; the last step
+/// includes the work after it) with the
 /// number of levels done after it, and its number of levels.
 fn time_build(grid: &HeightGrid) -> anyhow::Result<(f64, Vec<f64>, Vec<usize>, usize)> {
     let marks = Mutex::new(Vec::new());
