@@ -593,6 +593,22 @@ impl std::ops::Index<usize> for Codes<'_> {
 /// The code of `err` of the split point `m` (see the module docs).
 #[inline(never)]
 fn diamond_error(heights: &[f32], hier: &Hierarchy, level: Level, m: Pt, codes: Codes<'_>) -> u16 {
+    diamond_code(hier, level, m, codes, |t| {
+        triangle_error(heights, hier, level, t)
+    })
+}
+
+/// The code of the split point `m` of `level` from `own(T)`, the error of
+/// each inside triangle `T` of its diamond: the largest of their codes and
+/// their children's codes, [`INFINITE`] when a triangle straddles the border.
+#[inline]
+fn diamond_code(
+    hier: &Hierarchy,
+    level: Level,
+    m: Pt,
+    codes: Codes<'_>,
+    mut own: impl FnMut(&Tri) -> f64,
+) -> u16 {
     let mut e = 0f64;
     let mut code = 0u16;
     for t in diamond(level, m, hier.size()).into_iter().flatten() {
@@ -601,7 +617,7 @@ fn diamond_error(heights: &[f32], hier: &Hierarchy, level: Level, m: Pt, codes: 
             Placement::Straddling => return INFINITE,
             Placement::Inside => {}
         }
-        e = max_no_nan(e, triangle_error(heights, hier, level, &t));
+        e = max_no_nan(e, own(&t));
         let (c0, c1) = t.children();
         if !c0.is_unit() {
             code = code.max(codes[hier.index(c0.mid())]);
@@ -769,6 +785,12 @@ mod test {
     pub(super) fn grid(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> HeightGrid {
         let v = (0..w * h).map(|i| f(i % w, i / w)).collect();
         HeightGrid::new(w, h, v, GeoRef::unreferenced(1.0)).unwrap()
+    }
+
+    /// A rough synthetic terrain for comparing build paths: a sawtooth, a
+    /// saddle and a wave, so that no two neighbouring diamonds agree.
+    pub(super) fn rough(x: usize, y: usize) -> f32 {
+        ((x * 37 + y * 11) % 13) as f32 * 1.7 - (x * y) as f32 * 0.03 + (y as f32 * 0.1).sin()
     }
 
     /// A real grid from the bundled fixtures, as this crate's own type.

@@ -36,8 +36,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use rayon::prelude::*;
 
-use super::{code_of, diamond, first_col, level_rows, level_side, Level, Span};
-use crate::error_code::INFINITE;
+use super::{diamond, diamond_code, first_col, level_rows, level_side, Codes, Level, Span};
 use crate::hierarchy::{Hierarchy, Placement, Pt};
 
 /// About this many bytes of heights per band: half a core's L2 cache on the
@@ -60,9 +59,6 @@ fn band_rows(width: u32) -> u32 {
 /// The split points of one level inside the grid, numbered row by row.
 struct Lattice {
     level: Level,
-    /// First row and row step of the level's split points.
-    first: u32,
-    step: u32,
     /// Number of the first point of each row of split points, and the total
     /// at the end.
     starts: Vec<usize>,
@@ -86,19 +82,15 @@ impl Lattice {
             starts.push(n);
             y += step;
         }
-        Lattice {
-            level,
-            first,
-            step,
-            starts,
-        }
+        Lattice { level, starts }
     }
 
     /// The split points, in their numbering's order.
     fn points<'h>(&self, hier: &'h Hierarchy) -> impl Iterator<Item = Pt> + 'h {
         let (level, s) = (self.level, level_side(self.level));
-        (self.first..hier.height())
-            .step_by(self.step as usize)
+        let (first, step) = level_rows(level);
+        (first..hier.height())
+            .step_by(step as usize)
             .flat_map(move |y| {
                 (first_col(level, y)..hier.width())
                     .step_by(s as usize)
@@ -113,7 +105,8 @@ impl Lattice {
 
     /// The number of the split point `m`, which must be on the lattice.
     fn index(&self, m: Pt) -> usize {
-        let k = ((m[1] - self.first) / self.step) as usize;
+        let (first, step) = level_rows(self.level);
+        let k = ((m[1] - first) / step) as usize;
         let x0 = first_col(self.level, m[1]);
         self.starts[k] + ((m[0] - x0) / level_side(self.level)) as usize
     }
@@ -126,22 +119,11 @@ pub(super) fn build_banded(heights: &[f32], hier: &Hierarchy, levels: &[Level], 
     // than the cost of two parallel sections a level on a small one.
     for (lattice, own) in own_errors(heights, hier, levels) {
         for (m, e) in lattice.points(hier).zip(own) {
-            let mut code = code_of(f64::from_bits(e.into_inner()));
-            for t in diamond(lattice.level, m, hier.size()).into_iter().flatten() {
-                match hier.place(&t) {
-                    Placement::Outside => continue,
-                    Placement::Straddling => {
-                        code = INFINITE;
-                        break;
-                    }
-                    Placement::Inside => {}
-                }
-                // The children are a finer level's split points: final.
-                let (c0, c1) = t.children();
-                code = code.max(codes[hier.index(c0.mid())]);
-                code = code.max(codes[hier.index(c1.mid())]);
-            }
-            codes[hier.index(m)] = code;
+            // The own error is the diamond's, found by the banded pass; the
+            // children are a finer level's split points: final.
+            let e = f64::from_bits(e.into_inner());
+            let view = Codes { c: codes, base: 0 };
+            codes[hier.index(m)] = diamond_code(hier, lattice.level, m, view, |_| e);
         }
     }
 }
@@ -194,9 +176,10 @@ fn scan_band(
     // split point.
     let lo = r0.saturating_sub(s / 2);
     let hi = (r1 + s / 2).min(h - 1);
-    let mut k = lo.saturating_sub(lattice.first).div_ceil(lattice.step);
+    let (first, step) = level_rows(lattice.level);
+    let mut k = lo.saturating_sub(first).div_ceil(step);
     loop {
-        let y = lattice.first + k * lattice.step;
+        let y = first + k * step;
         if y > hi {
             break;
         }
@@ -231,8 +214,8 @@ fn scan_band(
 
 #[cfg(test)]
 mod test {
-    use super::super::test::{fixture, grid};
-    use super::super::{build_level, fill_level, fused, levels, span_error};
+    use super::super::test::{fixture, grid, rough};
+    use super::super::{build_level, fill_level, fused, levels};
     use super::*;
 
     /// The banded build gives the level-by-level build's codes on every
@@ -243,9 +226,7 @@ mod test {
     /// smaller triangles.
     #[test]
     fn banded_levels_match_the_level_by_level_build() {
-        let f = |x: usize, y: usize| {
-            ((x * 37 + y * 11) % 13) as f32 * 1.7 - (x * y) as f32 * 0.03 + (y as f32 * 0.1).sin()
-        };
+        let f = rough;
         let grids = [
             grid(300, 260, f),
             grid(513, 513, f),
@@ -302,39 +283,21 @@ mod test {
         ];
         let mut checked = 0;
         for g in &grids {
-            let hier = Hierarchy::new(g.width() as u32, g.height() as u32);
+            let tree = crate::Bitree::build(g).unwrap();
+            let hier = tree.hierarchy();
             let all = levels(hier.size());
             let coarse = &all[fused::up_to(&all, 16).len()..];
-            let w = hier.width() as usize;
-            let hv = |p: Pt| f64::from(g.heights()[p[1] as usize * w + p[0] as usize]);
-            for (lattice, errors) in own_errors(g.heights(), &hier, coarse) {
-                let mut y = lattice.first;
-                while y < hier.height() {
-                    let mut x = first_col(lattice.level, y);
-                    while x < hier.width() {
-                        let m = [x, y];
-                        let tris = diamond(lattice.level, m, hier.size());
-                        let mut e = 0f64;
-                        for t in tris.iter().flatten() {
-                            match hier.place(t) {
-                                Placement::Inside => {
-                                    let whole =
-                                        span_error(g.heights(), w, t, hv(t.a), hv(t.b), hv(t.c));
-                                    e = e.max(whole);
-                                }
-                                Placement::Straddling => {
-                                    e = 0.0;
-                                    break;
-                                }
-                                Placement::Outside => {}
-                            }
-                        }
-                        let got = f64::from_bits(errors[lattice.index(m)].load(Ordering::Relaxed));
-                        assert_eq!(got, e, "{:?} at {m:?}", lattice.level);
-                        checked += usize::from(e > 0.0);
-                        x += level_side(lattice.level);
-                    }
-                    y += lattice.step;
+            for (lattice, errors) in own_errors(g.heights(), hier, coarse) {
+                for m in lattice.points(hier) {
+                    // The whole triangles' error; 0 where one straddles the
+                    // border (the banded pass skips those diamonds).
+                    let e = tree
+                        .own_error_at(m)
+                        .filter(|e| e.is_finite())
+                        .unwrap_or(0.0);
+                    let got = f64::from_bits(errors[lattice.index(m)].load(Ordering::Relaxed));
+                    assert_eq!(got, e, "{:?} at {m:?}", lattice.level);
+                    checked += usize::from(e > 0.0);
                 }
             }
         }

@@ -357,7 +357,7 @@ impl Rows<'_> {
 
 #[cfg(test)]
 mod test {
-    use super::super::test::{fixture, grid};
+    use super::super::test::{fixture, grid, rough};
     use super::super::{build_level, levels};
     use super::*;
 
@@ -367,9 +367,7 @@ mod test {
     /// allowed up.
     #[test]
     fn fused_fine_levels_match_the_level_by_level_build() {
-        let f = |x: usize, y: usize| {
-            ((x * 37 + y * 11) % 13) as f32 * 1.7 - (x * y) as f32 * 0.03 + (y as f32 * 0.1).sin()
-        };
+        let f = rough;
         let grids = [
             grid(70, 203, f),
             grid(131, 257, f),
