@@ -36,19 +36,21 @@
 //!
 //! * **The fine levels** (up to `A(16)`, `A(32)` or `A(64)` as the grid's
 //!   height allows: 8 to 12 levels, most of the split points) are
-//!   built together in one cache-blocked pass (`build_fused`): the rows are
-//!   cut into segments swept in parallel, and in each segment every level
-//!   follows a few rows behind the one below it, so it reads rows that are
-//!   still in cache. The seams between segments are filled by a second
-//!   parallel pass. Their triangles are small, so each level has a shortcut
+//!   built together in one cache-blocked pass (`fused::sweep`): the rows are
+//!   cut into segments of equal height, as many for each thread, swept in
+//!   parallel, and in each segment every level follows a few rows behind the
+//!   one below it, so it reads rows that are still in cache. The seams
+//!   between segments are filled by a second parallel pass (`fused::seams`). Their triangles are small, so each level has a shortcut
 //!   that scans its diamond directly, without building triangles or spans,
 //!   and the two finest levels are computed a row at a time.
 //! * **The coarse levels** (above `A(64)`) are built in two steps
-//!   (`build_banded`): one parallel pass over bands of rows that fit in a
+//!   (`coarse.rs`): one parallel pass over bands of rows that fit in a
 //!   core's cache computes every coarse split point's own error, all levels
 //!   at once, so the heights are read from memory once rather than once per
 //!   level; then, level by level, each code takes the maximum with its
-//!   children's (a few thousand points).
+//!   children's (a few thousand points). The bands need no codes, so they
+//!   are the work of any thread that would otherwise wait: one with no
+//!   segment left to sweep, or alongside the seams.
 //! * On grids too short to fuse up to `A(64)`, the levels in between are
 //!   built one at a time, each in parallel over its rows of split points.
 //!
@@ -75,8 +77,7 @@ use rayon::prelude::*;
 use crate::error_code::{self, encode_up, SplitRule, INFINITE};
 use crate::grid::HeightGrid;
 use crate::hierarchy::{Hierarchy, Placement, Pt, RowSpans, Tri};
-use coarse::build_banded;
-use fused::{build_fused, SWEEP_ROWS};
+use fused::SWEEP_ROWS;
 use kernels::{fine_a2, fine_a4, fine_b2, fine_b4, small_a, small_b, SMALL_MAX};
 
 /// Errors from building or extracting a mesh.
@@ -201,28 +202,37 @@ impl<'g> Bitree<'g> {
             let levels = levels(hier.size());
             let threads = rayon::current_num_threads() as u32;
             let (fine, segment_rows) = fused::plan(&levels, hier.height(), threads);
-            build_fused(
-                grid.heights(),
-                &hier,
-                fine,
-                segment_rows,
-                SWEEP_ROWS,
-                &mut codes,
-            );
-            progress(fine.len(), levels.len());
-            // The levels between the fused ones and the banded ones (only on
-            // grids too short to fuse up to `A(SMALL_MAX)`) keep their
-            // shortcuts, one level at a time.
+            // The levels from `banded` on, above `A(SMALL_MAX)`, are built
+            // by the banded pass (`coarse.rs`).
             let banded = levels
                 .iter()
                 .take_while(|l| level_side(**l) <= SMALL_MAX)
                 .count();
-            for (k, level) in levels.iter().enumerate().take(banded).skip(fine.len()) {
-                build_level(grid.heights(), &hier, *level, &mut codes);
-                progress(k + 1, levels.len());
-            }
+            let heights = grid.heights();
+            // The coarse levels' own errors read only the heights: their
+            // bands fill the time a thread would wait for the others, at the
+            // end of the sweep and during the seams.
+            let own = coarse::OwnErrors::new(&hier, &levels[banded..]);
+            let filler = || own.scan_next(heights, &hier);
+            fused::sweep(heights, &hier, fine, segment_rows, SWEEP_ROWS, &mut codes, &filler);
+            // The rest of the levels up to `A(SMALL_MAX)`, alongside the
+            // bands left: the fused levels' seams, then the levels between
+            // the fused ones and the banded ones (only on grids too short to
+            // fuse up to `A(SMALL_MAX)`), one level at a time with their
+            // shortcuts.
+            rayon::join(
+                || {
+                    fused::seams(heights, &hier, fine, segment_rows, &mut codes);
+                    progress(fine.len(), levels.len());
+                    for (k, level) in levels.iter().enumerate().take(banded).skip(fine.len()) {
+                        build_level(heights, &hier, *level, &mut codes);
+                        progress(k + 1, levels.len());
+                    }
+                },
+                || own.scan_rest(heights, &hier),
+            );
             if banded < levels.len() {
-                build_banded(grid.heights(), &hier, &levels[banded..], &mut codes);
+                coarse::close(&hier, own, &mut codes);
                 progress(levels.len(), levels.len());
             }
             Ok((hier, codes))
@@ -943,6 +953,38 @@ mod test {
                 ambiguous > 0,
                 "the thresholds never exercised the tie-break"
             );
+        }
+    }
+
+    /// The build gives the same codes on any number of threads: the fused
+    /// sweep's segments, their seams and the banded pass alongside them all
+    /// depend on the thread count, on grids whose heights take each of the
+    /// plan's cases (fused up to `A(16)`, `A(32)`, `A(64)`; one segment, four,
+    /// eight), real and synthetic.
+    #[test]
+    fn builds_the_same_codes_on_any_number_of_threads() {
+        let f = rough;
+        let grids = [
+            grid(90, 41, f),
+            grid(300, 260, f),
+            grid(180, 513, f),
+            grid(150, 1201, f),
+            grid(70, 2100, f),
+            fixture("S29W072.hgt.zip"),
+        ];
+        let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+        for g in &grids {
+            let one = pool(1).install(|| Bitree::build(g).unwrap().codes);
+            assert!(one.iter().any(|&c| c != 0 && c != INFINITE));
+            for n in [2, 3, 8] {
+                let many = pool(n).install(|| Bitree::build(g).unwrap().codes);
+                assert!(
+                    many == one,
+                    "{}×{} on {n} threads",
+                    g.width(),
+                    g.height()
+                );
+            }
         }
     }
 

@@ -22,11 +22,23 @@
 //! level-synchronous passes over that grid with no serial part and no
 //! imbalance: the ceiling against which to read the build's.
 //!
+//! Each round also runs **two one-thread builds at once**, one on each core
+//! (two one-thread pools, started together), and takes the slower one's
+//! time `Tc`. Their throughput over the round's lone 1-thread build `T1`,
+//! `2·T1 / Tc`, is what the two cores give this very work when nothing in it
+//! is shared or serial: the same loops, caches and memory traffic. A
+//! perfect split of one build over the two cores would take `Tc / 2`, so
+//! this is the build's own ceiling, and `speed-up ÷ throughput` its parallel
+//! efficiency. (On a machine whose two cores do not slow each other down,
+//! the throughput is 2.)
+//!
 //! With `--levels`, each grid's row is followed by the speed-up of each
 //! step of the build (from `Bitree::build_with_progress`, medians over the
 //! rounds): the fused fine levels `B(2)–A(s)` as one step, each level up to
 //! `A(64)` that the grid was too short to fuse, then the banded coarse levels
-//! `B(128)–A(N)` as one step (see `cota_core::hierarchy`).
+//! `B(128)–A(N)` as one step (see `cota_core::hierarchy`). Since the coarse
+//! levels' bands fill the threads' idle time during the earlier steps, the
+//! steps overlap: the last one is the bands still left, and the closure.
 //!
 //! Run: `cargo run --release -p cota-bench --bin build-speedup [-- --rounds N] [-- --big] [-- --levels]`.
 
@@ -50,6 +62,8 @@ struct Pairs {
     /// The perfectly parallel reference, 2 threads and 1.
     ref_two: Vec<f64>,
     ref_one: Vec<f64>,
+    /// Two one-thread builds at once, one on each core: the slower one's time.
+    copies: Vec<f64>,
 }
 
 /// The perfectly parallel reference (see the module doc): `passes` parallel
@@ -75,6 +89,27 @@ fn time_reference(grid: &HeightGrid, passes: usize) -> f64 {
     });
     std::hint::black_box(acc);
     t.elapsed().as_secs_f64()
+}
+
+/// Two one-thread builds of `grid` at once, on the one-thread pools `one`
+/// and `other`, started together: the slower one's time, in seconds.
+fn time_copies(
+    grid: &HeightGrid,
+    one: &rayon::ThreadPool,
+    other: &rayon::ThreadPool,
+) -> anyhow::Result<f64> {
+    let start = std::sync::Barrier::new(2);
+    let build = |pool: &rayon::ThreadPool| {
+        start.wait();
+        pool.install(|| time_build(grid)).map(|t| t.0)
+    };
+    let (a, b) = std::thread::scope(|s| {
+        let a = s.spawn(|| build(one));
+        let b = build(other);
+        (a.join(), b)
+    });
+    let a = a.map_err(|_| anyhow::anyhow!("a build thread panicked"))??;
+    Ok(a.max(b?))
 }
 
 /// `f` on the global pool and on the one-thread pool `one`, back to back,
@@ -124,7 +159,12 @@ fn time_build(grid: &HeightGrid) -> anyhow::Result<(f64, Vec<f64>, Vec<usize>, u
     Ok((s, steps, done, total))
 }
 
-fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::Result<Pairs> {
+fn pairs(
+    grid: &HeightGrid,
+    rounds: usize,
+    one: &rayon::ThreadPool,
+    other: &rayon::ThreadPool,
+) -> anyhow::Result<Pairs> {
     // One warm-up of each; the reference makes as many passes as the build
     // has levels.
     let (_, _, done, passes) = time_build(grid)?;
@@ -137,6 +177,7 @@ fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::R
         one_levels: Vec::with_capacity(rounds),
         ref_two: Vec::with_capacity(rounds),
         ref_one: Vec::with_capacity(rounds),
+        copies: Vec::with_capacity(rounds),
     };
     time_reference(grid, passes);
     one.install(|| time_reference(grid, passes));
@@ -150,6 +191,7 @@ fn pairs(grid: &HeightGrid, rounds: usize, one: &rayon::ThreadPool) -> anyhow::R
         let (ref_two, ref_one) = paired(r, one, || time_reference(grid, passes));
         p.ref_two.push(ref_two);
         p.ref_one.push(ref_one);
+        p.copies.push(time_copies(grid, one, other)?);
     }
     Ok(p)
 }
@@ -168,20 +210,26 @@ fn row(name: &str, grid: &HeightGrid, p: &Pairs) {
         .zip(&p.ref_two)
         .map(|(a, b)| a / b)
         .collect();
+    // Two builds at once in about the time of one: the throughput of the
+    // two cores over one, from the same round's 1-thread build.
+    let throughput: Vec<f64> = p.one.iter().zip(&p.copies).map(|(a, c)| 2.0 * a / c).collect();
+    let (speed_up, ceiling) = (median(&ratios), median(&throughput));
     println!(
-        "| {name} | {}×{} | {} | {:.2} ms | {:.2} ms | **{:.2}** | {:.2} | {:.2}–{:.2} | {:.2} | {:.2} ({:.2} ms) |",
+        "| {name} | {}×{} | {} | {:.2} ms | {:.2} ms | **{:.2}** | {:.2} | {:.2}–{:.2} | {:.2} | {:.2} ({:.2} ms) | {:.2} | {:.0} % |",
         grid.width(),
         grid.height(),
         ratios.len(),
         m1 * 1e3,
         m2 * 1e3,
-        median(&ratios),
+        speed_up,
         m1 / m2,
         lo,
         hi,
         best1 / best2,
         median(&ref_ratios),
         median(&p.ref_two) * 1e3,
+        ceiling,
+        100.0 * speed_up / ceiling,
     );
 }
 
@@ -234,25 +282,28 @@ fn main() -> anyhow::Result<()> {
             level_line(name, p);
         }
     };
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .context("a one-thread rayon pool")?;
+    let one_thread = || {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .context("a one-thread rayon pool")
+    };
+    let (one, other) = (one_thread()?, one_thread()?);
     println!(
         "Paired build rounds: {} rayon threads vs 1 (median of per-round ratios).\n",
         rayon::current_num_threads()
     );
-    println!("| grid | size | rounds | 1 thread (median) | 2 threads (median) | speed-up (median of ratios) | ratio of medians | ratio range | best / best | perfectly parallel reference: speed-up (2-thread median) |");
-    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("| grid | size | rounds | 1 thread (median) | 2 threads (median) | speed-up (median of ratios) | ratio of medians | ratio range | best / best | perfectly parallel reference: speed-up (2-thread median) | two 1-thread builds at once: throughput | speed-up ÷ throughput |");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for case in load_cases(|m| eprintln!("build-speedup: {m}")) {
-        show(case.name, &case.square, &pairs(&case.square, rounds, &one)?);
+        show(case.name, &case.square, &pairs(&case.square, rounds, &one, &other)?);
         if let Some(native) = &case.native {
             let name = format!("srtm{}", native.width());
-            show(&name, native, &pairs(native, rounds, &one)?);
+            show(&name, native, &pairs(native, rounds, &one, &other)?);
         }
     }
     match load_mosaic2() {
-        Ok(m) => show("mosaic2", &m.grid, &pairs(&m.grid, rounds, &one)?),
+        Ok(m) => show("mosaic2", &m.grid, &pairs(&m.grid, rounds, &one, &other)?),
         Err(e) => eprintln!("build-speedup: skipping mosaic2: {e}"),
     }
     if big {
@@ -263,7 +314,7 @@ fn main() -> anyhow::Result<()> {
             Ok(b) => show(
                 "big4097",
                 &b.grid,
-                &pairs(&b.grid, rounds.div_ceil(3), &one)?,
+                &pairs(&b.grid, rounds.div_ceil(3), &one, &other)?,
             ),
             Err(e) => eprintln!("build-speedup: skipping big4097: {e}"),
         }

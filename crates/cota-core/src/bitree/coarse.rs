@@ -13,7 +13,9 @@
 //!
 //! So the build is split in two:
 //! 1. **Own errors, banded.** The rows are cut into bands that fit in a
-//!    core's L2 cache, swept in parallel. In each band, every coarse level
+//!    core's L2 cache, taken from a shared queue by whichever thread is free
+//!    (during the fine levels' sweep, by a thread with no segment left; then
+//!    alongside the seams). In each band, every coarse level
 //!    scans the part of each of its inside triangles that lies in the band,
 //!    row by row exactly as [`super::span_error`] does, and keeps the largest
 //!    deviation per split point (an atomic maximum over the bands): the
@@ -32,7 +34,7 @@
 //! evaluations (each level visits every sample once) but `O(n)` reads from
 //! memory; the closure is `O(n / 64²)`.
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 use rayon::prelude::*;
 
@@ -112,12 +114,81 @@ impl Lattice {
     }
 }
 
-/// Builds `levels` (consecutive, fine to coarse, every finer level's codes
-/// already in `codes`): own errors in one banded pass, then the closure.
-pub(super) fn build_banded(heights: &[f32], hier: &Hierarchy, levels: &[Level], codes: &mut [u16]) {
+/// The own errors of a run of consecutive levels, filled band by band from
+/// a shared queue of bands ([`OwnErrors::scan_next`]), then closed into codes
+/// by [`close`]. The bands read the heights only, not the codes, so the build
+/// hands them out to whichever thread has nothing else to do while the finer
+/// levels are built.
+pub(super) struct OwnErrors {
+    /// Each level's split points and their own errors so far, as `f64` bits
+    /// (non-negative `f64`s order like their bits, so an atomic maximum of
+    /// the bits is the maximum of the errors).
+    levels: Vec<(Lattice, Vec<AtomicU64>)>,
+    /// Rows per band, and the number of bands.
+    rows: u32,
+    bands: u32,
+    /// The next band not yet taken.
+    next: AtomicU32,
+}
+
+impl OwnErrors {
+    /// No band scanned yet: every own error 0.
+    pub(super) fn new(hier: &Hierarchy, levels: &[Level]) -> Self {
+        let levels: Vec<_> = levels
+            .iter()
+            .map(|&l| {
+                let lattice = Lattice::new(l, hier);
+                let errors = (0..lattice.len()).map(|_| AtomicU64::new(0)).collect();
+                (lattice, errors)
+            })
+            .collect();
+        let rows = band_rows(hier.width());
+        let bands = if levels.is_empty() {
+            0
+        } else {
+            hier.height().div_ceil(rows)
+        };
+        OwnErrors {
+            levels,
+            rows,
+            bands,
+            next: AtomicU32::new(0),
+        }
+    }
+
+    /// Takes the next band from the queue and folds it into every level's
+    /// own errors; `false` (doing nothing) once every band has been taken.
+    pub(super) fn scan_next(&self, heights: &[f32], hier: &Hierarchy) -> bool {
+        let b = self.next.fetch_add(1, Ordering::Relaxed);
+        if b >= self.bands {
+            // Keep the counter from wrapping however often it is asked.
+            self.next.store(self.bands, Ordering::Relaxed);
+            return false;
+        }
+        let r0 = b * self.rows;
+        let r1 = (r0 + self.rows - 1).min(hier.height() - 1);
+        for (lattice, errors) in &self.levels {
+            scan_band(heights, hier, lattice, errors, r0, r1);
+        }
+        true
+    }
+
+    /// Scans every band still in the queue, on all the pool's threads.
+    pub(super) fn scan_rest(&self, heights: &[f32], hier: &Hierarchy) {
+        (0..rayon::current_num_threads())
+            .into_par_iter()
+            .with_max_len(1)
+            .for_each(|_| while self.scan_next(heights, hier) {});
+    }
+}
+
+/// Closes `own` (every band scanned) into the codes of its levels, fine to
+/// coarse, every finer level's codes already in `codes`.
+pub(super) fn close(hier: &Hierarchy, own: OwnErrors, codes: &mut [u16]) {
+    debug_assert!(own.next.load(Ordering::Relaxed) >= own.bands);
     // The closure is sequential: a few thousand points on a 4097² grid, fewer
     // than the cost of two parallel sections a level on a small one.
-    for (lattice, own) in own_errors(heights, hier, levels) {
+    for (lattice, own) in own.levels {
         for (m, e) in lattice.points(hier).zip(own) {
             // The own error is the diamond's, found by the banded pass; the
             // children are a finer level's split points: final.
@@ -128,32 +199,19 @@ pub(super) fn build_banded(heights: &[f32], hier: &Hierarchy, levels: &[Level], 
     }
 }
 
-/// The own error of every split point of `levels`, as `f64` bits (0 where a
-/// triangle of its diamond straddles the border), from one banded pass.
-fn own_errors(
-    heights: &[f32],
-    hier: &Hierarchy,
-    levels: &[Level],
-) -> Vec<(Lattice, Vec<AtomicU64>)> {
-    // Non-negative `f64`s order like their bits, so an atomic maximum of
-    // the bits is the maximum of the errors.
-    let own: Vec<(Lattice, Vec<AtomicU64>)> = levels
-        .iter()
-        .map(|&l| {
-            let lattice = Lattice::new(l, hier);
-            let errors = (0..lattice.len()).map(|_| AtomicU64::new(0)).collect();
-            (lattice, errors)
-        })
-        .collect();
-    let rows = band_rows(hier.width());
-    let bands = hier.height().div_ceil(rows);
-    (0..bands).into_par_iter().for_each(|b| {
-        let r0 = b * rows;
-        let r1 = (r0 + rows - 1).min(hier.height() - 1);
-        for (lattice, errors) in &own {
-            scan_band(heights, hier, lattice, errors, r0, r1);
-        }
-    });
+/// Builds `levels` (consecutive, fine to coarse, every finer level's codes
+/// already in `codes`): own errors in one banded pass, then the closure.
+#[cfg(test)]
+pub(super) fn build_banded(heights: &[f32], hier: &Hierarchy, levels: &[Level], codes: &mut [u16]) {
+    close(hier, own_errors(heights, hier, levels), codes);
+}
+
+/// The own error of every split point of `levels` (0 where a triangle of its
+/// diamond straddles the border), every band scanned.
+#[cfg(test)]
+fn own_errors(heights: &[f32], hier: &Hierarchy, levels: &[Level]) -> OwnErrors {
+    let own = OwnErrors::new(hier, levels);
+    own.scan_rest(heights, hier);
     own
 }
 
@@ -287,7 +345,7 @@ mod test {
             let hier = tree.hierarchy();
             let all = levels(hier.size());
             let coarse = &all[fused::up_to(&all, 16).len()..];
-            for (lattice, errors) in own_errors(g.heights(), hier, coarse) {
+            for (lattice, errors) in own_errors(g.heights(), hier, coarse).levels {
                 for m in lattice.points(hier) {
                     // The whole triangles' error; 0 where one straddles the
                     // border (the banded pass skips those diamonds).

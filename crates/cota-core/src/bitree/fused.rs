@@ -14,6 +14,9 @@
 //! # Runtime
 //! One pass over the grid for the 8 to 12 levels, plus the seams: `O(n)`.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
 use rayon::prelude::*;
 
 use super::kernels::{fine_a4, fine_b4, small_a, small_b, SMALL_MAX};
@@ -52,11 +55,26 @@ pub(super) fn plan(levels: &[Level], height: u32, threads: u32) -> (&[Level], u3
         s /= 2;
     }
     let fine = up_to(levels, s);
-    let segment_rows = Lags::new(fine)
-        .seam_rows()
-        .max(height.div_ceil(4 * threads))
-        .max(1);
-    (fine, segment_rows)
+    let seam = Lags::new(fine).seam_rows().max(1);
+    // (`seam` rows at least: a grid shorter than that is one segment.)
+    (fine, height.div_ceil(segments(height, seam, threads)).max(seam))
+}
+
+/// How many segments of equal height the sweep cuts `height` rows into: as
+/// many as are at least `seam` rows tall, up to four per thread so that rayon
+/// can even out a thread slowed down, and a multiple of the thread count
+/// where there are enough, so that each thread gets as many rows as the
+/// others. (Five segments on two threads would leave one thread three of
+/// them; the seams' odd one out is evened out by the coarse levels' banded
+/// pass, which runs alongside them.)
+fn segments(height: u32, seam: u32, threads: u32) -> u32 {
+    let fit = (height / seam).max(1);
+    let n = fit.min(4 * threads.max(1));
+    if n >= threads {
+        n - n % threads
+    } else {
+        n
+    }
 }
 
 /// How far, in rows, each fused level's codes depend on the rows around them.
@@ -101,7 +119,23 @@ impl Lags {
 pub(super) const SWEEP_ROWS: u32 = 16;
 
 /// Builds the `levels` (`B(2), A(2), …`, fine to coarse, from
-/// [`plan`]) in one pass, cache-blocked by rows.
+/// [`plan`]) in one pass, cache-blocked by rows: [`sweep`], then [`seams`].
+#[cfg(test)]
+pub(super) fn build_fused(
+    heights: &[f32],
+    hier: &Hierarchy,
+    levels: &[Level],
+    segment_rows: u32,
+    sweep_rows: u32,
+    codes: &mut [u16],
+) {
+    sweep(heights, hier, levels, segment_rows, sweep_rows, codes, &|| false);
+    seams(heights, hier, levels, segment_rows, codes);
+}
+
+/// The first part of the fused build of `levels` (`B(2), A(2), …`, fine to
+/// coarse, from [`plan`]): every split point but those near the boundaries
+/// between segments, which [`seams`] fills after it.
 ///
 /// Level-by-level, each fine level would be one pass over the whole grid and
 /// one parallel section. Here the grid's rows are cut into segments of
@@ -112,50 +146,89 @@ pub(super) const SWEEP_ROWS: u32 = 16;
 ///
 /// Near the boundary between two segments a level's children lie on both
 /// sides, so each segment leaves `lag[l]` rows of level `l` on its side of
-/// the boundary; a second parallel pass fills these *seams* level by level.
+/// the boundary: the *seams*, for [`seams`].
 /// Every split point is computed once, with the same kernels as the
 /// level-by-level build (the two finest levels a row at a time), and the
 /// tests check that the codes are identical.
-pub(super) fn build_fused(
+///
+/// **Filler.** The segments are few (their seams make them tall), so the
+/// threads can finish them far apart: one woken late, or running slower
+/// than the other. Each thread takes the next segment not yet taken and,
+/// when none is left, calls `filler` (one unit of other work, `false` when
+/// it has none) until the last segment is done, instead of waiting for it.
+pub(super) fn sweep(
     heights: &[f32],
     hier: &Hierarchy,
     levels: &[Level],
     segment_rows: u32,
     sweep_rows: u32,
     codes: &mut [u16],
+    filler: &(dyn Fn() -> bool + Sync),
 ) {
     let (w, h) = (hier.width(), hier.height());
     let lags = Lags::new(levels);
     debug_assert!(segment_rows >= lags.seam_rows().max(1));
-    codes
-        .par_chunks_mut(segment_rows as usize * w as usize)
-        .enumerate()
-        .for_each(|(k, chunk)| {
-            let y0 = k as u32 * segment_rows;
-            let y1 = (y0 + segment_rows).min(h);
-            // Level `l`'s rows in this segment: all of them at the grid's
-            // edges, `lag[l]` short of each boundary with another segment.
-            let lo = |l: usize| if y0 == 0 { 0 } else { y0 + lags.lag[l] };
-            let hi = |l: usize| if y1 == h { h } else { y1 - lags.lag[l] };
-            let mut front: Vec<u32> = (0..levels.len()).map(lo).collect();
-            let mut end = y0;
-            while end < y1 {
-                end = (end + sweep_rows).min(y1);
-                for (l, &level) in levels.iter().enumerate() {
-                    let stop = if end == y1 {
-                        hi(l)
-                    } else {
-                        end.saturating_sub(lags.lag[l]).min(hi(l))
-                    };
-                    if stop > front[l] {
-                        rows_of_level(heights, hier, level, front[l]..stop, chunk, y0);
-                        front[l] = stop;
-                    }
+    let segments: Vec<Mutex<Option<&mut [u16]>>> = codes
+        .chunks_mut(segment_rows as usize * w as usize)
+        .map(|c| Mutex::new(Some(c)))
+        .collect();
+    let (next, done) = (AtomicUsize::new(0), AtomicUsize::new(0));
+    let segment = |k: usize, chunk: &mut [u16]| {
+        let y0 = k as u32 * segment_rows;
+        let y1 = (y0 + segment_rows).min(h);
+        // Level `l`'s rows in this segment: all of them at the grid's
+        // edges, `lag[l]` short of each boundary with another segment.
+        let lo = |l: usize| if y0 == 0 { 0 } else { y0 + lags.lag[l] };
+        let hi = |l: usize| if y1 == h { h } else { y1 - lags.lag[l] };
+        let mut front: Vec<u32> = (0..levels.len()).map(lo).collect();
+        let mut end = y0;
+        while end < y1 {
+            end = (end + sweep_rows).min(y1);
+            for (l, &level) in levels.iter().enumerate() {
+                let stop = if end == y1 {
+                    hi(l)
+                } else {
+                    end.saturating_sub(lags.lag[l]).min(hi(l))
+                };
+                if stop > front[l] {
+                    rows_of_level(heights, hier, level, front[l]..stop, chunk, y0);
+                    front[l] = stop;
                 }
             }
+        }
+    };
+    (0..rayon::current_num_threads())
+        .into_par_iter()
+        .with_max_len(1)
+        .for_each(|_| loop {
+            let k = next.fetch_add(1, Ordering::Relaxed);
+            if let Some(slot) = segments.get(k) {
+                // Each segment is taken once: its lock is never contended.
+                let chunk = slot.lock().ok().and_then(|mut c| c.take());
+                if let Some(chunk) = chunk {
+                    segment(k, chunk);
+                }
+                done.fetch_add(1, Ordering::Relaxed);
+            } else if done.load(Ordering::Relaxed) == segments.len() || !filler() {
+                break;
+            }
         });
-    // The seams: rows `y − lag[l] .. y + lag[l]` of each level around each
-    // boundary `y`, level by level, reading `reach` rows further.
+}
+
+/// The second part of the fused build (after [`sweep`] with the same
+/// `levels` and `segment_rows`): the seams, rows `y − lag[l] .. y + lag[l]`
+/// of each level `l` around each boundary `y` between segments, level by
+/// level, reading `reach` rows further. The seams are independent of each
+/// other, and filled in parallel.
+pub(super) fn seams(
+    heights: &[f32],
+    hier: &Hierarchy,
+    levels: &[Level],
+    segment_rows: u32,
+    codes: &mut [u16],
+) {
+    let (w, h) = (hier.width(), hier.height());
+    let lags = Lags::new(levels);
     let margin = lags.lag.last().copied().unwrap_or(0) + lags.reach;
     let mut seams: Vec<(u32, &mut [u16])> = Vec::new();
     let mut rest: &mut [u16] = codes;
@@ -425,6 +498,8 @@ mod test {
             (513, 2, 32),
             (513, 1, 32),
             (1025, 2, 64),
+            (1201, 2, 64),
+            (2401, 2, 64),
             (4097, 2, 64),
             (4097, 16, 64),
         ] {
@@ -433,6 +508,10 @@ mod test {
             assert_eq!(side(fine), Some(top), "{height} rows, {threads} threads");
             assert!(segment_rows >= Lags::new(fine).seam_rows());
             assert!(segment_rows >= height.div_ceil(4 * threads));
+            // Equal segments, as many for each thread.
+            let n = height.div_ceil(segment_rows);
+            assert!(n == 1 || n % threads == 0, "{height} rows, {threads} threads: {n} segments");
+            assert!(n == 1 || n * segment_rows - height < n, "{height} rows: {n} × {segment_rows}");
         }
         // A grid too small for `A(16)` fuses all its levels.
         let all = levels(8);
