@@ -214,7 +214,15 @@ impl<'g> Bitree<'g> {
             // end of the sweep and during the seams.
             let own = coarse::OwnErrors::new(&hier, &levels[banded..]);
             let filler = || own.scan_next(heights, &hier);
-            fused::sweep(heights, &hier, fine, segment_rows, SWEEP_ROWS, &mut codes, &filler);
+            fused::sweep(
+                heights,
+                &hier,
+                fine,
+                segment_rows,
+                SWEEP_ROWS,
+                &mut codes,
+                &filler,
+            );
             // The rest of the levels up to `A(SMALL_MAX)`, alongside the
             // bands left: the fused levels' seams, then the levels between
             // the fused ones and the banded ones (only on grids too short to
@@ -972,18 +980,18 @@ mod test {
             grid(70, 2100, f),
             fixture("S29W072.hgt.zip"),
         ];
-        let pool = |n| rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+        let pool = |n| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap()
+        };
         for g in &grids {
             let one = pool(1).install(|| Bitree::build(g).unwrap().codes);
             assert!(one.iter().any(|&c| c != 0 && c != INFINITE));
             for n in [2, 3, 8] {
                 let many = pool(n).install(|| Bitree::build(g).unwrap().codes);
-                assert!(
-                    many == one,
-                    "{}×{} on {n} threads",
-                    g.width(),
-                    g.height()
-                );
+                assert!(many == one, "{}×{} on {n} threads", g.width(), g.height());
             }
         }
     }

@@ -212,7 +212,12 @@ fn row(name: &str, grid: &HeightGrid, p: &Pairs) {
         .collect();
     // Two builds at once in about the time of one: the throughput of the
     // two cores over one, from the same round's 1-thread build.
-    let throughput: Vec<f64> = p.one.iter().zip(&p.copies).map(|(a, c)| 2.0 * a / c).collect();
+    let throughput: Vec<f64> = p
+        .one
+        .iter()
+        .zip(&p.copies)
+        .map(|(a, c)| 2.0 * a / c)
+        .collect();
     let (speed_up, ceiling) = (median(&ratios), median(&throughput));
     println!(
         "| {name} | {}×{} | {} | {:.2} ms | {:.2} ms | **{:.2}** | {:.2} | {:.2}–{:.2} | {:.2} | {:.2} ({:.2} ms) | {:.2} | {:.0} % |",
@@ -296,7 +301,11 @@ fn main() -> anyhow::Result<()> {
     println!("| grid | size | rounds | 1 thread (median) | 2 threads (median) | speed-up (median of ratios) | ratio of medians | ratio range | best / best | perfectly parallel reference: speed-up (2-thread median) | two 1-thread builds at once: throughput | speed-up ÷ throughput |");
     println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for case in load_cases(|m| eprintln!("build-speedup: {m}")) {
-        show(case.name, &case.square, &pairs(&case.square, rounds, &one, &other)?);
+        show(
+            case.name,
+            &case.square,
+            &pairs(&case.square, rounds, &one, &other)?,
+        );
         if let Some(native) = &case.native {
             let name = format!("srtm{}", native.width());
             show(&name, native, &pairs(native, rounds, &one, &other)?);

@@ -57,7 +57,10 @@ pub(super) fn plan(levels: &[Level], height: u32, threads: u32) -> (&[Level], u3
     let fine = up_to(levels, s);
     let seam = Lags::new(fine).seam_rows().max(1);
     // (`seam` rows at least: a grid shorter than that is one segment.)
-    (fine, height.div_ceil(segments(height, seam, threads)).max(seam))
+    (
+        fine,
+        height.div_ceil(segments(height, seam, threads)).max(seam),
+    )
 }
 
 /// How many segments of equal height the sweep cuts `height` rows into: as
@@ -129,7 +132,15 @@ pub(super) fn build_fused(
     sweep_rows: u32,
     codes: &mut [u16],
 ) {
-    sweep(heights, hier, levels, segment_rows, sweep_rows, codes, &|| false);
+    sweep(
+        heights,
+        hier,
+        levels,
+        segment_rows,
+        sweep_rows,
+        codes,
+        &|| false,
+    );
     seams(heights, hier, levels, segment_rows, codes);
 }
 
@@ -510,8 +521,14 @@ mod test {
             assert!(segment_rows >= height.div_ceil(4 * threads));
             // Equal segments, as many for each thread.
             let n = height.div_ceil(segment_rows);
-            assert!(n == 1 || n % threads == 0, "{height} rows, {threads} threads: {n} segments");
-            assert!(n == 1 || n * segment_rows - height < n, "{height} rows: {n} × {segment_rows}");
+            assert!(
+                n == 1 || n % threads == 0,
+                "{height} rows, {threads} threads: {n} segments"
+            );
+            assert!(
+                n == 1 || n * segment_rows - height < n,
+                "{height} rows: {n} × {segment_rows}"
+            );
         }
         // A grid too small for `A(16)` fuses all its levels.
         let all = levels(8);
