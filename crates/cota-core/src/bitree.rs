@@ -40,9 +40,10 @@
 //!   cut into segments of equal height, as many for each thread, swept in
 //!   parallel, and in each segment every level follows a few rows behind the
 //!   one below it, so it reads rows that are still in cache. The seams
-//!   between segments are filled by a second parallel pass (`fused::seams`). Their triangles are small, so each level has a shortcut
-//!   that scans its diamond directly, without building triangles or spans,
-//!   and the two finest levels are computed a row at a time.
+//!   between segments are filled by a second parallel pass
+//!   (`fused::seams`). Their triangles are small, so each level has a
+//!   shortcut that scans its diamond directly, without building triangles or
+//!   spans, and the two finest levels are computed a row at a time.
 //! * **The coarse levels** (above `A(64)`) are built in two steps
 //!   (`coarse.rs`): one parallel pass over bands of rows that fit in a
 //!   core's cache computes every coarse split point's own error, all levels

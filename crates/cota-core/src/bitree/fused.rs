@@ -25,7 +25,7 @@ use crate::hierarchy::{Hierarchy, Pt};
 
 /// The finest levels, `B(2)` up to at least `A(FUSED_MIN)` and at most
 /// `A(FUSED_MAX)`, are built together in one pass over the rows (see
-/// [`build_fused`]); the coarser ones one level at a time.
+/// [`sweep`] and [`seams`]); the coarser ones one level at a time.
 pub(super) const FUSED_MIN: u32 = 16;
 /// See [`FUSED_MIN`].
 pub(super) const FUSED_MAX: u32 = 64;
@@ -40,15 +40,14 @@ pub(super) fn up_to(levels: &[Level], s: u32) -> &[Level] {
     &levels[..n]
 }
 
-/// Which levels [`build_fused`] builds for a grid of `height` rows on
-/// `threads` threads, and in segments of how many rows.
+/// Which levels [`sweep`] and [`seams`] build for a grid of `height` rows on
+/// `threads` threads, and in segments of how many rows (see [`segments`]).
 ///
 /// Every fused level saves a pass over the grid, but its seams are wider
 /// (`A(64)`'s segments need 252 rows): levels up to `A(64)` are fused while
 /// the grid holds at least [`MIN_SEGMENTS`] segments, and always those up to
 /// `A(16)`. The levels depend on the grid only, not on the thread count, so
-/// that 1- and 2-thread builds do the same steps. Each thread gets about four
-/// segments, so that rayon can even out the threads.
+/// that 1- and 2-thread builds do the same steps.
 pub(super) fn plan(levels: &[Level], height: u32, threads: u32) -> (&[Level], u32) {
     let mut s = FUSED_MAX;
     while s > FUSED_MIN && Lags::new(up_to(levels, s)).seam_rows() * MIN_SEGMENTS > height {
@@ -64,12 +63,12 @@ pub(super) fn plan(levels: &[Level], height: u32, threads: u32) -> (&[Level], u3
 }
 
 /// How many segments of equal height the sweep cuts `height` rows into: as
-/// many as are at least `seam` rows tall, up to four per thread so that rayon
-/// can even out a thread slowed down, and a multiple of the thread count
-/// where there are enough, so that each thread gets as many rows as the
-/// others. (Five segments on two threads would leave one thread three of
-/// them; the seams' odd one out is evened out by the coarse levels' banded
-/// pass, which runs alongside them.)
+/// many as are at least `seam` rows tall, up to four per thread (the smaller
+/// the last ones, the less a slowed-down thread holds the others up), and a
+/// multiple of the thread count where there are enough, so that each thread
+/// gets as many rows as the others. (Five segments on two threads would
+/// leave one thread three of them.) What imbalance is left, the coarse
+/// levels' bands fill (see [`sweep`]).
 fn segments(height: u32, seam: u32, threads: u32) -> u32 {
     let fit = (height / seam).max(1);
     let n = fit.min(4 * threads.max(1));
