@@ -205,10 +205,7 @@ impl<'g> Bitree<'g> {
             let (fine, segment_rows) = fused::plan(&levels, hier.height(), threads);
             // The levels from `banded` on, above `A(SMALL_MAX)`, are built
             // by the banded pass (`coarse.rs`).
-            let banded = levels
-                .iter()
-                .take_while(|l| level_side(**l) <= SMALL_MAX)
-                .count();
+            let banded = fused::up_to(&levels, SMALL_MAX).len();
             let heights = grid.heights();
             // The coarse levels' own errors read only the heights: their
             // bands fill the time a thread would wait for the others, at the
@@ -810,6 +807,16 @@ mod test {
     /// saddle and a wave, so that no two neighbouring diamonds agree.
     pub(super) fn rough(x: usize, y: usize) -> f32 {
         ((x * 37 + y * 11) % 13) as f32 * 1.7 - (x * y) as f32 * 0.03 + (y as f32 * 0.1).sin()
+    }
+
+    /// The codes of `levels` (consecutive from the finest) built level by
+    /// level, the other samples 0: the reference the faster paths must match.
+    pub(super) fn level_by_level(g: &HeightGrid, hier: &Hierarchy, levels: &[Level]) -> Vec<u16> {
+        let mut codes = vec![0u16; g.len()];
+        for &level in levels {
+            build_level(g.heights(), hier, level, &mut codes);
+        }
+        codes
     }
 
     /// A real grid from the bundled fixtures, as this crate's own type.

@@ -272,8 +272,8 @@ fn scan_band(
 
 #[cfg(test)]
 mod test {
-    use super::super::test::{fixture, grid, rough};
-    use super::super::{build_level, fill_level, fused, levels};
+    use super::super::test::{fixture, grid, level_by_level, rough};
+    use super::super::{fill_level, fused, levels};
     use super::*;
 
     /// The banded build gives the level-by-level build's codes on every
@@ -301,10 +301,7 @@ mod test {
         for g in &grids {
             let hier = Hierarchy::new(g.width() as u32, g.height() as u32);
             let all = levels(hier.size());
-            let mut expected = vec![0u16; g.len()];
-            for &level in &all {
-                build_level(g.heights(), &hier, level, &mut expected);
-            }
+            let expected = level_by_level(g, &hier, &all);
             for fine_max in [16, 64] {
                 let fine = fused::up_to(&all, fine_max);
                 let mut banded = expected.clone();

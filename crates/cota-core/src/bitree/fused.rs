@@ -120,29 +120,6 @@ impl Lags {
 /// their lag).
 pub(super) const SWEEP_ROWS: u32 = 16;
 
-/// Builds the `levels` (`B(2), A(2), …`, fine to coarse, from
-/// [`plan`]) in one pass, cache-blocked by rows: [`sweep`], then [`seams`].
-#[cfg(test)]
-pub(super) fn build_fused(
-    heights: &[f32],
-    hier: &Hierarchy,
-    levels: &[Level],
-    segment_rows: u32,
-    sweep_rows: u32,
-    codes: &mut [u16],
-) {
-    sweep(
-        heights,
-        hier,
-        levels,
-        segment_rows,
-        sweep_rows,
-        codes,
-        &|| false,
-    );
-    seams(heights, hier, levels, segment_rows, codes);
-}
-
 /// The first part of the fused build of `levels` (`B(2), A(2), …`, fine to
 /// coarse, from [`plan`]): every split point but those near the boundaries
 /// between segments, which [`seams`] fills after it.
@@ -440,8 +417,8 @@ impl Rows<'_> {
 
 #[cfg(test)]
 mod test {
-    use super::super::test::{fixture, grid, rough};
-    use super::super::{build_level, levels};
+    use super::super::levels;
+    use super::super::test::{fixture, grid, level_by_level, rough};
     use super::*;
 
     /// The fused build of the fine levels, cut into segments with seams
@@ -461,30 +438,30 @@ mod test {
             fixture("boulder_srtmgl3_240x144.asc"),
             fixture("hugo_site.asc"),
         ];
-        let mut seams = 0;
+        let mut seams_cut = 0;
         for g in &grids {
             let hier = Hierarchy::new(g.width() as u32, g.height() as u32);
             let all = levels(hier.size());
             for s in [FUSED_MIN, 2 * FUSED_MIN, FUSED_MAX] {
                 let fine = up_to(&all, s);
                 assert!(!fine.is_empty() && fine.len() <= 12);
-                let mut expected = vec![0u16; g.len()];
-                for &level in fine {
-                    build_level(g.heights(), &hier, level, &mut expected);
-                }
+                let expected = level_by_level(g, &hier, fine);
                 let shortest = Lags::new(fine).seam_rows();
                 for segment_rows in [shortest, shortest + 5, 2 * shortest + 3] {
                     for sweep_rows in [1, 3, SWEEP_ROWS] {
                         let mut fused = vec![0u16; g.len()];
-                        build_fused(
+                        let no_filler = || false;
+                        sweep(
                             g.heights(),
                             &hier,
                             fine,
                             segment_rows,
                             sweep_rows,
                             &mut fused,
+                            &no_filler,
                         );
-                        seams += (hier.height() - 1) / segment_rows;
+                        seams(g.heights(), &hier, fine, segment_rows, &mut fused);
+                        seams_cut += (hier.height() - 1) / segment_rows;
                         assert!(
                         fused == expected,
                         "{}x{}, levels up to {s}, segments of {segment_rows} rows, swept {sweep_rows} at a time",
@@ -495,7 +472,7 @@ mod test {
                 }
             }
         }
-        assert!(seams >= 10, "only {seams} seams exercised");
+        assert!(seams_cut >= 10, "only {seams_cut} seams exercised");
     }
 
     /// The plan fuses more levels on taller grids, the same whatever the
