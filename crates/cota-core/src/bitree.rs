@@ -75,67 +75,15 @@ mod kernels;
 
 use rayon::prelude::*;
 
+use crate::error::{hierarchy_for, MeshError};
 use crate::error_code::{self, encode_up, SplitRule, INFINITE};
 use crate::grid::HeightGrid;
-use crate::hierarchy::{Hierarchy, Placement, Pt, RowSpans, Tri};
+use crate::hierarchy::{
+    diamond, first_col, level_of, level_rows, level_side, levels, Hierarchy, Level, Placement, Pt,
+    RowSpans, Tri,
+};
 use fused::SWEEP_ROWS;
 use kernels::{fine_a2, fine_a4, fine_b2, fine_b4, small_a, small_b, SMALL_MAX};
-
-/// Errors from building or extracting a mesh.
-#[derive(Debug, thiserror::Error, Clone, PartialEq)]
-#[non_exhaustive]
-pub enum MeshError {
-    /// The grid is narrower or shorter than 2 samples.
-    #[error("expected a grid of at least 2x2 samples to mesh, found {width}x{height}")]
-    GridTooSmall {
-        /// Grid width.
-        width: usize,
-        /// Grid height.
-        height: usize,
-    },
-    /// The grid is too large for 32-bit vertex positions.
-    #[error("expected a grid of at most 2^30 samples per side to mesh, found {width}x{height}")]
-    GridTooLarge {
-        /// Grid width.
-        width: usize,
-        /// Grid height.
-        height: usize,
-    },
-    /// The grid has voids; fill them first.
-    #[error(transparent)]
-    Voids(#[from] crate::grid::GridError),
-    /// A negative or NaN error bound.
-    #[error("expected a maximum error of 0 m or more, found {0} m")]
-    BadMaxError(f64),
-    /// A triangle budget below what the grid needs.
-    #[error(
-        "expected a triangle budget of at least {min} for this {width}x{height} grid, found {got}"
-    )]
-    BudgetTooSmall {
-        /// The budget asked for.
-        got: usize,
-        /// The smallest mesh this grid allows.
-        min: usize,
-        /// Grid width.
-        width: usize,
-        /// Grid height.
-        height: usize,
-    },
-    /// Point marks made for a grid of another size.
-    #[error(
-        "expected point marks for the {width}x{height} grid being refined, found marks for a {marks_width}x{marks_height} grid"
-    )]
-    MarksSizeMismatch {
-        /// Grid width.
-        width: usize,
-        /// Grid height.
-        height: usize,
-        /// Width of the grid the marks were made for.
-        marks_width: usize,
-        /// Height of the grid the marks were made for.
-        marks_height: usize,
-    },
-}
 
 /// A bitree with the exact error of every split point, ready for extraction.
 ///
@@ -197,7 +145,7 @@ impl<'g> Bitree<'g> {
         progress: Progress<'_>,
     ) -> Result<Self, MeshError> {
         // One pool entry for the whole build, the void check included.
-        let (hier, codes) = crate::on_pool(|| -> Result<_, MeshError> {
+        let (hier, codes) = crate::par::on_pool(|| -> Result<_, MeshError> {
             let hier = hierarchy_for(grid)?;
             let mut codes = vec![0u16; grid.len()];
             let levels = levels(hier.size());
@@ -243,7 +191,7 @@ impl<'g> Bitree<'g> {
             }
             Ok((hier, codes))
         })?;
-        let inside = crate::extract::inside_roots(&hier);
+        let inside = hier.inside_roots();
         Ok(Bitree {
             grid,
             hier,
@@ -358,152 +306,6 @@ impl<'g> Bitree<'g> {
     }
 }
 
-/// The hierarchy of a grid that can be meshed: at least 2×2, at most 2^30 per
-/// side, no voids. Every hierarchy (bitree, quadtree, refine) starts here.
-///
-/// # Errors
-/// [`MeshError::GridTooSmall`], [`MeshError::GridTooLarge`], [`MeshError::Voids`].
-pub(crate) fn hierarchy_for(grid: &HeightGrid) -> Result<Hierarchy, MeshError> {
-    let (w, h) = (grid.width(), grid.height());
-    if w < 2 || h < 2 {
-        return Err(MeshError::GridTooSmall {
-            width: w,
-            height: h,
-        });
-    }
-    if w > (1 << 30) || h > (1 << 30) {
-        return Err(MeshError::GridTooLarge {
-            width: w,
-            height: h,
-        });
-    }
-    grid.require_no_voids()?;
-    Ok(Hierarchy::new(w as u32, h as u32))
-}
-
-/// The level whose split point is `m` in a padded square of side `n`; `None`
-/// for the square's corners, which split nothing.
-pub(crate) fn level_of(m: Pt, n: u32) -> Option<Level> {
-    let lowbit = |v: u32| {
-        if v == 0 {
-            u32::MAX
-        } else {
-            v & v.wrapping_neg()
-        }
-    };
-    let (lx, ly) = (lowbit(m[0]), lowbit(m[1]));
-    let half = lx.min(ly);
-    if half == u32::MAX || half >= n {
-        return None;
-    }
-    let s = 2 * half;
-    Some(if lx == ly { Level::A(s) } else { Level::B(s) })
-}
-
-/// One level of the hierarchy: `A(s)` or `B(s)` (see [`crate::hierarchy`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Level {
-    /// Square halves of side `s`; split points at square centres.
-    A(u32),
-    /// Triangles on a side of length `s`; split points at side midpoints.
-    B(u32),
-}
-
-/// The splittable levels of a padded square of side `n`, fine to coarse.
-pub(crate) fn levels(n: u32) -> Vec<Level> {
-    let mut v = Vec::new();
-    let mut s = 2;
-    while s <= n {
-        v.push(Level::B(s));
-        v.push(Level::A(s));
-        s *= 2;
-    }
-    v
-}
-
-/// The rows holding split points of `level`: `(first_row, row_step, x_of_row)`
-/// where `x_of_row(y)` gives the first column and all columns step by `s`.
-fn first_col(level: Level, y: u32) -> u32 {
-    match level {
-        Level::A(s) => s / 2,
-        Level::B(s) if y.is_multiple_of(s) => s / 2,
-        Level::B(_) => 0,
-    }
-}
-
-/// The triangles of the diamond whose split point is `m` at `level`.
-pub(crate) fn diamond(level: Level, m: Pt, n: u32) -> [Option<Tri>; 2] {
-    let [x, y] = m;
-    match level {
-        Level::A(s) => {
-            let h = s / 2;
-            let (x0, y0) = (x - h, y - h);
-            let even = ((x0 / s) + (y0 / s)) % 2 == 0;
-            if even {
-                let (a, b) = ([x0, y0], [x0 + s, y0 + s]);
-                [
-                    Some(Tri {
-                        a,
-                        b,
-                        c: [x0 + s, y0],
-                    }),
-                    Some(Tri {
-                        a: b,
-                        b: a,
-                        c: [x0, y0 + s],
-                    }),
-                ]
-            } else {
-                let (a, b) = ([x0 + s, y0], [x0, y0 + s]);
-                [
-                    Some(Tri {
-                        a,
-                        b,
-                        c: [x0 + s, y0 + s],
-                    }),
-                    Some(Tri {
-                        a: b,
-                        b: a,
-                        c: [x0, y0],
-                    }),
-                ]
-            }
-        }
-        Level::B(s) => {
-            let h = s / 2;
-            if y.is_multiple_of(s) {
-                let (a, b) = ([x - h, y], [x + h, y]);
-                [
-                    (y >= h).then(|| Tri {
-                        a,
-                        b,
-                        c: [x, y - h],
-                    }),
-                    (y + h <= n).then(|| Tri {
-                        a: b,
-                        b: a,
-                        c: [x, y + h],
-                    }),
-                ]
-            } else {
-                let (a, b) = ([x, y - h], [x, y + h]);
-                [
-                    (x >= h).then(|| Tri {
-                        a,
-                        b,
-                        c: [x - h, y],
-                    }),
-                    (x + h <= n).then(|| Tri {
-                        a: b,
-                        b: a,
-                        c: [x + h, y],
-                    }),
-                ]
-            }
-        }
-    }
-}
-
 /// Computes `err` for every split point of `level` and writes it into
 /// `codes`, in parallel over its rows: the level-by-level build, for the
 /// levels neither fused nor banded (see [`Bitree::build`]) and for the tests.
@@ -556,21 +358,6 @@ fn fill_level(
                 }
             }
         });
-}
-
-/// The side `s` of `A(s)` or `B(s)`.
-fn level_side(level: Level) -> u32 {
-    match level {
-        Level::A(s) | Level::B(s) => s,
-    }
-}
-
-/// The rows holding split points of `level`: `(first_row, row_step)`.
-fn level_rows(level: Level) -> (u32, u32) {
-    match level {
-        Level::A(s) => (s / 2, s),
-        Level::B(s) => (0, (s / 2).max(1)),
-    }
 }
 
 /// The code of the split point `m` of `level`: a shortcut where one applies,

@@ -25,9 +25,8 @@
 //! hanging vertices on their neighbour's edge) check 3 only forbids repeated
 //! directed edges, and coverage rests on (4) plus the per-sample coverage test.
 
-use crate::fictitious::diagonal_of;
 use crate::grid::HeightGrid;
-use crate::hierarchy::Hierarchy;
+use crate::hierarchy::{diagonal_of, Hierarchy};
 use crate::mesh::Mesh;
 use crate::metrics::{measure, Metrics};
 

@@ -70,9 +70,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use rayon::prelude::*;
 
-use crate::bitree::{Bitree, MeshError};
+use crate::bitree::Bitree;
+use crate::error::MeshError;
 use crate::error_code::{SplitRule, INFINITE};
-use crate::hierarchy::{Hierarchy, Placement, RowSpans, Tri};
+use crate::hierarchy::{RowSpans, Tri};
 use crate::mesh::{Mesh, MeshVertex};
 
 /// What to extract.
@@ -145,10 +146,10 @@ impl Bitree<'_> {
                 }
                 e
             }
-            Target::MaxTriangles(n) => crate::on_pool(|| self.threshold_for_budget(n))?,
+            Target::MaxTriangles(n) => crate::par::on_pool(|| self.threshold_for_budget(n))?,
         };
         Ok(Extraction {
-            mesh: crate::on_pool(|| self.extract_at(&SplitRule::new(threshold))),
+            mesh: crate::par::on_pool(|| self.extract_at(&SplitRule::new(threshold))),
             threshold_m: threshold,
         })
     }
@@ -156,7 +157,7 @@ impl Bitree<'_> {
     /// Number of triangles the mesh at threshold `e_m` has.
     pub fn count_at(&self, e_m: f64) -> usize {
         let rule = SplitRule::new(e_m);
-        crate::on_pool(|| {
+        crate::par::on_pool(|| {
             let tasks = self.tasks(&rule);
             count_tasks(self, &rule, &tasks, usize::MAX)
         })
@@ -313,28 +314,6 @@ impl Bitree<'_> {
             self.top(c1, rule, out);
         }
     }
-}
-
-/// The largest triangles of the hierarchy inside the grid, in depth-first
-/// order: the roots, split while they straddle the grid's border. Computed
-/// once per [`Bitree`]; every extraction starts from them.
-pub(crate) fn inside_roots(hier: &Hierarchy) -> Vec<Tri> {
-    fn walk(hier: &Hierarchy, t: Tri, out: &mut Vec<Tri>) {
-        match hier.place(&t) {
-            Placement::Outside => {}
-            Placement::Inside => out.push(t),
-            Placement::Straddling => {
-                let (c0, c1) = t.children();
-                walk(hier, c0, out);
-                walk(hier, c1, out);
-            }
-        }
-    }
-    let mut out = Vec::new();
-    for r in hier.roots() {
-        walk(hier, r, &mut out);
-    }
-    out
 }
 
 /// Inside triangles at most this many splits above the unit level are walked

@@ -40,8 +40,7 @@
 //! base selection ([`Marks::seed_border`]): they cannot be interpolated since a
 //! diagonal end may lie outside the grid.
 
-use crate::bitree::{diamond, Level};
-use crate::hierarchy::{Hierarchy, Placement, Pt, Tri};
+use crate::hierarchy::{diamond, level_of, parent, Hierarchy, Placement, Pt, Tri};
 
 /// The selected flag.
 const SEL: u8 = 1;
@@ -62,57 +61,12 @@ pub enum Closure {
     Watertight,
 }
 
-/// The level of the split point `p` in a padded square of side `n`, or `None`
-/// for the square's corners (and points outside it), which split nothing.
-///
-/// With `k` the smallest number of trailing zero bits of the two coordinates
-/// (0 counting as "infinitely many"), `p` is the centre of a `2^(k+1)` square
-/// (`A`) when both coordinates have exactly `k`, else the midpoint of a side of
-/// length `2^(k+1)` (`B`).
-pub(crate) fn level_of(p: Pt, n: u32) -> Option<Level> {
-    if p[0] > n || p[1] > n {
-        return None;
-    }
-    let tz = |v: u32| if v == 0 { 40 } else { v.trailing_zeros() };
-    let (kx, ky) = (tz(p[0]), tz(p[1]));
-    let k = kx.min(ky);
-    if k >= 31 {
-        return None;
-    }
-    let s = 2u64 << k;
-    if s > n as u64 {
-        return None;
-    }
-    let s = s as u32;
-    Some(if kx == ky { Level::A(s) } else { Level::B(s) })
-}
-
-/// The two diagonal (hypotenuse) ends of the split point `p`'s diamond.
-pub(crate) fn diagonal_of(p: Pt, n: u32) -> Option<(Pt, Pt)> {
-    let level = level_of(p, n)?;
-    diamond(level, p, n)
-        .into_iter()
-        .flatten()
-        .next()
-        .map(|t| (t.a, t.b))
-}
-
 /// Which side of its split point `m`'s diamond the triangle with apex `c` is
 /// on: the two apexes are symmetric about `m`, so comparing (row, column)
 /// tells them apart.
 #[inline]
 fn side_of(c: Pt, m: Pt) -> usize {
     usize::from((c[1], c[0]) >= (m[1], m[0]))
-}
-
-/// The parent of `t` (the diamond triangle of `t`'s apex that contains `t`),
-/// `None` for a root.
-pub(crate) fn parent(t: &Tri, n: u32) -> Option<Tri> {
-    let level = level_of(t.c, n)?;
-    diamond(level, t.c, n)
-        .into_iter()
-        .flatten()
-        .find(|p| p.c == t.a || p.c == t.b)
 }
 
 /// The closure state: which points are selected and which triangles split.
@@ -300,45 +254,5 @@ impl Marks {
             }
         }
         count
-    }
-}
-
-#[cfg(test)]
-mod test {
-    use super::*;
-
-    #[test]
-    fn levels_from_positions() {
-        assert_eq!(level_of([4, 4], 8), Some(Level::A(8)));
-        assert_eq!(level_of([4, 0], 8), Some(Level::B(8)));
-        assert_eq!(level_of([8, 4], 8), Some(Level::B(8)));
-        assert_eq!(level_of([2, 2], 8), Some(Level::A(4)));
-        assert_eq!(level_of([2, 4], 8), Some(Level::B(4)));
-        assert_eq!(level_of([1, 1], 8), Some(Level::A(2)));
-        assert_eq!(level_of([1, 0], 8), Some(Level::B(2)));
-        assert_eq!(level_of([0, 0], 8), None);
-        assert_eq!(level_of([8, 0], 8), None);
-        assert_eq!(level_of([8, 8], 8), None);
-    }
-
-    #[test]
-    fn every_child_has_its_parent() {
-        let h = Hierarchy::new(17, 17);
-        let mut stack = h.roots().to_vec();
-        for r in h.roots() {
-            assert_eq!(parent(&r, h.size()), None);
-        }
-        while let Some(t) = stack.pop() {
-            if t.is_unit() {
-                continue;
-            }
-            let (c0, c1) = t.children();
-            for c in [c0, c1] {
-                let p = parent(&c, h.size()).unwrap();
-                assert_eq!(p.c, t.c);
-                assert_eq!(p.mid(), t.mid());
-                stack.push(c);
-            }
-        }
     }
 }

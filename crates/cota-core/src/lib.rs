@@ -15,6 +15,7 @@ pub mod bitree;
 pub mod check;
 pub mod criteria;
 pub mod curvature;
+pub mod error;
 pub mod error_code;
 pub mod extract;
 pub mod fictitious;
@@ -24,6 +25,7 @@ pub mod light;
 pub mod mesh;
 pub mod metrics;
 pub mod mosaic;
+mod par;
 pub mod points;
 pub mod quadtree;
 pub mod quadtree_templates;
@@ -38,11 +40,12 @@ pub mod strip_quadtree;
 pub mod view;
 pub mod voids;
 
-pub use bitree::{Bitree, MeshError};
+pub use bitree::Bitree;
 pub use check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
 pub use criteria::{
     All, Any, Criterion, Element, EuclideanDistance, MaxVerticalError, RelativeSize,
 };
+pub use error::{MeshError, Result};
 pub use extract::{ExtractOptions, Extraction, Target};
 pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
 pub use mesh::{Mesh, MeshVertex};
@@ -51,16 +54,3 @@ pub use mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy, SeamRep
 pub use points::PointCounts;
 pub use quadtree::{QuadExtraction, QuadTree};
 pub use voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidError, VoidPolicy};
-
-/// Runs `f` on a rayon worker thread. A parallel section entered from outside
-/// the pool hands its work to the pool and waits to be woken (about 30 µs per
-/// section on the 2-core benchmark machine); one entered from a worker costs
-/// well under a microsecond. So each public entry point that runs several
-/// parallel sections enters the pool once, here.
-pub(crate) fn on_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
-    if rayon::current_thread_index().is_some() {
-        f()
-    } else {
-        rayon::scope(|_| f())
-    }
-}

@@ -70,8 +70,9 @@
 
 use rayon::prelude::*;
 
-use crate::bitree::{round_up_f32, MeshError};
+use crate::bitree::round_up_f32;
 use crate::criteria::{Criterion, Element, MaxVerticalError};
+use crate::error::MeshError;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{orient_up, Hierarchy, Pt};
 use crate::mesh::{Mesh, MeshVertex};
@@ -188,7 +189,7 @@ impl<'g> QuadTree<'g> {
     /// [`MeshError::GridTooSmall`], [`MeshError::GridTooLarge`], or
     /// [`MeshError::Voids`] when a sample is NaN (fill voids first).
     pub fn build(grid: &'g HeightGrid) -> Result<Self, MeshError> {
-        let hier = crate::bitree::hierarchy_for(grid)?;
+        let hier = crate::error::hierarchy_for(grid)?;
         let mut levels = Vec::new();
         let mut size = hier.size();
         loop {

@@ -53,8 +53,8 @@ use std::collections::HashSet;
 
 use rayon::prelude::*;
 
-use crate::bitree::MeshError;
 use crate::criteria::{Criterion, Element};
+use crate::error::MeshError;
 use crate::fictitious::{Closure, Marks};
 use crate::grid::HeightGrid;
 use crate::hierarchy::{orient_up, Hierarchy, Placement, Pt, Tri};
@@ -183,7 +183,7 @@ pub fn refine_marks(
     criterion: &dyn Criterion,
     opts: &RefineOptions,
 ) -> Result<(Refined, Marks), MeshError> {
-    let hier = crate::bitree::hierarchy_for(grid)?;
+    let hier = crate::error::hierarchy_for(grid)?;
     let mut marks = Marks::new(hier, opts.mode.closure());
     marks.seed_border();
     refine_marks_from(grid, criterion, opts, marks)
@@ -205,7 +205,7 @@ pub fn refine_marks_from(
     opts: &RefineOptions,
     marks: Marks,
 ) -> Result<(Refined, Marks), MeshError> {
-    let hier = crate::bitree::hierarchy_for(grid)?;
+    let hier = crate::error::hierarchy_for(grid)?;
     let mut marks = marks;
     if *marks.hierarchy() != hier {
         let m = marks.hierarchy();

@@ -70,7 +70,8 @@
 //! decoded step by step by the same [`StreamDecoder`]; their stated errors
 //! are measured exactly and need not decrease from step to step.
 
-use crate::bitree::{Bitree, MeshError};
+use crate::bitree::Bitree;
+use crate::error::MeshError;
 use crate::error_code::{decode, SplitRule, INFINITE};
 use crate::fictitious::Marks;
 use crate::grid::HeightGrid;

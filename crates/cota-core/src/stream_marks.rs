@@ -471,7 +471,7 @@ pub fn encode_marks_progressive(
         return Err(StreamError::BadMaxError(e_last));
     }
     let (qgrid, _) = quantize(grid, opts.quantum_m)?;
-    let hier = crate::bitree::hierarchy_for(&qgrid)?;
+    let hier = crate::error::hierarchy_for(&qgrid)?;
     let mut marks = Marks::new(hier, mode.closure());
     marks.seed_border();
     let coarse = triangulate(&qgrid, &marks, mode).mesh;

@@ -41,6 +41,12 @@
 //! two triangles on either side of a side for `B`), which is what makes a
 //! consistent decision per split point crack-free.
 
+mod level;
+
+pub(crate) use level::{
+    diagonal_of, diamond, first_col, level_of, level_rows, level_side, levels, parent, Level,
+};
+
 /// An integer grid position (column, row), row 0 north.
 pub type Pt = [u32; 2];
 
@@ -276,6 +282,28 @@ impl Hierarchy {
     #[inline]
     pub fn index(&self, p: Pt) -> usize {
         p[1] as usize * self.width as usize + p[0] as usize
+    }
+
+    /// The largest triangles of the hierarchy inside the grid, in depth-first
+    /// order: the roots, split while they straddle the grid's border. A
+    /// [`crate::Bitree`] computes them once; every extraction starts from them.
+    pub(crate) fn inside_roots(&self) -> Vec<Tri> {
+        fn walk(hier: &Hierarchy, t: Tri, out: &mut Vec<Tri>) {
+            match hier.place(&t) {
+                Placement::Outside => {}
+                Placement::Inside => out.push(t),
+                Placement::Straddling => {
+                    let (c0, c1) = t.children();
+                    walk(hier, c0, out);
+                    walk(hier, c1, out);
+                }
+            }
+        }
+        let mut out = Vec::new();
+        for r in self.roots() {
+            walk(self, r, &mut out);
+        }
+        out
     }
 }
 
