@@ -27,9 +27,9 @@ use std::hint::black_box;
 use std::path::PathBuf;
 
 use cota_bench::{bench_filters, load_cases, wanted};
+use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::refine::{refine, Mode, RefineOptions};
 use cota_core::strip::{stripify_bitree, stripify_bitree_with, StripMethod};
-use cota_core::voids::{fill_voids, FillOptions};
 use cota_core::{Bitree, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError, Mesh};
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::time::Duration;

@@ -37,8 +37,8 @@
 
 use std::path::{Path, PathBuf};
 
-use cota_core::mosaic::{mosaic, MosaicOptions, SeamPolicy, SeamReport};
-use cota_core::voids::{fill_voids, FillOptions};
+use cota_core::grid::mosaic::{mosaic, MosaicOptions, SeamPolicy, SeamReport};
+use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::HeightGrid;
 use cota_io::{read_dem, ReadOptions};
 

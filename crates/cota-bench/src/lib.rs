@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 
 pub mod big;
 
-use cota_core::voids::{fill_voids, FillOptions};
+use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::{measure, HeightGrid, Mesh, MeshVertex};
 use cota_io::{read_dem, PngEncoding, ReadOptions};
 use martini::{Martini, Tile};
@@ -245,13 +245,7 @@ pub fn pad_to(grid: &HeightGrid, n: usize) -> Result<HeightGrid, cota_core::Grid
 /// # Errors
 /// When the result is not a valid grid.
 pub fn crop_nw(grid: &HeightGrid, n: usize) -> Result<HeightGrid, cota_core::GridError> {
-    let (w, h) = (grid.width().min(n), grid.height().min(n));
-    let mut out = Vec::with_capacity(w * h);
-    for y in 0..h {
-        let row = &grid.heights()[y * grid.width()..y * grid.width() + w];
-        out.extend_from_slice(row);
-    }
-    HeightGrid::new(w, h, out, grid.georef().clone())
+    grid.window(0, 0, grid.width().min(n), grid.height().min(n))
 }
 
 /// Martini's precomputed errors for `grid` (a `martini.size`² grid).

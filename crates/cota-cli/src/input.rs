@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::mosaic::{mosaic, MosaicOptions, SeamPolicy, SeamReport};
-use cota_core::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
+use cota_core::grid::mosaic::{mosaic, MosaicOptions, SeamPolicy, SeamReport};
+use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
 use cota_core::HeightGrid;
 use cota_io::{read_dem, read_dem_bytes, DataType, Dem, Format, PngEncoding, ReadOptions};
 

@@ -7,8 +7,8 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
+use cota_core::grid::voids::FillReport;
 use cota_core::refine::Mode;
-use cota_core::voids::FillReport;
 use cota_core::{check_mesh, measure, Bitree, CheckOptions, ExtractOptions, Mesh, Metrics};
 use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use serde_json::json;
@@ -259,7 +259,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_text(r: &serde_json::Value, seams: &Option<cota_core::mosaic::SeamReport>) {
+fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::SeamReport>) {
     let f = |k: &str| r[k].as_f64().unwrap_or(0.0);
     println!(
         "input       {} ({} x {})",

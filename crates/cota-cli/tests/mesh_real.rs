@@ -5,8 +5,8 @@
 mod common;
 use common::*;
 
-use cota_core::mosaic::{mosaic, MosaicOptions};
-use cota_core::voids::{fill_voids, FillOptions};
+use cota_core::grid::mosaic::{mosaic, MosaicOptions};
+use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::{check_mesh, Bitree, CheckOptions, ExtractOptions, HeightGrid};
 use cota_io::{read_dem, PngEncoding, ReadOptions};
 

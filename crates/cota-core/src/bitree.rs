@@ -616,7 +616,7 @@ mod test {
             .grid;
         let (w, h) = (g.width(), g.height());
         let mut g = HeightGrid::new(w, h, g.heights().to_vec(), GeoRef::unreferenced(1.0)).unwrap();
-        crate::voids::fill_voids(&mut g, &crate::voids::FillOptions::DEFAULT).unwrap();
+        crate::grid::voids::fill_voids(&mut g, &crate::grid::voids::FillOptions::DEFAULT).unwrap();
         g
     }
 

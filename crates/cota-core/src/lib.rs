@@ -24,7 +24,6 @@ pub mod hierarchy;
 pub mod light;
 pub mod mesh;
 pub mod metrics;
-pub mod mosaic;
 mod par;
 pub mod points;
 pub mod quadtree;
@@ -38,7 +37,6 @@ pub mod strip;
 pub mod strip_cells;
 pub mod strip_quadtree;
 pub mod view;
-pub mod voids;
 
 pub use bitree::Bitree;
 pub use check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
@@ -47,10 +45,10 @@ pub use criteria::{
 };
 pub use error::{MeshError, Result};
 pub use extract::{ExtractOptions, Extraction, Target};
+pub use grid::mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy, SeamReport};
+pub use grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidError, VoidPolicy};
 pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
 pub use mesh::{Mesh, MeshVertex};
 pub use metrics::{measure, Metrics};
-pub use mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy, SeamReport};
 pub use points::PointCounts;
 pub use quadtree::{QuadExtraction, QuadTree};
-pub use voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidError, VoidPolicy};

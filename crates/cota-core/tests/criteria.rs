@@ -6,10 +6,10 @@ use std::path::PathBuf;
 
 use cota_core::criteria::{local_m, longest_edge_m, terrain_diagonal_m};
 use cota_core::curvature::{AccumulatedCurvature, CurvatureMap};
+use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::light::IlluminationMask;
 use cota_core::refine::{refine, Mode, RefineOptions, Refined};
 use cota_core::view::{Paper001, Paper003, ScreenSpaceError};
-use cota_core::voids::{fill_voids, FillOptions};
 use cota_core::{
     check_mesh, CheckOptions, Criterion, Element, EuclideanDistance, GeoRef, HeightGrid,
     MaxVerticalError, Mesh, RelativeSize,

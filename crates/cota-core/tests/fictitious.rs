@@ -5,9 +5,9 @@
 use std::path::PathBuf;
 
 use cota_core::fictitious::Marks;
+use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::hierarchy::Hierarchy;
 use cota_core::refine::{refine, triangulate, Mode, RefineOptions, Refined};
-use cota_core::voids::{fill_voids, FillOptions};
 use cota_core::{
     check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError,
     MeshError, Violation,

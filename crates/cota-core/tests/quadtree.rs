@@ -32,7 +32,7 @@ fn read(path: &std::path::Path) -> HeightGrid {
         .unwrap()
         .grid;
     if g.void_count() > 0 {
-        use cota_core::voids::{fill_voids, FillMethod, FillOptions, VoidPolicy};
+        use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, VoidPolicy};
         let opts = FillOptions::DEFAULT.with_policy(VoidPolicy::Fill(FillMethod::Harmonic));
         fill_voids(&mut g, &opts).unwrap();
     }

@@ -8,12 +8,12 @@
 
 use std::path::PathBuf;
 
+use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::refine::{refine, Mode, RefineOptions};
 use cota_core::strip::{
     canonical, full_bitree_mesh, strip_to_triangles, stripify_bitree, stripify_bitree_with,
     MeshStrip, Strip, StripMethod,
 };
-use cota_core::voids::{fill_voids, FillOptions};
 use cota_core::{
     check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError, Mesh,
 };

@@ -13,8 +13,8 @@ use std::path::Path;
 use std::time::Instant;
 
 use common::shared_data;
-use cota_core::mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy};
-use cota_core::voids::{fill_voids, FillOptions};
+use cota_core::grid::mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy};
+use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::{GeoRef, GridError, HeightGrid};
 use cota_io::{read_dem, ReadOptions};
 

@@ -6,8 +6,8 @@
 mod common;
 
 use common::workspace_root;
+use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::stream::{encode, StreamDecoder, StreamOptions};
-use cota_core::voids::{fill_voids, FillOptions};
 use cota_core::{check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid};
 use cota_io::stream_file::{
     crc32, decode_stream_bytes, step_end_offsets, stream_bytes, StreamFileError, StreamLimit,

@@ -1,4 +1,4 @@
-//! Void filling (`cota_core::voids`) on real DEMs with voids: the Pyrenees SRTM
+//! Void filling (`cota_core::grid::voids`) on real DEMs with voids: the Pyrenees SRTM
 //! tile N42E001 (7652 voids), an SRTM GeoTIFF of Mt Fuji (2437), Luxembourg
 //! (3942 of 8550 samples, its outside is nodata) and a 10 m ASCII grid (2028 of
 //! 4180). After a harmonic fill no NaN remains, every filled sample lies within
@@ -13,7 +13,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use common::shared_data;
-use cota_core::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
+use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
 use cota_core::{GridError, HeightGrid};
 use cota_io::{read_dem, ReadOptions};
 
@@ -190,7 +190,7 @@ fn refuse_policy_names_count_and_first_void() {
     let err = fill_voids(&mut g, &opts).unwrap_err();
     assert_eq!(
         err,
-        cota_core::voids::VoidError::Refused(GridError::HasVoids {
+        cota_core::grid::voids::VoidError::Refused(GridError::HasVoids {
             count: 7652,
             col,
             row

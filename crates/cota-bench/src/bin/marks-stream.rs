@@ -18,9 +18,9 @@
 use std::error::Error;
 use std::path::{Path, PathBuf};
 
+use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::refine::{refine_marks, Mode, RefineOptions};
 use cota_core::stream::{encode_marks, encode_marks_progressive, StreamOptions};
-use cota_core::voids::{fill_voids, FillOptions};
 use cota_core::{HeightGrid, MaxVerticalError};
 use cota_io::stream_file::{step_end_offsets, stream_bytes};
 use cota_io::{read_dem, ReadOptions};

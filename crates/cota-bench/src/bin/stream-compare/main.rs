@@ -22,8 +22,8 @@ use std::error::Error;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::stream::{encode, StreamOptions};
-use cota_core::voids::{fill_voids, FillOptions};
 use cota_core::{Bitree, ExtractOptions, HeightGrid, Mesh};
 use cota_io::stream_file::stream_bytes;
 use cota_io::{read_dem, ReadOptions};

@@ -30,7 +30,7 @@
 //!    mean difference.
 //!
 //! Holes stay void (NaN) and are counted in [`Mosaic::hole_samples`]; fill them
-//! (and the tiles' own voids) with [`crate::voids`] if needed.
+//! (and the tiles' own voids) with [`crate::grid::voids`] if needed.
 //!
 //! # Output georeference
 //! CRS, pixel size and [`PixelIs`] convention of tile 0; origin at the
@@ -44,7 +44,7 @@
 //!
 //! ```
 //! use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
-//! use cota_core::mosaic::{mosaic, MosaicOptions};
+//! use cota_core::grid::mosaic::{mosaic, MosaicOptions};
 //! // Two 3x3 tiles sharing a column, one degree apart at 1/2 degree per pixel.
 //! let tile = |lon: f64, h: f32| {
 //!     let g = GeoRef { crs: Crs::WGS84, origin_x: lon, origin_y: 1.0, pixel_x: 0.5,

@@ -14,9 +14,15 @@
 //!   *sample-centre* coordinates when [`PixelIs::Point`]. [`GeoRef::sample_xy`]
 //!   hides the difference and gives the position of a sample.
 
+mod frame;
+pub mod mosaic;
+pub mod voids;
+
 use std::fmt;
 
 use rayon::prelude::*;
+
+pub use frame::LocalFrame;
 
 /// Largest number of samples a grid may hold (2^31, 8 GiB of f32 heights).
 ///
@@ -61,6 +67,22 @@ pub enum GridError {
         col: usize,
         /// Row of the sample.
         row: usize,
+    },
+    /// A window that is empty or does not lie inside the grid.
+    #[error("expected a window inside the {grid_width}x{grid_height} grid, found {width}x{height} samples at column {col}, row {row}")]
+    WindowOutside {
+        /// First column of the window.
+        col: usize,
+        /// First row of the window.
+        row: usize,
+        /// Width of the window.
+        width: usize,
+        /// Height of the window.
+        height: usize,
+        /// Width of the grid.
+        grid_width: usize,
+        /// Height of the grid.
+        grid_height: usize,
     },
     /// The grid still has voids where none are allowed.
     #[error("grid has {count} void samples (first at column {col}, row {row}); fill them or choose a void policy")]
@@ -424,6 +446,60 @@ impl HeightGrid {
         let mut it = self.heights.iter().copied().filter(|h| !h.is_nan());
         let first = it.next()?;
         Some(it.fold((first, first), |(lo, hi), h| (lo.min(h), hi.max(h))))
+    }
+
+    /// The window of `width × height` samples whose north-west sample is
+    /// (`col`, `row`), as a grid of its own whose georeference is shifted to
+    /// the window (same CRS and pixel size).
+    ///
+    /// ```
+    /// use cota_core::{GeoRef, HeightGrid};
+    /// let g = HeightGrid::new(3, 2, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0], GeoRef::unreferenced(30.0)).unwrap();
+    /// let w = g.window(1, 0, 2, 2).unwrap();
+    /// assert_eq!(w.heights(), &[2.0, 3.0, 5.0, 6.0]);
+    /// assert!(g.window(2, 0, 2, 2).is_err());
+    /// ```
+    ///
+    /// # Errors
+    /// [`GridError::WindowOutside`] when the window is empty or leaves the grid.
+    pub fn window(
+        &self,
+        col: usize,
+        row: usize,
+        width: usize,
+        height: usize,
+    ) -> Result<HeightGrid, GridError> {
+        let fits = |start: usize, len: usize, total: usize| {
+            len > 0 && start.checked_add(len).is_some_and(|end| end <= total)
+        };
+        if !fits(col, width, self.width) || !fits(row, height, self.height) {
+            return Err(GridError::WindowOutside {
+                col,
+                row,
+                width,
+                height,
+                grid_width: self.width,
+                grid_height: self.height,
+            });
+        }
+        let mut heights = Vec::with_capacity(width * height);
+        for r in row..row + height {
+            let start = r * self.width + col;
+            heights.extend_from_slice(&self.heights[start..start + width]);
+        }
+        let src = &self.georef;
+        let georef = GeoRef {
+            origin_x: src.origin_x + col as f64 * src.pixel_x,
+            origin_y: src.origin_y + row as f64 * src.pixel_y,
+            ..src.clone()
+        };
+        HeightGrid::new(width, height, heights, georef)
+    }
+
+    /// The grid's local frame in metres (x east, y north, z up, origin at the
+    /// south-west sample).
+    pub fn local_frame(&self) -> LocalFrame {
+        LocalFrame::of(self)
     }
 
     /// Cell size `[dx, dy]` in metres at the grid's centre (see
