@@ -19,14 +19,14 @@
 //!    direction has no second difference there (0). Non-finite values count 0.
 //! 2. **Accumulated curvature** of an element, `K`, in 1/m: the sum of `k` over
 //!    the grid samples in or on it (a triangle: its exact integer spans,
-//!    [`crate::raster::for_each_span`]; a block with four corners: the samples of
+//!    [`crate::mesh::raster::for_each_span`]; a block with four corners: the samples of
 //!    its bounding rectangle).
 //! 3. A summed-area table (prefix sums over rows and columns, `f64`) built once
 //!    in `O(W·H)` makes a rectangle `O(1)` and a triangle `O(rows)`.
 
 use crate::criteria::{Criterion, Element};
 use crate::grid::HeightGrid;
-use crate::raster::for_each_span;
+use crate::mesh::raster::for_each_span;
 
 /// Per-sample curvature of a grid with its summed-area table.
 #[derive(Debug, Clone)]

@@ -12,7 +12,6 @@
 #![warn(missing_docs)]
 
 pub mod bitree;
-pub mod check;
 pub mod criteria;
 pub mod curvature;
 pub mod error;
@@ -23,12 +22,10 @@ pub mod grid;
 pub mod hierarchy;
 pub mod light;
 pub mod mesh;
-pub mod metrics;
 mod par;
 pub mod points;
 pub mod quadtree;
 pub mod quadtree_templates;
-pub mod raster;
 pub mod refine;
 pub mod stream;
 pub mod stream_coder;
@@ -39,7 +36,6 @@ pub mod strip_quadtree;
 pub mod view;
 
 pub use bitree::Bitree;
-pub use check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
 pub use criteria::{
     All, Any, Criterion, Element, EuclideanDistance, MaxVerticalError, RelativeSize,
 };
@@ -48,7 +44,8 @@ pub use extract::{ExtractOptions, Extraction, Target};
 pub use grid::mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy, SeamReport};
 pub use grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidError, VoidPolicy};
 pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
+pub use mesh::check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
+pub use mesh::metrics::{measure, Metrics};
 pub use mesh::{Mesh, MeshVertex};
-pub use metrics::{measure, Metrics};
 pub use points::PointCounts;
 pub use quadtree::{QuadExtraction, QuadTree};

@@ -113,7 +113,7 @@ impl Criterion for IlluminationMask<'_> {
 
 /// The light a sample receives, `max(0, N·L̂)` in `[0, 1]` ([`grid_normal`];
 /// 0 for a zero light direction): the weight of paper 002's
-/// illumination-weighted volume error ([`crate::metrics::weighted_volume_m3`]).
+/// illumination-weighted volume error ([`crate::mesh::metrics::weighted_volume_m3`]).
 pub fn received_light(grid: &HeightGrid, light_dir: [f64; 3], col: usize, row: usize) -> f64 {
     let Some(l) = unit(light_dir) else {
         return 0.0;

@@ -25,7 +25,7 @@
 //!    ([`crate::quadtree_templates`]) is then the maximum of 4 of these 8
 //!    numbers: **exact** for the template the leaf really has, no worst case.
 //!    Errors are the largest `|plane − h|` over every sample in or on a piece
-//!    ([`crate::raster::for_each_span`], [`crate::raster::Plane`]), rounded up to
+//!    ([`crate::mesh::raster::max_deviation`]), rounded up to
 //!    `f32`.
 //! 2. **Refine** ([`QuadTree::refine`], per criterion): top-down from the root,
 //!    coarse levels first. A leaf is split when it straddles the border or when
@@ -75,10 +75,10 @@ use crate::criteria::{Criterion, Element, MaxVerticalError};
 use crate::error::MeshError;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{orient_up, Hierarchy, Pt};
+use crate::mesh::raster::max_deviation;
 use crate::mesh::{Mesh, MeshVertex};
 use crate::points::PointCounts;
 use crate::quadtree_templates::{side_pieces, template};
-use crate::raster::{for_each_span, Plane};
 
 /// Options for [`QuadTree::refine_with`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -301,29 +301,14 @@ fn block_side_errors(grid: &HeightGrid, hier: &Hierarchy, size: u32, i: u32, j: 
     out
 }
 
-/// Largest |plane − h| over the samples in or on triangle `t` (grid positions).
+/// Largest |plane − h| over the samples in or on triangle `t` (grid
+/// positions), the plane through its corners' sample heights.
 fn piece_error(grid: &HeightGrid, t: [Pt; 3]) -> f64 {
-    let hv = |p: Pt| grid.get(p[0] as usize, p[1] as usize) as f64;
-    let Some(plane) = Plane::new(t, t.map(hv)) else {
-        return 0.0;
-    };
-    let heights = grid.heights();
-    let w = grid.width();
-    let mut e = 0f64;
-    for_each_span(t, |row, a, b| {
-        let base = row as usize * w;
-        for (k, &h) in heights[base + a as usize..=base + b as usize]
-            .iter()
-            .enumerate()
-        {
-            let x = (a as usize + k) as f64;
-            let d = (plane.at(x, row as f64) - h as f64).abs();
-            if d > e {
-                e = d;
-            }
-        }
-    });
-    e
+    max_deviation(
+        grid,
+        t,
+        t.map(|p| grid.get(p[0] as usize, p[1] as usize) as f64),
+    )
 }
 
 /// What a leaf should do.

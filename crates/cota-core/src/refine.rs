@@ -58,8 +58,8 @@ use crate::error::MeshError;
 use crate::fictitious::{Closure, Marks};
 use crate::grid::HeightGrid;
 use crate::hierarchy::{orient_up, Hierarchy, Placement, Pt, Tri};
+use crate::mesh::raster::max_deviation;
 use crate::mesh::{Mesh, MeshVertex};
-use crate::raster::{for_each_span, Plane};
 
 /// How points needed only for the hierarchy are treated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -372,7 +372,7 @@ fn judge(
     let e = Element {
         corners: &corners,
         depth: l.depth,
-        vertical_error_m: exact_error(grid, p, zs),
+        vertical_error_m: max_deviation(grid, p, zs),
         grid,
     };
     if !criterion.wants_split(&e) {
@@ -401,25 +401,6 @@ fn judge(
         }
     }
     Verdict::Select(out)
-}
-
-/// The exact largest |plane − h| over the samples in or on the triangle `p`
-/// with vertex heights `zs` (metres).
-pub(crate) fn exact_error(grid: &HeightGrid, p: [Pt; 3], zs: [f64; 3]) -> f64 {
-    let Some(plane) = Plane::new(p, zs) else {
-        return 0.0;
-    };
-    let w = grid.width();
-    let heights = grid.heights();
-    let mut e = 0f64;
-    for_each_span(p, |y, x0, x1| {
-        let row = &heights[y as usize * w..];
-        for x in x0..=x1 {
-            let d = (plane.at(x as f64, y as f64) - row[x as usize] as f64).abs();
-            e = if d > e { d } else { e };
-        }
-    });
-    e
 }
 
 /// Builds the mesh from the leaves; returns it with the counts of real and

@@ -70,8 +70,8 @@ use crate::criteria::MaxVerticalError;
 use crate::fictitious::Marks;
 use crate::grid::{GeoRef, HeightGrid};
 use crate::hierarchy::{Hierarchy, Placement, Pt, Tri};
+use crate::mesh::metrics::measure;
 use crate::mesh::Mesh;
-use crate::metrics::measure;
 use crate::refine::{refine_marks_from, triangulate, Mode, RefineOptions};
 use crate::stream::{
     corner_points, level, quantize, residual_ctx, EncodedStep, EncodedStream, Models, State,

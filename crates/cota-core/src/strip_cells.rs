@@ -17,7 +17,7 @@
 //!    shares whole edges: no T-junction appears or disappears), the vertex
 //!    set and the triangle count, and changes the surface only strictly
 //!    inside the cell, where there is no sample: the error at every sample,
-//!    and so every figure of [`crate::metrics`] and every bound the mesh
+//!    and so every figure of [`crate::mesh::metrics`] and every bound the mesh
 //!    met, is unchanged. Both new triangles are counter-clockwise seen from
 //!    above like the mesh's.
 //! 3. **Rows.** Maximal horizontal runs of unit cells, at least

@@ -1,10 +1,15 @@
-//! Exact enumeration of the grid samples inside or on a triangle.
+//! Exact enumeration of the grid samples inside or on a triangle, and the
+//! exact largest deviation of a triangle's plane from them.
 //!
-//! Used by the metrics and the checker, which must see **every** sample. Vertices
-//! are integer (column, row) positions, so the three edge functions are integer
+//! Used by the metrics and the checker, which must see **every** sample, and
+//! by the refinements that judge a triangle by its exact error
+//! ([`max_deviation`]: the criterion-driven refinement, paper
+//! `001_49f2c365e8c41172.txt`, and the restricted quadtree). Vertices are
+//! integer (column, row) positions, so the three edge functions are integer
 //! linear forms and each row's span is found with exact integer floor/ceil
 //! division: no sample on an edge is ever missed or invented by rounding.
 
+use crate::grid::HeightGrid;
 use crate::hierarchy::Pt;
 
 /// Calls `f(row, first_col, last_col)` for each row of samples inside or on the
@@ -94,6 +99,27 @@ impl Plane {
     pub fn at(&self, x: f64, y: f64) -> f64 {
         self.z0 + self.gx * (x - self.x0) + self.gy * (y - self.y0)
     }
+}
+
+/// The exact largest |plane − h| over the grid samples in or on the triangle
+/// `p` (columns, rows) whose corners have heights `zs` (metres): the plane
+/// through the corners, evaluated in `f64` at every sample of
+/// [`for_each_span`]. 0 for a degenerate triangle.
+pub fn max_deviation(grid: &HeightGrid, p: [Pt; 3], zs: [f64; 3]) -> f64 {
+    let Some(plane) = Plane::new(p, zs) else {
+        return 0.0;
+    };
+    let w = grid.width();
+    let heights = grid.heights();
+    let mut e = 0f64;
+    for_each_span(p, |y, x0, x1| {
+        let row = &heights[y as usize * w..];
+        for x in x0..=x1 {
+            let d = (plane.at(x as f64, y as f64) - row[x as usize] as f64).abs();
+            e = if d > e { d } else { e };
+        }
+    });
+    e
 }
 
 #[cfg(test)]

@@ -18,17 +18,17 @@
 //!    winding number is 1 everywhere inside: the triangles tile the rectangle
 //!    exactly. Every sample is also checked to be covered.
 //! 5. **the error bound**: the true |Δz| at **every** sample is at most the bound
-//!    ([`crate::metrics::measure`]), with a slack of `1e-9·max(1, |h|max)` for
+//!    ([`super::metrics::measure`]), with a slack of `1e-9·max(1, |h|max)` for
 //!    floating-point rounding only.
 //!
 //! In non-conforming mode (the papers' faithful fictitious points, which leave
 //! hanging vertices on their neighbour's edge) check 3 only forbids repeated
 //! directed edges, and coverage rests on (4) plus the per-sample coverage test.
 
+use super::metrics::{measure, Metrics};
+use super::Mesh;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{diagonal_of, Hierarchy};
-use crate::mesh::Mesh;
-use crate::metrics::{measure, Metrics};
 
 /// What [`check_mesh`] requires.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -19,10 +19,10 @@
 //! ([`distortion_m2`]) and a per-sample weighted volume
 //! ([`weighted_volume_m3`], paper 002's illumination-weighted volume error).
 
+use super::raster::{for_each_span, Plane};
+use super::Mesh;
 use crate::grid::HeightGrid;
 use crate::hierarchy::Pt;
-use crate::mesh::Mesh;
-use crate::raster::{for_each_span, Plane};
 
 /// Exact error statistics of a mesh over the grid's samples.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -5,6 +5,14 @@
 //! and a height in metres. Triangles are counter-clockwise seen from above in
 //! the east/north/up frame (x = column, y = north = −row), so their normals point
 //! up. Exporters turn (column, row) into metres or grid units.
+//!
+//! The family also holds what every mesh is measured and proved with: the
+//! exact spans of a triangle over the grid ([`raster`]), the exact metrics
+//! over every sample ([`metrics`]) and the one invariant checker ([`check`]).
+
+pub mod check;
+pub mod metrics;
+pub mod raster;
 
 /// A mesh vertex on a grid sample.
 ///
