@@ -15,15 +15,12 @@ pub mod bitree;
 pub mod criteria;
 pub mod curvature;
 pub mod error;
-pub mod error_code;
-pub mod extract;
 pub mod fictitious;
 pub mod grid;
 pub mod hierarchy;
 pub mod light;
 pub mod mesh;
 mod par;
-pub mod points;
 pub mod quadtree;
 pub mod quadtree_templates;
 pub mod refine;
@@ -36,16 +33,16 @@ pub mod strip_quadtree;
 pub mod view;
 
 pub use bitree::Bitree;
+pub use bitree::PointCounts;
+pub use bitree::{ExtractOptions, Extraction, Target};
 pub use criteria::{
     All, Any, Criterion, Element, EuclideanDistance, MaxVerticalError, RelativeSize,
 };
 pub use error::{MeshError, Result};
-pub use extract::{ExtractOptions, Extraction, Target};
 pub use grid::mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy, SeamReport};
 pub use grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidError, VoidPolicy};
 pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
 pub use mesh::check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
 pub use mesh::metrics::{measure, Metrics};
 pub use mesh::{Mesh, MeshVertex};
-pub use points::PointCounts;
 pub use quadtree::{QuadExtraction, QuadTree};

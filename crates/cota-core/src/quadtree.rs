@@ -55,7 +55,7 @@
 //! # Selected and added points
 //! [`QuadExtraction::points`] counts by splits, for any criterion (the
 //! point-level definition shared with the bitree, for the max-error criterion,
-//! is [`crate::Bitree::point_counts`], see [`crate::points`]). A split of a
+//! is [`crate::Bitree::point_counts`], see [`crate::bitree::points`]). A split of a
 //! block introduces its 4 side midpoints and the centres of its 4 children
 //! (children of side 1 have none). A mesh vertex is
 //! * **base**: a corner or the centre of the root block (present before any split);
@@ -71,13 +71,13 @@
 use rayon::prelude::*;
 
 use crate::bitree::round_up_f32;
+use crate::bitree::PointCounts;
 use crate::criteria::{Criterion, Element, MaxVerticalError};
 use crate::error::MeshError;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{orient_up, Hierarchy, Pt};
 use crate::mesh::raster::max_deviation;
 use crate::mesh::{Mesh, MeshVertex};
-use crate::points::PointCounts;
 use crate::quadtree_templates::{side_pieces, template};
 
 /// Options for [`QuadTree::refine_with`].

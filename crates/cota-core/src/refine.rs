@@ -27,7 +27,7 @@
 //!    are the split points of the leaves it refined; fictitious points are
 //!    those only the dependencies (forced splits) needed.
 //! 5. Repeat 2–4 until no point is added; then emit the leaves (numbered
-//!    row-major as in [`crate::extract`]).
+//!    row-major as in [`crate::bitree::extract`]).
 //!
 //! # The bound with fictitious points
 //! Fictitious points change the planes of the triangles that use them, so the

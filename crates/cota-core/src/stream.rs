@@ -70,9 +70,9 @@
 //! decoded step by step by the same [`StreamDecoder`]; their stated errors
 //! are measured exactly and need not decrease from step to step.
 
+use crate::bitree::error_code::{decode, SplitRule, INFINITE};
 use crate::bitree::Bitree;
 use crate::error::MeshError;
-use crate::error_code::{decode, SplitRule, INFINITE};
 use crate::fictitious::Marks;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{orient_up, Hierarchy, Placement, Pt, Tri};

@@ -9,7 +9,7 @@
 //! Varshney, "Optimizing triangle strips for fast rendering" (1996).
 //!
 //! 1. **Recover the hierarchy from the mesh.** Every triangle of a bitree mesh
-//!    (any mode of [`crate::extract`] or [`crate::refine`]) is a triangle of the
+//!    (any mode of [`crate::bitree::extract`] or [`crate::refine`]) is a triangle of the
 //!    hierarchy: its right-angle vertex and its hypotenuse identify it. The
 //!    grid's extent is read from the vertices, so no grid is needed.
 //! 2. **Traverse.** From the two roots, a triangle entered at one end of its

@@ -38,8 +38,10 @@ use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 use rayon::prelude::*;
 
-use super::{diamond, diamond_code, first_col, level_rows, level_side, Codes, Level, Span};
-use crate::hierarchy::{Hierarchy, Placement, Pt};
+use super::error::{diamond_code, Codes, Span};
+use crate::hierarchy::{
+    diamond, first_col, level_rows, level_side, Hierarchy, Level, Placement, Pt,
+};
 
 /// About this many bytes of heights per band: half a core's L2 cache on the
 /// machines measured (1 MiB), so the band stays there while every coarse
@@ -272,9 +274,11 @@ fn scan_band(
 
 #[cfg(test)]
 mod test {
+    use super::super::by_level::fill_level;
+    use super::super::fused;
     use super::super::test::{fixture, grid, level_by_level, rough};
-    use super::super::{fill_level, fused, levels};
     use super::*;
+    use crate::hierarchy::levels;
 
     /// The banded build gives the level-by-level build's codes on every
     /// banded level, on synthetic and real grids of several shapes (square,

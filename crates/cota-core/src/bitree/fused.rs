@@ -19,9 +19,9 @@ use std::sync::Mutex;
 
 use rayon::prelude::*;
 
+use super::error::{code_of, diamond_error, Codes};
 use super::kernels::{fine_a4, fine_b4, small_a, small_b, SMALL_MAX};
-use super::{code_of, diamond_error, first_col, level_rows, level_side, Codes, Level};
-use crate::hierarchy::{Hierarchy, Pt};
+use crate::hierarchy::{first_col, level_rows, level_side, Hierarchy, Level, Pt};
 
 /// The finest levels, `B(2)` up to at least `A(FUSED_MIN)` and at most
 /// `A(FUSED_MAX)`, are built together in one pass over the rows (see

@@ -13,7 +13,7 @@
 //! # Runtime
 //! `O(s²)` per split point of `A(s)` or `B(s)`, with a small constant.
 
-use super::{code_of, max_no_nan, row_max_dev, Codes};
+use super::error::{code_of, max_no_nan, row_max_dev, Codes};
 use crate::hierarchy::{Hierarchy, Pt};
 
 /// `B(2)` away from the grid's border: both triangles of the diamond are inside
@@ -297,8 +297,11 @@ fn side_children(codes: Codes<'_>, w: usize, x: usize, y: usize, d: usize) -> u1
 
 #[cfg(test)]
 mod test {
+    use super::super::error::diamond_error;
     use super::super::test::grid;
-    use super::super::*;
+    use super::super::Bitree;
+    use super::*;
+    use crate::hierarchy::{first_col, levels, Level};
 
     #[test]
     fn fine_level_shortcuts_match_the_general_path() {

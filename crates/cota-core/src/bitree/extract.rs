@@ -53,7 +53,7 @@
 //! Each call enters the rayon pool once (see `on_pool`): entering it per
 //! parallel section costs more than a sparse extraction.
 //!
-//! The split test reads 16-bit error codes ([`crate::error_code`]) and settles
+//! The split test reads 16-bit error codes ([`crate::bitree::error_code`]) and settles
 //! the rare ambiguous code exactly, so the mesh is the one of the exact errors;
 //! the scan for the bitset settles them the same way.
 //!
@@ -70,9 +70,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use rayon::prelude::*;
 
-use crate::bitree::Bitree;
+use super::error_code::{SplitRule, INFINITE};
+use super::Bitree;
 use crate::error::MeshError;
-use crate::error_code::{SplitRule, INFINITE};
 use crate::hierarchy::{RowSpans, Tri};
 use crate::mesh::{Mesh, MeshVertex};
 

@@ -33,7 +33,7 @@
 //! must be transmitted; a fictitious-point mode transmits the vertices with a
 //! real height only (paper 000 §3.3, [`crate::refine`]).
 
-use crate::bitree::{round_up_f32, Bitree};
+use super::{round_up_f32, Bitree};
 use crate::mesh::Mesh;
 
 /// How the vertices of a mesh split into base, selected and added points.
