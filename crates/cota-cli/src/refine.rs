@@ -2,11 +2,11 @@
 //! `cota_core::refine::refine`.
 
 use anyhow::bail;
+use cota_core::criteria::curvature::{AccumulatedCurvature, CurvatureMap};
+use cota_core::criteria::light::IlluminationMask;
 use cota_core::criteria::terrain_diagonal_m;
-use cota_core::curvature::{AccumulatedCurvature, CurvatureMap};
-use cota_core::light::IlluminationMask;
+use cota_core::criteria::view::{Paper001, Paper003, ScreenSpaceError};
 use cota_core::refine::{refine, Mode, RefineOptions};
-use cota_core::view::{Paper001, Paper003, ScreenSpaceError};
 use cota_core::{
     CheckOptions, Criterion, EuclideanDistance, HeightGrid, MaxVerticalError, Mesh, RelativeSize,
 };

@@ -13,12 +13,10 @@
 
 pub mod bitree;
 pub mod criteria;
-pub mod curvature;
 pub mod error;
 pub mod fictitious;
 pub mod grid;
 pub mod hierarchy;
-pub mod light;
 pub mod mesh;
 mod par;
 pub mod quadtree;
@@ -30,13 +28,14 @@ pub mod stream_marks;
 pub mod strip;
 pub mod strip_cells;
 pub mod strip_quadtree;
-pub mod view;
 
 pub use bitree::Bitree;
 pub use bitree::PointCounts;
 pub use bitree::{ExtractOptions, Extraction, Target};
 pub use criteria::{
-    All, Any, Criterion, Element, EuclideanDistance, MaxVerticalError, RelativeSize,
+    AccumulatedCurvature, All, Any, Criterion, CriterionKind, CriterionOptions, Element,
+    EuclideanDistance, IlluminationMask, MaxVerticalError, Paper001, Paper003, RelativeSize,
+    ScreenSpaceError,
 };
 pub use error::{MeshError, Result};
 pub use grid::mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy, SeamReport};

@@ -4,12 +4,12 @@
 
 use std::path::PathBuf;
 
+use cota_core::criteria::curvature::{AccumulatedCurvature, CurvatureMap};
+use cota_core::criteria::light::IlluminationMask;
+use cota_core::criteria::view::{Paper001, Paper003, ScreenSpaceError};
 use cota_core::criteria::{local_m, longest_edge_m, terrain_diagonal_m};
-use cota_core::curvature::{AccumulatedCurvature, CurvatureMap};
 use cota_core::grid::voids::{fill_voids, FillOptions};
-use cota_core::light::IlluminationMask;
 use cota_core::refine::{refine, Mode, RefineOptions, Refined};
-use cota_core::view::{Paper001, Paper003, ScreenSpaceError};
 use cota_core::{
     check_mesh, CheckOptions, Criterion, Element, EuclideanDistance, GeoRef, HeightGrid,
     MaxVerticalError, Mesh, RelativeSize,
@@ -431,7 +431,7 @@ fn formulas_give_their_documented_values() {
     };
     assert!(!s_up.in_view(&e) && !s_up.wants_split(&e));
     // Paper 003: K·cosθ/d with the motion towards the centroid: cosθ = 1.
-    let c = cota_core::view::centroid_m(&e);
+    let c = cota_core::criteria::view::centroid_m(&e);
     let from = [c[0] - 30.0, c[1] - 40.0, c[2]];
     let p3 = Paper003 {
         map: &map,

@@ -5,9 +5,9 @@
 
 use std::path::PathBuf;
 
-use cota_core::curvature::CurvatureMap;
+use cota_core::criteria::curvature::CurvatureMap;
+use cota_core::criteria::light::{received_light, IlluminationMask};
 use cota_core::grid::voids::{fill_voids, FillOptions};
-use cota_core::light::{received_light, IlluminationMask};
 use cota_core::mesh::metrics::{distortion_m2, weighted_volume_m3};
 use cota_core::refine::{refine, RefineOptions};
 use cota_core::{measure, Bitree, ExtractOptions, GeoRef, HeightGrid, Mesh};

@@ -190,7 +190,7 @@ pub fn distortion_m2(grid: &HeightGrid, mesh: &Mesh) -> f64 {
 /// m³ (times the weight's unit): `Σ |Δz|·wx·wy·dx·dy·weight(col, row)` with the
 /// trapezoidal shares of [`measure`]'s `volume_m3`; each sample once, in the
 /// first mesh triangle containing it. With the received light as the weight
-/// (paper `002_9d6c1367b8962b6c.txt`, [`crate::light::received_light`]) this is
+/// (paper `002_9d6c1367b8962b6c.txt`, [`crate::criteria::light::received_light`]) this is
 /// the illumination-weighted volume error.
 pub fn weighted_volume_m3(grid: &HeightGrid, mesh: &Mesh, weight: impl Fn(u32, u32) -> f64) -> f64 {
     let [dx, dy] = grid.cell_size_m();

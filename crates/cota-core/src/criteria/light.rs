@@ -12,13 +12,13 @@
 //!    differences on the border.
 //! 2. `I(S) = mean over the element's corners of max(0, N·L̂)`, `L̂` the unit
 //!    direction towards the light, so `I ∈ [0, 1]`.
-//! 3. `K(S)` is the accumulated curvature of [`crate::curvature`] (1/m).
+//! 3. `K(S)` is the accumulated curvature of [`super::curvature`] (1/m).
 //! 4. The element is **accepted** when `K(S)·(α + (1 − α)·I(S)) ≤ T` and
 //!    refined otherwise: `α = 1` is pure curvature; for `α < 1` dark elements
 //!    are simplified more while lit ones keep their density.
 
-use crate::criteria::{Criterion, Element};
-use crate::curvature::CurvatureMap;
+use super::curvature::{default_tolerance, CurvatureMap};
+use super::{Criterion, CriterionError, Element};
 use crate::grid::HeightGrid;
 
 /// The grid's unit normal at a sample, local frame (x east, y north, z up).
@@ -62,10 +62,47 @@ pub struct IlluminationMask<'a> {
     /// Direction towards the light, local frame (any length; normalised).
     /// Suggested: `[1, 1, 1]` (a light high in the north-east).
     pub light_dir: [f64; 3],
-    /// Weight of pure curvature, in `[0, 1]`. Default in the CLI: 0.5.
+    /// Weight of pure curvature, in `[0, 1]`. Default
+    /// ([`super::CriterionOptions`]): 0.5, dark and lit weighted alike.
     pub alpha: f64,
-    /// Tolerance `T`, 1/m.
+    /// Tolerance `T`, 1/m. Default ([`IlluminationMask::new`] without one):
+    /// [`super::DEFAULT_TOLERANCE_SHARE`] of [`CurvatureMap::total`].
     pub tolerance: f64,
+}
+
+impl<'a> IlluminationMask<'a> {
+    /// The mask on `map` with the light towards `light_dir`, weight `alpha`
+    /// and `tolerance` (1/m), or by default
+    /// [`super::DEFAULT_TOLERANCE_SHARE`] × [`CurvatureMap::total`].
+    ///
+    /// # Errors
+    /// [`CriterionError::OutOfRange`] for an `alpha` outside `[0, 1]` or a
+    /// negative or NaN tolerance.
+    pub fn new(
+        map: &'a CurvatureMap,
+        light_dir: [f64; 3],
+        alpha: f64,
+        tolerance: Option<f64>,
+    ) -> Result<Self, CriterionError> {
+        Ok(IlluminationMask {
+            map,
+            light_dir,
+            alpha: weight(alpha)?,
+            tolerance: default_tolerance(map, tolerance)?,
+        })
+    }
+}
+
+/// `alpha` when it is a weight in `[0, 1]`.
+pub(super) fn weight(alpha: f64) -> Result<f64, CriterionError> {
+    if !(0.0..=1.0).contains(&alpha) {
+        return Err(CriterionError::OutOfRange {
+            setting: "alpha",
+            expected: "a weight in [0, 1]",
+            found: alpha,
+        });
+    }
+    Ok(alpha)
 }
 
 impl IlluminationMask<'_> {

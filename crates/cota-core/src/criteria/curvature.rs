@@ -24,7 +24,7 @@
 //! 3. A summed-area table (prefix sums over rows and columns, `f64`) built once
 //!    in `O(W·H)` makes a rectangle `O(1)` and a triangle `O(rows)`.
 
-use crate::criteria::{Criterion, Element};
+use super::{non_negative, Criterion, CriterionError, Element, DEFAULT_TOLERANCE_SHARE};
 use crate::grid::HeightGrid;
 use crate::mesh::raster::for_each_span;
 
@@ -157,9 +157,34 @@ impl CurvatureMap {
 pub struct AccumulatedCurvature<'a> {
     /// The grid's curvature map.
     pub map: &'a CurvatureMap,
-    /// The tolerance, 1/m (no default: it depends on the terrain; a fraction
-    /// of [`CurvatureMap::total`] is a good start).
+    /// The tolerance, 1/m. Default ([`AccumulatedCurvature::new`] without
+    /// one): [`DEFAULT_TOLERANCE_SHARE`] of [`CurvatureMap::total`].
     pub tolerance: f64,
+}
+
+impl<'a> AccumulatedCurvature<'a> {
+    /// The criterion on `map` with `tolerance` (1/m), or by default
+    /// [`DEFAULT_TOLERANCE_SHARE`] × [`CurvatureMap::total`].
+    ///
+    /// # Errors
+    /// [`CriterionError::OutOfRange`] for a negative or NaN tolerance.
+    pub fn new(map: &'a CurvatureMap, tolerance: Option<f64>) -> Result<Self, CriterionError> {
+        Ok(AccumulatedCurvature {
+            map,
+            tolerance: default_tolerance(map, tolerance)?,
+        })
+    }
+}
+
+/// `tolerance`, validated, or [`DEFAULT_TOLERANCE_SHARE`] of the map's total.
+pub(super) fn default_tolerance(
+    map: &CurvatureMap,
+    tolerance: Option<f64>,
+) -> Result<f64, CriterionError> {
+    match tolerance {
+        Some(t) => non_negative("tolerance", t),
+        None => Ok(DEFAULT_TOLERANCE_SHARE * map.total()),
+    }
 }
 
 impl Criterion for AccumulatedCurvature<'_> {

@@ -4,7 +4,7 @@
 //! the viewpoint and the view direction), `001_49f2c365e8c41172.txt` (refine
 //! only if near AND large AND curved) and `003_3a32b63e0cff3a64.txt`
 //! (`k·cosθ/d`). Positions are in the grid's local frame in metres (x east,
-//! y north, z up, origin at the south-west sample, [`crate::criteria::local_m`]).
+//! y north, z up, origin at the south-west sample, [`super::local_m`]).
 //!
 //! 1. [`ScreenSpaceError`]: the element's vertical error projected at its
 //!    nearest distance, in pixels.
@@ -17,9 +17,13 @@
 //! any terrain sample the element covers, so the projected error is never
 //! understated.
 
-use crate::criteria::{local_m, longest_edge_m, terrain_diagonal_m, Criterion, Element};
-use crate::curvature::CurvatureMap;
-use crate::light::unit;
+use super::curvature::CurvatureMap;
+use super::light::unit;
+use super::{
+    local_m, longest_edge_m, non_negative, terrain_diagonal_m, Criterion, CriterionError, Element,
+    DEFAULT_TOLERANCE_SHARE,
+};
+use crate::grid::HeightGrid;
 
 /// The element's bounding box in the local frame: `(lo, hi)` metres, z widened
 /// by the vertical error.
@@ -110,6 +114,20 @@ impl ScreenSpaceError {
         }
     }
 
+    /// `self` when its settings are in range.
+    ///
+    /// # Errors
+    /// [`CriterionError::OutOfRange`] for a field of view outside
+    /// `(0, 180)` degrees or a negative or NaN viewport height, aspect or
+    /// pixel error.
+    pub fn validated(self) -> Result<Self, CriterionError> {
+        fov(self.fov_y_deg)?;
+        non_negative("viewport_height_px", self.viewport_height_px)?;
+        non_negative("aspect", self.aspect)?;
+        non_negative("max_error_px", self.max_error_px)?;
+        Ok(self)
+    }
+
     /// The element's projected vertical error in pixels (ignores the cone).
     pub fn error_px(&self, e: &Element<'_>) -> f64 {
         let d = nearest_distance_m(e, self.observer_m).max(0.01);
@@ -159,14 +177,26 @@ impl Criterion for ScreenSpaceError {
     }
 }
 
+/// `fov_y_deg` when it is an angle in `(0, 180)` degrees.
+pub(super) fn fov(fov_y_deg: f64) -> Result<f64, CriterionError> {
+    if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
+        return Err(CriterionError::OutOfRange {
+            setting: "fov_y_deg",
+            expected: "an angle in (0, 180) degrees",
+            found: fov_y_deg,
+        });
+    }
+    Ok(fov_y_deg)
+}
+
 /// Paper 001's indicator: refine only when the element is
 /// 1. **near**: its nearest distance ([`nearest_distance_m`]) is at most
 ///    `distance_factor × D`, `D` the largest distance from the observer to a
 ///    corner of the terrain's bounding box (x, y over the grid, z over its
 ///    height range), metres;
 /// 2. **large**: its longest horizontal edge exceeds `size_factor` × the
-///    terrain's diagonal (metres, [`crate::criteria::RelativeSize`]);
-/// 3. **curved**: its accumulated curvature `K` ([`crate::curvature`], 1/m)
+///    terrain's diagonal (metres, [`super::RelativeSize`]);
+/// 3. **curved**: its accumulated curvature `K` ([`super::curvature`], 1/m)
 ///    exceeds `curvature_factor × K_max`, `K_max` the accumulated curvature of
 ///    the whole grid (the largest any element can have; the paper's
 ///    "extensive indicator, proportional to the surface").
@@ -194,6 +224,17 @@ impl<'a> Paper001<'a> {
             size_factor: 0.01,
             curvature_factor: 0.2,
         }
+    }
+
+    /// `self` when its factors are 0 or more (not NaN).
+    ///
+    /// # Errors
+    /// [`CriterionError::OutOfRange`] naming the first factor out of range.
+    pub fn validated(self) -> Result<Self, CriterionError> {
+        non_negative("size_factor", self.size_factor)?;
+        non_negative("distance_factor", self.distance_factor)?;
+        non_negative("curvature_factor", self.curvature_factor)?;
+        Ok(self)
     }
 
     /// `D`: the largest distance from the observer to a corner of the
@@ -231,7 +272,7 @@ impl Criterion for Paper001<'_> {
 }
 
 /// Paper 003's indicator: refine while `K·cosθ / d > tolerance`, with `K` the
-/// element's accumulated curvature (1/m, [`crate::curvature`]), `d` the
+/// element's accumulated curvature (1/m, [`super::curvature`]), `d` the
 /// distance from the observer to the element's centroid ([`centroid_m`],
 /// metres, at least 1 cm) and `θ` the angle between the observer's motion
 /// direction and the direction from the observer to that centroid. Units of
@@ -244,8 +285,38 @@ pub struct Paper003<'a> {
     pub observer_m: [f64; 3],
     /// Direction of motion (any length).
     pub motion_dir: [f64; 3],
-    /// Tolerance `T`, 1/m².
+    /// Tolerance `T`, 1/m². Default ([`Paper003::new`] without one):
+    /// [`DEFAULT_TOLERANCE_SHARE`] × [`CurvatureMap::total`] divided by the
+    /// terrain's diagonal in metres ([`terrain_diagonal_m`]), the curvature
+    /// criteria's default over the distance across the whole terrain.
     pub tolerance: f64,
+}
+
+impl<'a> Paper003<'a> {
+    /// The indicator on `map` (of `grid`) for an observer at `observer_m`
+    /// moving along `motion_dir`, with `tolerance` (1/m²) or the default of
+    /// [`Paper003::tolerance`].
+    ///
+    /// # Errors
+    /// [`CriterionError::OutOfRange`] for a negative or NaN tolerance.
+    pub fn new(
+        map: &'a CurvatureMap,
+        grid: &HeightGrid,
+        observer_m: [f64; 3],
+        motion_dir: [f64; 3],
+        tolerance: Option<f64>,
+    ) -> Result<Self, CriterionError> {
+        let tolerance = match tolerance {
+            Some(t) => non_negative("tolerance", t)?,
+            None => DEFAULT_TOLERANCE_SHARE * map.total() / terrain_diagonal_m(grid).max(1e-9),
+        };
+        Ok(Paper003 {
+            map,
+            observer_m,
+            motion_dir,
+            tolerance,
+        })
+    }
 }
 
 impl Paper003<'_> {

@@ -11,17 +11,75 @@
 //! 1. [`MaxVerticalError`]: the exact vertical error (the default).
 //! 2. [`EuclideanDistance`]: paper 000 §3.2, the 3D distance to the plane.
 //! 3. [`RelativeSize`]: paper 001's size factor.
-//! 4. [`crate::curvature::AccumulatedCurvature`]: papers 002–004.
-//! 5. [`crate::light::IlluminationMask`]: paper 002's mask.
-//! 6. [`crate::view::ScreenSpaceError`], [`crate::view::Paper001`],
-//!    [`crate::view::Paper003`]: view-dependent.
+//! 4. [`AccumulatedCurvature`]: papers 002–004 ([`curvature`]).
+//! 5. [`IlluminationMask`]: paper 002's mask ([`light`]).
+//! 6. [`ScreenSpaceError`], [`Paper001`], [`Paper003`]: view-dependent
+//!    ([`view`]).
 //! 7. [`All`], [`Any`]: combinations.
 //!
+//! Each has a validating constructor (`new`) whose defaults, data-derived
+//! where the papers give none, are documented there; [`CriterionKind`] and
+//! [`CriterionOptions`] name a criterion and its settings as plain data
+//! (what a command line or a request holds), and [`CriterionOptions::build`]
+//! makes it for a grid.
+//!
 //! Geometry is in the grid's local frame in metres: x east, y north, z up,
-//! origin at the south-west sample ([`local_m`]), with the cell size of
-//! [`HeightGrid::cell_size_m`].
+//! origin at the south-west sample ([`local_m`], [`crate::grid::LocalFrame`]),
+//! with the cell size of [`HeightGrid::cell_size_m`].
+
+mod choice;
+pub mod curvature;
+pub mod light;
+pub mod view;
 
 use crate::grid::HeightGrid;
+
+pub use choice::{CriterionKind, CriterionOptions};
+pub use curvature::{AccumulatedCurvature, CurvatureMap};
+pub use light::IlluminationMask;
+pub use view::{Paper001, Paper003, ScreenSpaceError};
+
+/// A criterion setting out of its range, or a missing one.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum CriterionError {
+    /// A setting outside its range (negative, NaN, an angle out of bounds).
+    #[error("{setting}: expected {expected}, found {found}")]
+    OutOfRange {
+        /// The setting, as named in [`CriterionOptions`].
+        setting: &'static str,
+        /// What it must be.
+        expected: &'static str,
+        /// What it was.
+        found: f64,
+    },
+    /// A view-dependent criterion without an observer.
+    #[error("the {criterion} criterion needs an observer position (metres, local frame)")]
+    NeedsObserver {
+        /// The criterion's name ([`CriterionKind::name`]).
+        criterion: &'static str,
+    },
+}
+
+/// `Ok` when `v` is 0 or more (not NaN), else [`CriterionError::OutOfRange`]
+/// naming `setting`.
+pub(crate) fn non_negative(setting: &'static str, v: f64) -> Result<f64, CriterionError> {
+    if v.is_nan() || v < 0.0 {
+        return Err(CriterionError::OutOfRange {
+            setting,
+            expected: "0 or more",
+            found: v,
+        });
+    }
+    Ok(v)
+}
+
+/// The default tolerance of the curvature criteria (curvature, light and,
+/// divided by the terrain's diagonal, paper 003), as a share of the grid's
+/// total accumulated curvature ([`CurvatureMap::total`]): `1e-4`. The papers
+/// give no value and a tolerance depends on the terrain, so the default is
+/// relative to the terrain's own total.
+pub const DEFAULT_TOLERANCE_SHARE: f64 = 1e-4;
 
 /// What a criterion sees of one element of a hierarchy.
 #[derive(Debug, Clone, Copy)]
@@ -50,6 +108,14 @@ pub trait Criterion: Sync {
 
     /// A short name for reports.
     fn name(&self) -> String;
+
+    /// `Some(E)` when this criterion is exactly the vertical bound
+    /// "refine while `vertical_error_m > E`" (metres) and nothing else, so that
+    /// the bitree's error map can answer it for every element at once
+    /// ([`crate::mesher`] then extracts instead of refining). Default: `None`.
+    fn vertical_bound_m(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// The default criterion: refine while the exact vertical error exceeds a bound:
@@ -58,6 +124,18 @@ pub trait Criterion: Sync {
 pub struct MaxVerticalError {
     /// The bound in metres. Default: 1.0.
     pub max_error_m: f64,
+}
+
+impl MaxVerticalError {
+    /// The bound of `max_error_m` metres.
+    ///
+    /// # Errors
+    /// [`CriterionError::OutOfRange`] for a negative or NaN bound.
+    pub fn new(max_error_m: f64) -> Result<Self, CriterionError> {
+        Ok(MaxVerticalError {
+            max_error_m: non_negative("max_error_m", max_error_m)?,
+        })
+    }
 }
 
 impl Default for MaxVerticalError {
@@ -74,10 +152,14 @@ impl Criterion for MaxVerticalError {
     fn name(&self) -> String {
         format!("max-error {} m", self.max_error_m)
     }
+
+    fn vertical_bound_m(&self) -> Option<f64> {
+        Some(self.max_error_m)
+    }
 }
 
 /// Refine when **every** inner criterion wants to (paper 001's AND of
-/// distance, size and curvature).
+/// distance, size and curvature). Never a pure vertical bound.
 pub struct All<'a>(pub Vec<&'a dyn Criterion>);
 
 impl Criterion for All<'_> {
@@ -92,7 +174,8 @@ impl Criterion for All<'_> {
 }
 
 /// Refine when **any** inner criterion wants to (e.g. a vertical bound that must
-/// hold everywhere, plus extra detail near the observer).
+/// hold everywhere, plus extra detail near the observer). Never a pure
+/// vertical bound: it may refine more than its inner bound asks.
 pub struct Any<'a>(pub Vec<&'a dyn Criterion>);
 
 impl Criterion for Any<'_> {
@@ -109,12 +192,7 @@ impl Criterion for Any<'_> {
 /// The local frame position in metres of an element corner `[col, row, z_m]`:
 /// x east = `col·dx`, y north = `(H − 1 − row)·dy`, z = height.
 pub fn local_m(grid: &HeightGrid, corner: [f64; 3]) -> [f64; 3] {
-    let [dx, dy] = grid.cell_size_m();
-    [
-        corner[0] * dx,
-        (grid.height() as f64 - 1.0 - corner[1]) * dy,
-        corner[2],
-    ]
+    grid.local_frame().point_m(corner[0], corner[1], corner[2])
 }
 
 /// The length in metres of the horizontal diagonal of the grid's rectangle:
@@ -163,6 +241,16 @@ impl Default for EuclideanDistance {
 }
 
 impl EuclideanDistance {
+    /// The bound of `max_distance_m` metres.
+    ///
+    /// # Errors
+    /// [`CriterionError::OutOfRange`] for a negative or NaN bound.
+    pub fn new(max_distance_m: f64) -> Result<Self, CriterionError> {
+        Ok(EuclideanDistance {
+            max_distance_m: non_negative("max_error_m", max_distance_m)?,
+        })
+    }
+
     /// The element's largest Euclidean distance in metres (see the type docs).
     pub fn distance_m(e: &Element<'_>) -> f64 {
         let p: Vec<[f64; 3]> = e.corners.iter().map(|&c| local_m(e.grid, c)).collect();
@@ -213,6 +301,18 @@ pub struct RelativeSize {
 impl Default for RelativeSize {
     fn default() -> Self {
         RelativeSize { factor: 0.01 }
+    }
+}
+
+impl RelativeSize {
+    /// Refine while the longest edge exceeds `factor` × the terrain's diagonal.
+    ///
+    /// # Errors
+    /// [`CriterionError::OutOfRange`] for a negative or NaN factor.
+    pub fn new(factor: f64) -> Result<Self, CriterionError> {
+        Ok(RelativeSize {
+            factor: non_negative("size_factor", factor)?,
+        })
     }
 }
 
