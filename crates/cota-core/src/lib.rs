@@ -14,7 +14,6 @@
 pub mod bitree;
 pub mod criteria;
 pub mod error;
-pub mod fictitious;
 pub mod grid;
 pub mod hierarchy;
 pub mod mesh;

@@ -73,10 +73,10 @@
 use crate::bitree::error_code::{decode, SplitRule, INFINITE};
 use crate::bitree::Bitree;
 use crate::error::MeshError;
-use crate::fictitious::Marks;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{orient_up, Hierarchy, Placement, Pt, Tri};
 use crate::mesh::{Mesh, MeshVertex};
+use crate::refine::Marks;
 use crate::refine::Mode;
 use crate::stream_coder::{Bit, RangeDecoder, RangeEncoder, ResidualModel};
 

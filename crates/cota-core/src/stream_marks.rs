@@ -67,11 +67,11 @@
 //! exactly the former one-step layout, so one-step files still decode.
 
 use crate::criteria::MaxVerticalError;
-use crate::fictitious::Marks;
 use crate::grid::{GeoRef, HeightGrid};
 use crate::hierarchy::{Hierarchy, Placement, Pt, Tri};
 use crate::mesh::metrics::measure;
 use crate::mesh::Mesh;
+use crate::refine::Marks;
 use crate::refine::{refine_marks_from, triangulate, Mode, RefineOptions};
 use crate::stream::{
     corner_points, level, quantize, residual_ctx, EncodedStep, EncodedStream, Models, State,
@@ -357,7 +357,7 @@ impl<'s> Walk<'s> {
         let mut marks = match self.prev {
             Some(p) => p.clone(),
             None => {
-                let mut m = Marks::new(hier, mode.closure());
+                let mut m = Marks::new(hier, mode);
                 m.seed_border();
                 m
             }
@@ -472,7 +472,7 @@ pub fn encode_marks_progressive(
     }
     let (qgrid, _) = quantize(grid, opts.quantum_m)?;
     let hier = crate::error::hierarchy_for(&qgrid)?;
-    let mut marks = Marks::new(hier, mode.closure());
+    let mut marks = Marks::new(hier, mode);
     marks.seed_border();
     let coarse = triangulate(&qgrid, &marks, mode).mesh;
     let emax = measure(&qgrid, &coarse).max_error_m;
@@ -564,10 +564,10 @@ pub fn encode_marks_steps(
             expected,
             found,
         };
-        if marks.closure() != mode.closure() {
+        if marks.mode() != mode {
             return Err(bad(
                 format!("marks closed under the {} rule", mode.name()),
-                format!("{:?}", marks.closure()),
+                format!("marks closed under the {} rule", marks.mode().name()),
             ));
         }
         if prev.as_ref().is_some_and(|p| !marks.contains(p)) {
@@ -760,7 +760,7 @@ mod test {
             matches!(e, Err(StreamError::BadStep { step: 0, .. })),
             "{e:?}"
         );
-        let mut open = Marks::new(*fine.hierarchy(), mode.closure());
+        let mut open = Marks::new(*fine.hierarchy(), mode);
         open.seed_border();
         assert!(open.select([1, 2]));
         let e = encode_marks_steps(&g, &[(1.0, open)], mode, &so);

@@ -4,9 +4,9 @@
 
 use std::path::PathBuf;
 
-use cota_core::fictitious::Marks;
 use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::hierarchy::Hierarchy;
+use cota_core::refine::Marks;
 use cota_core::refine::{refine, triangulate, Mode, RefineOptions, Refined};
 use cota_core::{
     check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError,
@@ -108,10 +108,7 @@ fn five() -> HeightGrid {
 }
 
 fn marks_with(g: &HeightGrid, mode: Mode, selected: &[[u32; 2]]) -> Marks {
-    let mut m = Marks::new(
-        Hierarchy::new(g.width() as u32, g.height() as u32),
-        mode.closure(),
-    );
+    let mut m = Marks::new(Hierarchy::new(g.width() as u32, g.height() as u32), mode);
     m.seed_border();
     for &p in selected {
         m.select(p);

@@ -128,12 +128,12 @@ fn promise(mode: cota_core::refine::Mode, e: f64) -> CheckOptions {
 fn srtm_progressive_marks_every_prefix_is_the_senders_mesh() {
     use cota_core::refine::{refine_marks_from, triangulate, RefineOptions};
     use cota_core::stream::encode_marks_steps;
-    use cota_core::{fictitious::Marks, MaxVerticalError};
+    use cota_core::{refine::Marks, MaxVerticalError};
     // Andes, 200 x 160 samples from 610 m to 1899 m.
     let grid = s29_window(1000, 900, 200, 160);
     for mode in MODES {
         let hier = cota_core::hierarchy::Hierarchy::new(200, 160);
-        let mut marks = Marks::new(hier, mode.closure());
+        let mut marks = Marks::new(hier, mode);
         marks.seed_border();
         let mut steps = vec![(f32::MAX as f64, marks.clone())];
         for t in [256.0, 64.0, 16.0, 4.0, 1.0, 0.0] {

@@ -8,7 +8,7 @@
 //! right-angle apex, is split). The levels `A(s)` and `B(s)` are described in
 //! [`crate::hierarchy`].
 
-use super::{Pt, Tri};
+use super::tri::{Pt, Tri};
 
 /// One level of the hierarchy: `A(s)` or `B(s)` (see [`crate::hierarchy`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -17,18 +17,20 @@
 //!    apex of the parent, …) until it meets a triangle already split: the chain
 //!    is linear and each triangle is marked at most once.
 //!
-//! The closure comes in three [`Closure`] variants:
-//! * **Conforming**: every point made present is promoted to selected (real
+//! The closure comes in three variants, one per [`Mode`]:
+//! * **Conforming** ([`Mode::Conforming`]): every point made present is promoted to selected (real
 //!   height, both sides split): the forced-split closure of ROAM/RTIN, no
 //!   fictitious point, no T-junction.
-//! * **Faithful** (the paper): rules 1–3 only. Where only one side of a
+//! * **Faithful** (the paper, `Mode::Fictitious { watertight: false }`):
+//!   rules 1–3 only. Where only one side of a
 //!   fictitious point's diagonal is split, the point hangs on the unsplit
 //!   neighbour's edge, exactly on it in exact arithmetic (its height is the
 //!   interpolation along that very edge; stored as `f32`, so within half an
 //!   ulp), but it is a T-junction; paper 000's
 //!   strips join such neighbours with one degenerate "line triangle" per hanging
 //!   vertex ([`Marks::hanging_vertices`]).
-//! * **Watertight**: rules 1–3, and every present point also splits both its
+//! * **Watertight** (`Mode::Fictitious { watertight: true }`): rules 1–3,
+//!   and every present point also splits both its
 //!   diamond triangles (recursively requiring their parents). Splitting a
 //!   triangle through a point interpolated on its own hypotenuse leaves the
 //!   surface unchanged, so the surface is the faithful one (a few more
@@ -40,7 +42,8 @@
 //! base selection ([`Marks::seed_border`]): they cannot be interpolated since a
 //! diagonal end may lie outside the grid.
 
-use crate::hierarchy::{diamond, level_of, parent, Hierarchy, Placement, Pt, Tri};
+use super::mode::Mode;
+use crate::hierarchy::{diamond, level_of, parent, walk, Hierarchy, Placement, Pt, Tri, Visitor};
 
 /// The selected flag.
 const SEL: u8 = 1;
@@ -48,18 +51,6 @@ const SEL: u8 = 1;
 const SIDES: [u8; 2] = [2, 4];
 /// Either split bit.
 const ANY_SIDE: u8 = 2 | 4;
-
-/// How the closure treats points that are needed but not selected.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Closure {
-    /// Every needed point gets its real height and splits both sides.
-    Conforming,
-    /// Needed points are fictitious and split only the side that needs them
-    /// (paper 000; hanging vertices).
-    Faithful,
-    /// Needed points are fictitious and split both sides (no T-junction).
-    Watertight,
-}
 
 /// Which side of its split point `m`'s diamond the triangle with apex `c` is
 /// on: the two apexes are symmetric about `m`, so comparing (row, column)
@@ -69,11 +60,32 @@ fn side_of(c: Pt, m: Pt) -> usize {
     usize::from((c[1], c[0]) >= (m[1], m[0]))
 }
 
+/// The walk of [`Marks::seed_border`]: selects the split point of every
+/// straddling triangle that lies inside the grid, and stops at inside ones.
+struct Border<'m>(&'m mut Marks);
+
+impl Visitor for Border<'_> {
+    type Down = ();
+    type Error = std::convert::Infallible;
+
+    fn straddling(&mut self, t: &Tri, _down: ()) -> Result<(), Self::Error> {
+        let m = t.mid();
+        if self.0.hier.contains(m) {
+            self.0.select(m);
+        }
+        Ok(())
+    }
+
+    fn inside(&mut self, _t: &Tri, _down: ()) -> Result<Option<()>, Self::Error> {
+        Ok(None)
+    }
+}
+
 /// The closure state: which points are selected and which triangles split.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Marks {
     hier: Hierarchy,
-    closure: Closure,
+    mode: Mode,
     flags: Vec<u8>,
     /// Points that became present and still need the closure's rule.
     pending: Vec<Pt>,
@@ -83,11 +95,11 @@ impl Marks {
     /// No point selected, nothing split, over a `hier`-shaped grid. Call
     /// [`Marks::seed_border`] before selecting when the grid is not
     /// `2^k + 1` square.
-    pub fn new(hier: Hierarchy, closure: Closure) -> Self {
+    pub fn new(hier: Hierarchy, mode: Mode) -> Self {
         let n = hier.width() as usize * hier.height() as usize;
         Marks {
             hier,
-            closure,
+            mode,
             flags: vec![0; n],
             pending: Vec::new(),
         }
@@ -98,9 +110,9 @@ impl Marks {
         &self.hier
     }
 
-    /// The closure rule these marks follow.
-    pub fn closure(&self) -> Closure {
-        self.closure
+    /// The mode whose closure rule these marks follow.
+    pub fn mode(&self) -> Mode {
+        self.mode
     }
 
     /// True when every point selected in `other` is selected here and every
@@ -118,19 +130,8 @@ impl Marks {
     /// Selects the split points of every triangle straddling the grid's
     /// border (those inside the grid): the coarsest mesh, always present.
     pub fn seed_border(&mut self) {
-        let mut stack: Vec<Tri> = self.hier.roots().to_vec();
-        while let Some(t) = stack.pop() {
-            if self.hier.place(&t) != Placement::Straddling || t.is_unit() {
-                continue;
-            }
-            let m = t.mid();
-            if self.hier.contains(m) {
-                self.select(m);
-            }
-            let (c0, c1) = t.children();
-            stack.push(c0);
-            stack.push(c1);
-        }
+        let hier = self.hier;
+        let Ok(()) = walk(&hier, &hier.roots(), (), &mut Border(self));
         self.close();
     }
 
@@ -180,12 +181,12 @@ impl Marks {
     /// call, until nothing changes.
     pub fn close(&mut self) {
         while let Some(p) = self.pending.pop() {
-            match self.closure {
-                Closure::Conforming => {
+            match self.mode {
+                Mode::Conforming => {
                     self.select(p);
                 }
-                Closure::Watertight => self.split_both(p),
-                Closure::Faithful => {}
+                Mode::Fictitious { watertight: true } => self.split_both(p),
+                Mode::Fictitious { watertight: false } => {}
             }
         }
     }
