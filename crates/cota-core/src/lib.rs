@@ -19,7 +19,6 @@ pub mod hierarchy;
 pub mod mesh;
 mod par;
 pub mod quadtree;
-pub mod quadtree_templates;
 pub mod refine;
 pub mod stream;
 pub mod stream_coder;

@@ -13,7 +13,7 @@
 //! uses the same points with the same dependencies (paper 000 §2.2): a block
 //! centre splits the block's two halves, a side midpoint the two triangles
 //! (corner, corner, centre) on either side of the side, which are exactly the
-//! quadtree templates' side pieces ([`crate::quadtree_templates`]).
+//! quadtree templates' side pieces ([`crate::quadtree::templates`]).
 //!
 //! 1. A point's **own error** is the largest exact `e(T)` of the (one or two)
 //!    triangles of its diamond that lie inside the grid: the largest
