@@ -12,7 +12,7 @@
 //! 4. Strip references: one strip per mesh, `cota_core::strip` for the
 //!    bitree with `--strip-method` (default guided: the mesh as compared;
 //!    cells re-triangulates unit cells of the bitree mesh only, so it is not
-//!    a like-for-like comparison), `cota_core::strip_quadtree` for the
+//!    a like-for-like comparison), `cota_core::strip::stripify_quadtree` for the
 //!    quadtree; `n/a` (`null` in JSON) when a mesh cannot be stripped.
 
 use std::fmt::Write as _;
@@ -54,7 +54,7 @@ struct Entry {
     /// References when sent as separate triangles: 3 per triangle.
     separate_refs: usize,
     /// References as one triangle strip (`cota_core::strip` for the bitree,
-    /// `cota_core::strip_quadtree` for the quadtree).
+    /// `cota_core::strip::stripify_quadtree` for the quadtree).
     strip_refs: Option<usize>,
     /// Measured largest |Δz| over every sample, metres.
     max_error_m: f64,
@@ -201,7 +201,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
     let full_mesh = cota_core::strip::full_bitree_mesh(w as u32, h as u32);
     let method = a.strip_method.method();
     let full_strip_bt = bitree_strip_refs(&full_mesh, method);
-    let full_strip_qt = Some(cota_core::strip_quadtree::stripify_quadtree(&full_mesh).refs());
+    let full_strip_qt = Some(cota_core::strip::stripify_quadtree(&full_mesh).refs());
     let full = |hierarchy, mode| Entry {
         hierarchy,
         mode,
@@ -308,7 +308,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
                 added_by_forced_splits: Some(x.points.added),
                 line_triangles: 0,
                 separate_refs: 3 * c.triangles,
-                strip_refs: Some(cota_core::strip_quadtree::stripify_quadtree(&x.mesh).refs()),
+                strip_refs: Some(cota_core::strip::stripify_quadtree(&x.mesh).refs()),
                 max_error_m: max_error(&grid, &x.mesh, conforming)?,
             });
         }

@@ -24,8 +24,6 @@ pub mod stream;
 pub mod stream_coder;
 pub mod stream_marks;
 pub mod strip;
-pub mod strip_cells;
-pub mod strip_quadtree;
 
 pub use bitree::Bitree;
 pub use bitree::PointCounts;

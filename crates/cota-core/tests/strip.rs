@@ -1,7 +1,7 @@
 //! Triangle strips from the bitree traversal (papers 000 §4 and 001): on real
 //! data in every mode, the strip holds exactly the mesh's triangles with the
 //! mesh's orientation, degenerate triangles only as connectors, and few
-//! references per triangle. The cells strip (`cota_core::strip_cells`) holds
+//! references per triangle. The cells strip (`StripMethod::Cells`) holds
 //! exactly the triangles of the mesh it returns, which passes the invariant
 //! checker with the input's bound, and is never longer than the guided one.
 #![allow(clippy::unwrap_used, reason = "tests")]
@@ -11,8 +11,7 @@ use std::path::PathBuf;
 use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::refine::{refine, Mode, RefineOptions};
 use cota_core::strip::{
-    canonical, full_bitree_mesh, strip_to_triangles, stripify_bitree, stripify_bitree_with,
-    MeshStrip, Strip, StripMethod,
+    full_bitree_mesh, stripify_bitree, stripify_bitree_with, MeshStrip, Strip, StripMethod,
 };
 use cota_core::{
     check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError, Mesh,
@@ -29,15 +28,9 @@ fn real() -> HeightGrid {
 
 /// The strip has exactly the mesh's triangles, same orientation, each once.
 fn assert_same_triangles(mesh: &Mesh, strip: &Strip) {
-    let mut got: Vec<[u32; 3]> = strip_to_triangles(&strip.indices)
-        .into_iter()
-        .map(canonical)
-        .collect();
-    let mut want: Vec<[u32; 3]> = mesh.triangles.iter().copied().map(canonical).collect();
-    got.sort_unstable();
-    want.sort_unstable();
-    assert_eq!(got.len(), want.len());
-    assert!(got == want, "strip triangles differ from the mesh's");
+    if let Err(e) = strip.validate(mesh) {
+        panic!("strip triangles differ from the mesh's: {e}");
+    }
     assert_eq!(strip.triangles, mesh.triangles.len());
     assert_eq!(strip.triangles + strip.degenerate + 2, strip.indices.len());
 }
@@ -262,7 +255,7 @@ fn golden_3x3() {
 #[test]
 fn quadtree_leaves() {
     use cota_core::quadtree::QuadTree;
-    use cota_core::strip_quadtree::stripify_quadtree;
+    use cota_core::strip::stripify_quadtree;
     let g = real();
     let qt = QuadTree::build(&g).unwrap();
     for e in [1.0, 10.0] {

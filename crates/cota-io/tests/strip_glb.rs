@@ -8,7 +8,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use cota_core::strip::{strip_to_triangles, stripify_bitree};
+use cota_core::strip::{drawn_triangles, stripify_bitree};
 use cota_core::{Bitree, ExtractOptions, GeoRef, HeightGrid, Mesh};
 use cota_io::export::{
     write_atomically, write_glb_strip, Coords, ExportError, ExportOptions, IndexWidth,
@@ -100,7 +100,7 @@ fn strip_glb_faces_up_in_both_frames() {
                     .with_index_width(width);
                 let (idx, pos) = read_back(&encode(m, &strip.indices, &g, &o));
                 assert!(idx == strip.indices || idx[1..] == strip.indices[..]);
-                let tris = strip_to_triangles(&idx);
+                let tris = drawn_triangles(&idx);
                 assert_eq!(tris.len(), m.triangles.len());
                 for t in tris {
                     let [a, b, c] = t.map(|i| pos[i as usize]);

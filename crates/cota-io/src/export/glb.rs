@@ -111,25 +111,10 @@ pub fn write_glb_strip<W: Write>(
 /// triangles, with their drawn orientation, are the mesh's triangles, each
 /// once. Indices are already known to be in range.
 fn check_strip_triangles(mesh: &Mesh, strip: &[u32]) -> Result<(), ExportError> {
-    use cota_core::strip::{canonical, strip_to_triangles};
-    let mut got: Vec<[u32; 3]> = strip_to_triangles(strip)
-        .into_iter()
-        .map(canonical)
-        .collect();
-    let mut want: Vec<[u32; 3]> = mesh.triangles.iter().copied().map(canonical).collect();
-    got.sort_unstable();
-    want.sort_unstable();
-    if got == want {
-        return Ok(());
-    }
-    let foreign = got
-        .iter()
-        .filter(|t| want.binary_search(t).is_err())
-        .count();
-    Err(ExportError::StripMismatch {
-        mesh_triangles: want.len(),
-        strip_triangles: got.len(),
-        foreign,
+    cota_core::strip::validate_indices(strip, mesh).map_err(|e| ExportError::StripMismatch {
+        mesh_triangles: e.mesh_triangles,
+        strip_triangles: e.strip_triangles,
+        foreign: e.foreign,
     })
 }
 

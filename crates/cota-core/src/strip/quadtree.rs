@@ -10,7 +10,7 @@
 //!    (by their centroid: row first, then column), the paper's sweep at the
 //!    resolution of the triangles.
 //! 2. Grow one standard strip greedily from that order with the guided
-//!    growth of [`crate::strip`] (step 4 there): natural or swap neighbour,
+//!    growth of [`super`] (step 4 there): natural or swap neighbour,
 //!    the one with fewer unvisited neighbours first, restarts around the last
 //!    vertex or at the next triangle of the sweep. Orientation and parity are
 //!    handled as there: every non-degenerate triangle of the strip is a mesh
@@ -23,8 +23,9 @@
 //! # Runtime
 //! `O(T log T)` for the sort, then linear.
 
+use super::emit::Strip;
+use super::guided::stripify_guided;
 use crate::mesh::Mesh;
-use crate::strip::{stripify_guided, Strip};
 
 /// Strips `mesh` (steps 1–2 of the module docs).
 pub fn stripify_quadtree(mesh: &Mesh) -> Strip {

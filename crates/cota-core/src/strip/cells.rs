@@ -1,11 +1,11 @@
 //! Triangle strips by rows of re-triangulated unit cells.
 //!
 //! Papers `000_ebf7e3a88dffd361.txt` §4 and `001_49f2c365e8c41172.txt` strip
-//! the bitree's leaves in traversal order ([`crate::strip`]). At full
+//! the bitree's leaves in traversal order ([`super`]). At full
 //! resolution that mesh is the "4-8" pattern (diagonals alternate), where
 //! half the vertices lie in 8 triangles and half in 4, so any strip of it
 //! needs at least 1.25 references per triangle (the lower bound in
-//! [`crate::strip`]). This module reaches about `1 + 3/(2W)` on a full grid
+//! [`super`]). This module reaches about `1 + 3/(2W)` on a full grid
 //! `W` samples wide by changing the diagonals first:
 //!
 //! 1. **Unit cells.** A unit cell is a 1×1 grid square covered by exactly two
@@ -30,12 +30,12 @@
 //!    corner where the previous one ended costs one extra index (a swap, as
 //!    its first triangle comes on the other parity), any other join two or
 //!    three (degenerate connectors; the orientation is kept by the strip's
-//!    parity as in [`crate::strip`] step 3).
+//!    parity as in [`super`] step 3).
 //! 4. **The rest.** The other unit cells get the diagonal `/`
 //!    ([`CellOptions::parallel_rest`]): where they form patches every
 //!    interior vertex then lies in 6 triangles instead of 4 or 8, so the
 //!    1.25 bound no longer applies there. The triangles not in a run are
-//!    stripped by [`crate::strip::stripify_guided`] in the hierarchy's order,
+//!    stripped by [`super::guided::stripify_guided`] in the hierarchy's order,
 //!    and the two strips are joined with degenerate connectors.
 //!
 //! On a full grid every cell is a unit cell and every row one run: `2W`
@@ -43,20 +43,21 @@
 //! `2(W−1)(H−1)` triangles, 1.0012 per triangle at 1201². On adaptive SRTM
 //! meshes at 0.5–5 m it gives 1.24–1.43 where the guided strip of the
 //! unchanged mesh gives 1.44, but at 10–20 m, where few unit cells are left,
-//! it can be a little longer, so [`crate::strip::StripMethod::Cells`] keeps
+//! it can be a little longer, so [`super::StripMethod::Cells`] keeps
 //! whichever strip is shorter (`bench/README.md`, "Triangle strips").
 //!
 //! # Runtime
 //! `O(T log T)` for the cell search (a sort of the unit triangles) plus the
 //! guided strip of the remainder.
 
+use super::emit::{finish, strip_from_order, Strip};
+use super::guided::stripify_guided;
 use crate::mesh::Mesh;
-use crate::strip::{finish, stripify_guided, Strip};
 
 /// Options of [`stripify_cells`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
-pub struct CellOptions {
+pub(crate) struct CellOptions {
     /// Shortest horizontal run of unit cells stripped as a row; shorter runs
     /// are left to the guided strip. Default: 16 (measured on S29W072 and
     /// N00E010 at 0.5–20 m: 8 gives up to 0.04 more references per triangle,
@@ -75,18 +76,6 @@ impl CellOptions {
         min_run_cells: 16,
         parallel_rest: true,
     };
-
-    /// Sets [`CellOptions::parallel_rest`].
-    pub const fn with_parallel_rest(mut self, yes: bool) -> Self {
-        self.parallel_rest = yes;
-        self
-    }
-
-    /// Sets [`CellOptions::min_run_cells`].
-    pub const fn with_min_run_cells(mut self, n: usize) -> Self {
-        self.min_run_cells = n;
-        self
-    }
 }
 
 impl Default for CellOptions {
@@ -97,7 +86,7 @@ impl Default for CellOptions {
 
 /// A strip of a re-triangulated mesh.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct CellStrip {
+pub(crate) struct CellStrip {
     /// The strip.
     pub strip: Strip,
     /// The triangles it encodes: the input mesh's, in the same slots, with
@@ -210,11 +199,11 @@ fn row_triangles(c: &Cell, east: bool) -> [[u32; 3]; 2] {
 }
 
 /// Strips `mesh` (a bitree mesh, `order` its triangle slots in the
-/// hierarchy's order, as from [`crate::strip::bitree_order_ids`]) by rows
+/// hierarchy's order, as from [`super::bitree_order`]) by rows
 /// of re-triangulated unit cells and the guided strip of the rest (module
 /// docs). Slots missing from `order` or out of range are left out of the
 /// strip (not of [`CellStrip::triangles`]), so pass every slot once.
-pub fn stripify_cells(mesh: &Mesh, order: &[u32], opts: &CellOptions) -> CellStrip {
+pub(crate) fn stripify_cells(mesh: &Mesh, order: &[u32], opts: &CellOptions) -> CellStrip {
     let cells = unit_cells(mesh);
     let mut triangles = mesh.triangles.clone();
     let mut in_row = vec![false; mesh.triangles.len()];
@@ -276,7 +265,7 @@ pub fn stripify_cells(mesh: &Mesh, order: &[u32], opts: &CellOptions) -> CellStr
             flipped_cells += usize::from(!c.slash);
         }
     }
-    let mut s = crate::strip::strip_from_order(&row_order).indices;
+    let mut s = strip_from_order(&row_order).indices;
     let rest: Vec<[u32; 3]> = order
         .iter()
         .filter(|&&k| in_row.get(k as usize) == Some(&false))
@@ -320,8 +309,8 @@ fn append(s: &mut Vec<u32>, t: &[u32]) {
 
 #[cfg(test)]
 mod test {
+    use super::super::emit::{canonical, drawn_triangles as strip_to_triangles};
     use super::*;
-    use crate::strip::{canonical, strip_to_triangles};
 
     #[test]
     fn append_keeps_parity() {
@@ -349,7 +338,7 @@ mod test {
 
     #[test]
     fn unit_cells_of_a_3x3_full_grid() {
-        let mesh = crate::strip::full_bitree_mesh(3, 3);
+        let mesh = super::super::full_bitree_mesh(3, 3);
         let cells = unit_cells(&mesh);
         assert_eq!(cells.len(), 4);
         // The 4-8 pattern: diagonals alternate.

@@ -1,0 +1,280 @@
+//! The order of a bitree mesh's triangles in the hierarchy: the Sierpinski
+//! traversal of paper `001_49f2c365e8c41172.txt` (its sequence types A, B, C)
+//! and paper `000_ebf7e3a88dffd361.txt` §4, recovered from the mesh alone
+//! (steps 1 and 2 of [`super`]).
+
+use crate::hierarchy::{orient_up, walk, Hierarchy, Placement, Pt, Tri, Visitor};
+use crate::mesh::{Mesh, MeshVertex};
+
+/// Why a mesh cannot be stripped from the hierarchy.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StripError {
+    /// A triangle is not a right isosceles triangle of the bitree.
+    #[error("expected triangle {0} to be a bitree triangle (right isosceles, on the hierarchy)")]
+    NotBitree(usize),
+    /// Some triangles were not reached by the traversal (or appear twice).
+    #[error("expected the triangles to tile the grid as bitree leaves; {missed} of {total} were not reached")]
+    NotTiling {
+        /// Triangles not visited.
+        missed: usize,
+        /// Triangles of the mesh.
+        total: usize,
+    },
+    /// A vertex index out of range.
+    #[error("expected vertex indices below {vertices}, found {index}")]
+    BadIndex {
+        /// The offending index.
+        index: u32,
+        /// Number of vertices.
+        vertices: usize,
+    },
+}
+
+/// The mesh's triangles (counter-clockwise, as in the mesh) in the Sierpinski
+/// order of the hierarchy (step 2).
+///
+/// # Errors
+/// As [`super::stripify_bitree`].
+pub fn bitree_order(mesh: &Mesh) -> Result<Vec<[u32; 3]>, StripError> {
+    Ok(bitree_order_ids(mesh)?
+        .into_iter()
+        .map(|k| mesh.triangles[k as usize])
+        .collect())
+}
+
+/// [`bitree_order`] as indices into `mesh.triangles`.
+///
+/// # Errors
+/// As [`super::stripify_bitree`].
+pub(crate) fn bitree_order_ids(mesh: &Mesh) -> Result<Vec<u32>, StripError> {
+    if mesh.triangles.is_empty() {
+        return Ok(Vec::new());
+    }
+    let samples = Samples::new(mesh);
+    let leaves = Leaves::new(mesh)?;
+    let hier = samples.hier;
+    let mut order = Vec::with_capacity(mesh.triangles.len());
+    let roots = hier.roots();
+    // Root 0 from (0,0) to (N,N), root 1 back from (N,N) to (0,0).
+    let mut stack: Vec<(Tri, Pt)> = vec![(roots[1], roots[1].a), (roots[0], roots[0].a)];
+    while let Some((t, enter)) = stack.pop() {
+        if let Some(k) = samples.id_of(t.c).and_then(|c| leaves.find(c, &t)) {
+            order.push(k);
+            continue;
+        }
+        if t.is_unit() || hier.place(&t) == Placement::Outside {
+            continue;
+        }
+        let m = t.mid();
+        let near_a = Tri {
+            a: t.c,
+            b: t.a,
+            c: m,
+        };
+        let near_b = Tri {
+            a: t.b,
+            b: t.c,
+            c: m,
+        };
+        let (first, second) = if enter == t.a {
+            ((near_a, t.a), (near_b, t.c))
+        } else {
+            ((near_b, t.b), (near_a, t.c))
+        };
+        stack.push(second);
+        stack.push(first);
+    }
+    if order.len() != mesh.triangles.len() {
+        return Err(StripError::NotTiling {
+            missed: mesh.triangles.len() - order.len().min(mesh.triangles.len()),
+            total: mesh.triangles.len(),
+        });
+    }
+    Ok(order)
+}
+
+/// The grid a mesh lies on, read from its vertices, and the vertex on each
+/// sample: a dense table when the grid is not much larger than the mesh,
+/// else a binary search over sorted sample keys (vertices are usually
+/// numbered row-major already).
+struct Samples {
+    hier: Hierarchy,
+    dense: Vec<u32>,
+    by_key: Vec<(u64, u32)>,
+}
+
+impl Samples {
+    fn new(mesh: &Mesh) -> Self {
+        let (mut w, mut h) = (2u32, 2u32);
+        for v in &mesh.vertices {
+            w = w.max(v.col.saturating_add(1));
+            h = h.max(v.row.saturating_add(1));
+        }
+        let hier = Hierarchy::new(w, h);
+        let key = |v: &MeshVertex| v.row as u64 * w as u64 + v.col as u64;
+        let samples = w as u64 * h as u64;
+        let mut s = Samples {
+            hier,
+            dense: Vec::new(),
+            by_key: Vec::new(),
+        };
+        if samples <= 16 * mesh.vertices.len() as u64 {
+            s.dense = vec![u32::MAX; samples as usize];
+            for (i, v) in mesh.vertices.iter().enumerate() {
+                s.dense[key(v) as usize] = i as u32;
+            }
+        } else {
+            s.by_key = mesh
+                .vertices
+                .iter()
+                .enumerate()
+                .map(|(i, v)| (key(v), i as u32))
+                .collect();
+            if !s.by_key.is_sorted() {
+                s.by_key.sort_unstable();
+            }
+        }
+        s
+    }
+
+    /// The vertex on sample `p`, if any.
+    fn id_of(&self, p: Pt) -> Option<u32> {
+        let (w, h) = (self.hier.width(), self.hier.height());
+        if p[0] >= w || p[1] >= h {
+            return None;
+        }
+        let key = p[1] as u64 * w as u64 + p[0] as u64;
+        if !self.dense.is_empty() {
+            return self
+                .dense
+                .get(key as usize)
+                .copied()
+                .filter(|&i| i != u32::MAX);
+        }
+        self.by_key
+            .binary_search_by_key(&key, |&(k, _)| k)
+            .ok()
+            .map(|i| self.by_key[i].1)
+    }
+}
+
+/// The mesh's triangles by their right-angle vertex (compressed rows), each
+/// with its hypotenuse's ends.
+struct Leaves {
+    start: Vec<u32>,
+    by_apex: Vec<(Pt, Pt, u32)>,
+}
+
+impl Leaves {
+    /// # Errors
+    /// [`StripError::BadIndex`] or [`StripError::NotBitree`] for the first
+    /// triangle, in mesh order, with a bad index or not of the bitree.
+    fn new(mesh: &Mesh) -> Result<Self, StripError> {
+        let nv = mesh.vertices.len();
+        let pos = |i: u32| -> Result<Pt, StripError> {
+            mesh.vertices
+                .get(i as usize)
+                .map(|v| [v.col, v.row])
+                .ok_or(StripError::BadIndex {
+                    index: i,
+                    vertices: nv,
+                })
+        };
+        let mut apex_of = Vec::with_capacity(mesh.triangles.len());
+        let mut start = vec![0u32; nv + 1];
+        for (k, t) in mesh.triangles.iter().enumerate() {
+            let p = [pos(t[0])?, pos(t[1])?, pos(t[2])?];
+            let apex = right_angle(p).ok_or(StripError::NotBitree(k))?;
+            let (a, b) = (p[(apex + 1) % 3], p[(apex + 2) % 3]);
+            apex_of.push((t[apex], a, b));
+            start[t[apex] as usize + 1] += 1;
+        }
+        for i in 0..nv {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut by_apex: Vec<(Pt, Pt, u32)> = vec![([0, 0], [0, 0], 0); mesh.triangles.len()];
+        for (k, &(c, a, b)) in apex_of.iter().enumerate() {
+            by_apex[fill[c as usize] as usize] = (a, b, k as u32);
+            fill[c as usize] += 1;
+        }
+        Ok(Leaves { start, by_apex })
+    }
+
+    /// The mesh triangle that is the hierarchy triangle `t`, whose apex is
+    /// the vertex `c`.
+    fn find(&self, c: u32, t: &Tri) -> Option<u32> {
+        let c = c as usize;
+        self.by_apex[self.start[c] as usize..self.start[c + 1] as usize]
+            .iter()
+            .find(|&&(a, b, _)| (a == t.a && b == t.b) || (a == t.b && b == t.a))
+            .map(|&(_, _, k)| k)
+    }
+}
+
+/// The index (0..3) of the right-angle vertex of a right isosceles triangle.
+fn right_angle(p: [Pt; 3]) -> Option<usize> {
+    let d2 = |u: Pt, v: Pt| {
+        let dx = u[0] as i64 - v[0] as i64;
+        let dy = u[1] as i64 - v[1] as i64;
+        dx * dx + dy * dy
+    };
+    (0..3).find(|&k| {
+        let (u, v) = (p[(k + 1) % 3], p[(k + 2) % 3]);
+        let (l1, l2, hyp) = (d2(p[k], u), d2(p[k], v), d2(u, v));
+        l1 > 0 && l1 == l2 && hyp == 2 * l1
+    })
+}
+
+/// The full-resolution bitree mesh of a `width × height` grid (every unit
+/// triangle inside it, heights 0): what extraction at `E = 0` gives on a
+/// rough grid, for reporting the strip of the full grid. The second root's
+/// triangles come first.
+pub fn full_bitree_mesh(width: u32, height: u32) -> Mesh {
+    let hier = Hierarchy::new(width.max(2), height.max(2));
+    let (w, h) = (hier.width(), hier.height());
+    let vertices = (0..h)
+        .flat_map(|row| (0..w).map(move |col| MeshVertex { col, row, z_m: 0.0 }))
+        .collect();
+    let mut all = UnitLeaves {
+        hier,
+        triangles: Vec::new(),
+    };
+    let [r0, r1] = hier.roots();
+    let Ok(()) = walk(&hier, &[r1, r0], (), &mut all);
+    Mesh {
+        vertices,
+        triangles: all.triangles,
+    }
+}
+
+/// Every inside triangle splits down to the unit ones, each kept
+/// counter-clockwise in sample indices.
+struct UnitLeaves {
+    hier: Hierarchy,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl Visitor for UnitLeaves {
+    type Down = ();
+    type Error = std::convert::Infallible;
+
+    fn straddling(&mut self, _t: &Tri, _down: ()) -> Result<(), Self::Error> {
+        Ok(())
+    }
+
+    fn inside(&mut self, _t: &Tri, _down: ()) -> Result<Option<()>, Self::Error> {
+        Ok(Some(()))
+    }
+
+    fn leaf(&mut self, t: &Tri, _down: ()) {
+        let (a, b) = if orient_up(t.a, t.b, t.c) > 0 {
+            (t.a, t.b)
+        } else {
+            (t.b, t.a)
+        };
+        self.triangles
+            .push([a, b, t.c].map(|p| self.hier.index(p) as u32));
+    }
+}
