@@ -21,8 +21,6 @@ mod par;
 pub mod quadtree;
 pub mod refine;
 pub mod stream;
-pub mod stream_coder;
-pub mod stream_marks;
 pub mod strip;
 
 pub use bitree::Bitree;

@@ -15,7 +15,7 @@
 //!    grid allows, tolerance `f32::MAX`); then tolerances `T_1 > T_2 > …`:
 //!    powers of two from the step-0 mesh's error down to `quantum_m`, then
 //!    the requested `max_error_m` (or the caller's thresholds, as in
-//!    [`crate::stream`]). Step `k`'s marks are the refinement at `T_k`
+//!    [`super`]). Step `k`'s marks are the refinement at `T_k`
 //!    continued from step `k − 1`'s closed marks
 //!    ([`crate::refine::refine_marks_from`]): the previous selection plus the
 //!    points the refinement at `T_k` adds, closed with [`Marks::close`]. So
@@ -57,27 +57,28 @@
 //!
 //! # Bit layout
 //! Header kind 1 (conforming), 2 (fictitious, watertight) or 3 (fictitious,
-//! faithful) of [`crate::stream`]. Each step: `max_error_m: f32` (the stated
+//! faithful) of [`super`]. Each step: `max_error_m: f32` (the stated
 //! bound), then one range-coded block: in walk order, `split: bit` per inside
 //! candidate triangle, then for a split point met for the first time in the
 //! step `selected: bit` (new point) or `promoted: bit` (fictitious before)
 //! and, when the point becomes selected (or is a border point in step 0), its
-//! residual ([`crate::stream_coder::ResidualModel`], one model per level and
+//! residual ([`super::coder::ResidualModel`], one model per level and
 //! step; steps above 15 share step 15's). Step 0 uses its own contexts and is
 //! exactly the former one-step layout, so one-step files still decode.
 
+use super::format::{
+    lattice, quantize, thresholds, EncodedStep, EncodedStream, StreamError, StreamHeader,
+    StreamKind, StreamOptions, MAX_Q, UNKNOWN,
+};
+use super::models::{level, residual_ctx, Models, Question};
+use super::state::{predict, Answers, Coder, Decoder, Encoder, State};
+use crate::bitree::round_up_f32;
 use crate::criteria::MaxVerticalError;
 use crate::grid::{GeoRef, HeightGrid};
-use crate::hierarchy::{Hierarchy, Placement, Pt, Tri};
+use crate::hierarchy::{walk, Hierarchy, Pt, Tri, Visitor};
 use crate::mesh::metrics::measure;
 use crate::mesh::Mesh;
-use crate::refine::Marks;
-use crate::refine::{refine_marks_from, triangulate, Mode, RefineOptions};
-use crate::stream::{
-    corner_points, level, quantize, residual_ctx, EncodedStep, EncodedStream, Models, State,
-    StreamError, StreamHeader, StreamKind, StreamOptions, MAX_Q, UNKNOWN,
-};
-use crate::stream_coder::{Bit, RangeDecoder, RangeEncoder};
+use crate::refine::{refine_marks_from, triangulate, Marks, Mode, RefineOptions};
 
 /// Per-sample flags of the walk: selected (in this step's marks).
 const SEL: u8 = 1;
@@ -92,79 +93,34 @@ fn side(c: Pt, m: Pt) -> usize {
     usize::from((c[1], c[0]) >= (m[1], m[0]))
 }
 
-/// What one coded bit says.
-#[derive(Clone, Copy)]
-enum Question {
-    /// "This triangle splits"; the context index.
-    Split(usize),
-    /// "This new point is selected"; the level.
-    Selected(usize),
-    /// "This fictitious point becomes selected"; the level.
-    Promoted(usize),
+/// The walk of one step: [`Walk`] with its coder.
+struct StepWalk<'w, 's, C> {
+    w: &'w mut Walk<'s>,
+    c: &'w mut C,
 }
 
-/// The model of a question in a step.
-fn model(models: &mut Models, q: Question, step: usize) -> &mut Bit {
-    match (q, step) {
-        (Question::Split(c), 0) => &mut models.side[c],
-        (Question::Split(c), _) => &mut models.side_later[c],
-        (Question::Selected(l), 0) => &mut models.select[l],
-        (Question::Selected(l), _) => &mut models.select_later[l],
-        (Question::Promoted(l), _) => &mut models.promote[l],
+impl<C: Coder> Visitor for StepWalk<'_, '_, C> {
+    /// Whether the triangle is new in this step (its parent was not split
+    /// in the previous one).
+    type Down = bool;
+    type Error = String;
+
+    fn straddling(&mut self, t: &Tri, _new_tri: bool) -> Result<bool, String> {
+        self.w.straddling(self.c, t)?;
+        Ok(false)
+    }
+
+    fn inside(&mut self, t: &Tri, new_tri: bool) -> Result<Option<bool>, String> {
+        self.w.inside(self.c, t, new_tri)
     }
 }
 
-/// The two directions of the walk.
-trait MarksCoder {
-    fn bit(&mut self, q: Question, step: usize, t: &Tri) -> Result<bool, String>;
-    fn height(&mut self, ctx: usize, i: usize, pred: i64) -> Result<i64, String>;
-}
-
-struct Enc<'a> {
-    enc: RangeEncoder,
-    models: &'a mut Models,
-    marks: &'a Marks,
-    q: &'a [i64],
-    new_points: usize,
-}
-
-impl MarksCoder for Enc<'_> {
-    fn bit(&mut self, q: Question, step: usize, t: &Tri) -> Result<bool, String> {
-        let yes = match q {
-            Question::Split(_) => self.marks.splits(t),
-            Question::Selected(_) | Question::Promoted(_) => self.marks.is_selected(t.mid()),
-        };
-        self.enc.bit(model(self.models, q, step), yes);
-        Ok(yes)
-    }
-
-    fn height(&mut self, ctx: usize, i: usize, pred: i64) -> Result<i64, String> {
-        let q = self.q[i];
-        self.models.residual[ctx].encode(&mut self.enc, q - pred);
-        self.new_points += 1;
-        Ok(q)
-    }
-}
-
-struct Dec<'a, 'b> {
-    dec: RangeDecoder<'b>,
-    models: &'a mut Models,
-    new_points: usize,
-}
-
-impl MarksCoder for Dec<'_, '_> {
-    fn bit(&mut self, q: Question, step: usize, _t: &Tri) -> Result<bool, String> {
-        Ok(self.dec.bit(model(self.models, q, step)))
-    }
-
-    fn height(&mut self, ctx: usize, _i: usize, pred: i64) -> Result<i64, String> {
-        let r = self.models.residual[ctx].decode(&mut self.dec);
-        self.new_points += 1;
-        match pred.checked_add(r) {
-            Some(q) if q.abs() < MAX_Q => Ok(q),
-            _ => Err(format!(
-                "a height below 2^40 quanta, found a residual of {r} on a prediction of {pred}"
-            )),
+/// The sender's answers: the step's closed marks.
+impl Answers for &Marks {
+    fn answer(&mut self, q: Question, t: &Tri, _i: usize) -> bool {
+        match q {
+            Question::Split(_) | Question::Side(_) => self.splits(t),
+            Question::Selected(_) | Question::Promoted(_) => self.is_selected(t.mid()),
         }
     }
 }
@@ -231,22 +187,8 @@ impl<'s> Walk<'s> {
         (!v.is_nan()).then_some(v)
     }
 
-    fn learn<C: MarksCoder>(&mut self, c: &mut C, t: &Tri, i: usize) -> Result<(), String> {
-        let pred_m = match (self.z_at(t.a), self.z_at(t.b)) {
-            (Some(a), Some(b)) => (a + b) / 2.0,
-            _ => {
-                let v: Vec<f64> = [t.a, t.b, t.c]
-                    .into_iter()
-                    .filter_map(|p| self.z_at(p))
-                    .collect();
-                if v.is_empty() {
-                    0.0
-                } else {
-                    v.iter().sum::<f64>() / v.len() as f64
-                }
-            }
-        };
-        let pred = (pred_m / self.quantum_m).round();
+    fn learn<C: Coder>(&mut self, c: &mut C, t: &Tri, i: usize) -> Result<(), String> {
+        let pred = (predict(t, |p| self.z_at(p)) / self.quantum_m).round();
         let pred = if pred.abs() < MAX_Q as f64 {
             pred as i64
         } else {
@@ -268,85 +210,74 @@ impl<'s> Walk<'s> {
         }
     }
 
-    fn walk<C: MarksCoder>(
-        &mut self,
-        c: &mut C,
-        t: Tri,
-        inside: bool,
-        new_tri: bool,
-    ) -> Result<(), String> {
+    /// Walks this step's tree (see the module docs), coding through `c`.
+    fn run<C: Coder>(&mut self, c: &mut C) -> Result<(), String> {
         let hier = self.hier;
-        let inside = inside
-            || match hier.place(&t) {
-                Placement::Outside => return Ok(()),
-                Placement::Straddling => false,
-                Placement::Inside => true,
-            };
-        if t.is_unit() {
-            return Ok(());
-        }
-        let m = t.mid();
-        let mut was_split = !inside;
-        if !inside {
-            if hier.contains(m) {
-                let i = hier.index(m);
-                self.flags[i] |= SEEN;
-                if self.flags[i] & SEL == 0 {
-                    self.flags[i] |= SEL;
-                    if self.q[i] == UNKNOWN {
-                        self.learn(c, &t, i)?;
-                    }
-                }
-            }
-        } else {
-            let i = hier.index(m);
-            let lvl = level(&t);
-            let (prev_split, prev_present, prev_selected) = match self.prev {
-                Some(p) => (p.splits(&t), p.is_present(m), p.is_selected(m)),
-                None => (false, false, false),
-            };
-            was_split = prev_split;
-            if !prev_split {
-                let present = usize::from(prev_present || self.flags[i] & !SEEN != 0);
-                let ctx = if self.step == 0 {
-                    lvl * 2 + present
-                } else {
-                    (lvl * 2 + present) * 2 + usize::from(new_tri)
-                };
-                if !c.bit(Question::Split(ctx), self.step, &t)? {
-                    return Ok(());
-                }
-                self.flags[i] |= SIDES[side(t.c, m)];
-            }
-            if self.flags[i] & SEEN == 0 {
-                self.flags[i] |= SEEN;
-                if prev_selected {
-                    // Height known from an earlier step.
-                } else {
-                    let question = if prev_present {
-                        Question::Promoted(lvl)
-                    } else {
-                        Question::Selected(lvl)
-                    };
-                    if c.bit(question, self.step, &t)? {
-                        self.flags[i] |= SEL;
-                        self.learn(c, &t, i)?;
-                    } else {
-                        self.interpolate(&t, i)?;
-                    }
-                }
-            }
-        }
-        let (c0, c1) = t.children();
-        self.walk(c, c0, inside, !was_split)?;
-        self.walk(c, c1, inside, !was_split)
+        walk(&hier, &hier.roots(), true, &mut StepWalk { w: self, c })
     }
 
-    fn run<C: MarksCoder>(&mut self, c: &mut C) -> Result<(), String> {
-        for r in self.hier.roots() {
-            self.walk(c, r, false, true)?;
+    /// A straddling triangle: its split point inside the grid is a border
+    /// point, selected, its height sent in step 0.
+    fn straddling<C: Coder>(&mut self, c: &mut C, t: &Tri) -> Result<(), String> {
+        let m = t.mid();
+        if self.hier.contains(m) {
+            let i = self.hier.index(m);
+            self.flags[i] |= SEEN;
+            if self.flags[i] & SEL == 0 {
+                self.flags[i] |= SEL;
+                if self.q[i] == UNKNOWN {
+                    self.learn(c, t, i)?;
+                }
+            }
         }
         Ok(())
+    }
+
+    /// An inside triangle (`new_tri`: its parent was not split in the
+    /// previous step): whether it splits, and what its split point is the
+    /// first time the step meets it. `Some(children's new_tri)` when it splits.
+    fn inside<C: Coder>(
+        &mut self,
+        c: &mut C,
+        t: &Tri,
+        new_tri: bool,
+    ) -> Result<Option<bool>, String> {
+        let m = t.mid();
+        let i = self.hier.index(m);
+        let lvl = level(t);
+        let (prev_split, prev_present, prev_selected) = match self.prev {
+            Some(p) => (p.splits(t), p.is_present(m), p.is_selected(m)),
+            None => (false, false, false),
+        };
+        if !prev_split {
+            let present = usize::from(prev_present || self.flags[i] & !SEEN != 0);
+            let ctx = if self.step == 0 {
+                lvl * 2 + present
+            } else {
+                (lvl * 2 + present) * 2 + usize::from(new_tri)
+            };
+            if !c.bit(Question::Side(ctx), self.step, t, i)? {
+                return Ok(None);
+            }
+            self.flags[i] |= SIDES[side(t.c, m)];
+        }
+        if self.flags[i] & SEEN == 0 {
+            self.flags[i] |= SEEN;
+            if !prev_selected {
+                let question = if prev_present {
+                    Question::Promoted(lvl)
+                } else {
+                    Question::Selected(lvl)
+                };
+                if c.bit(question, self.step, t, i)? {
+                    self.flags[i] |= SEL;
+                    self.learn(c, t, i)?;
+                } else {
+                    self.interpolate(t, i)?;
+                }
+            }
+        }
+        Ok(Some(!prev_split))
     }
 
     /// The closed marks the receiver derives: the previous step's (or the
@@ -397,6 +328,7 @@ fn describe(selected: bool, present: bool) -> &'static str {
 }
 
 /// The mesh of closed `marks` with heights `q · quantum_m` (0 where unknown:
+
 /// only fictitious or absent samples, never read).
 fn mesh_of(
     hier: &Hierarchy,
@@ -423,16 +355,6 @@ fn mesh_of(
     )
     .map_err(|e| e.to_string())?;
     Ok(triangulate(&grid, marks, mode).mesh)
-}
-
-/// The `f32` stated for an exact error `e`: the smallest one not below it.
-fn stated_f32(e: f64) -> f32 {
-    let s = e as f32;
-    if (s as f64) < e {
-        s.next_up()
-    } else {
-        s
-    }
 }
 
 /// Encodes one closed `marks` of a refinement of `grid` in `mode` as a
@@ -476,29 +398,9 @@ pub fn encode_marks_progressive(
     marks.seed_border();
     let coarse = triangulate(&qgrid, &marks, mode).mesh;
     let emax = measure(&qgrid, &coarse).max_error_m;
-    let mut thresholds = Vec::new();
-    match &opts.thresholds_m {
-        Some(t) => {
-            for &e in t {
-                if e.is_finite() && e > e_last && thresholds.last().is_none_or(|&p| e < p) {
-                    thresholds.push(e);
-                }
-            }
-        }
-        None => {
-            if emax > e_last && emax.is_finite() {
-                let mut t = 2f64.powi(emax.log2().floor() as i32);
-                while t > e_last && t >= opts.quantum_m {
-                    thresholds.push(t);
-                    t /= 2.0;
-                }
-            }
-        }
-    }
-    thresholds.push(e_last);
     let refine_opts = RefineOptions::DEFAULT.with_mode(mode);
     let mut steps = vec![(f64::from(f32::MAX), marks.clone())];
-    for t in thresholds {
+    for t in thresholds(opts, emax, f64::INFINITY) {
         let crit = MaxVerticalError { max_error_m: t };
         let (_, next) = refine_marks_from(&qgrid, &crit, &refine_opts, marks)?;
         marks = next.clone();
@@ -542,63 +444,27 @@ pub fn encode_marks_steps(
             });
         }
     }
-    let q: Vec<i64> = qgrid
-        .heights()
-        .iter()
-        .map(|&h| (h as f64 / opts.quantum_m).round() as i64)
-        .collect();
-    let header = StreamHeader {
-        width: hier.width(),
-        height: hier.height(),
+    let q = lattice(&qgrid, opts.quantum_m);
+    let header = StreamHeader::new(&hier, opts.quantum_m, &q, StreamKind::Marks(mode));
+    let mut enc = StepEncoder {
+        state: State::new(&header),
+        models: Models::new(),
+        qgrid: &qgrid,
+        q: &q,
         quantum_m: opts.quantum_m,
-        corners_q: corner_points(&hier).map(|c| c.map(|p| q[hier.index(p)]).unwrap_or(0)),
-        kind: StreamKind::Marks(mode),
+        mode,
     };
-    let mut state = State::new(&header);
-    let mut models = Models::new();
     let mut prev: Option<Marks> = None;
     let mut out = Vec::with_capacity(steps.len());
     for (k, (label, marks)) in steps.iter().enumerate() {
-        let bad = |expected: String, found: String| StreamError::BadStep {
-            step: k,
-            expected,
-            found,
-        };
-        if marks.mode() != mode {
-            return Err(bad(
-                format!("marks closed under the {} rule", mode.name()),
-                format!("marks closed under the {} rule", marks.mode().name()),
-            ));
-        }
-        if prev.as_ref().is_some_and(|p| !marks.contains(p)) {
-            return Err(bad(
-                "marks containing the previous step's".into(),
-                "marks that drop a point or a split".into(),
-            ));
-        }
-        let mut c = Enc {
-            enc: RangeEncoder::new(),
-            models: &mut models,
-            marks,
-            q: &q,
-            new_points: 0,
-        };
-        let mut walk = Walk::new(hier, &mut state.q, prev.as_ref(), k, opts.quantum_m);
-        walk.run(&mut c)
-            .map_err(|found| bad("marks the encoder can walk".into(), found))?;
-        let derived = walk
-            .derive(mode)
-            .map_err(|found| bad("closed marks".into(), found))?;
-        if derived != *marks {
-            return Err(bad(
-                format!("marks closed under the {} rule", mode.name()),
-                "marks that their closure changes".into(),
-            ));
-        }
-        let new_points = c.new_points;
-        let block = c.enc.finish();
-        let mesh = triangulate(&qgrid, marks, mode).mesh;
-        let stated = stated_f32(measure(&qgrid, &mesh).max_error_m);
+        let (block, derived, mesh, new_points) =
+            enc.step(prev.as_ref(), k, marks)
+                .map_err(|(expected, found)| StreamError::BadStep {
+                    step: k,
+                    expected,
+                    found,
+                })?;
+        let stated = round_up_f32(measure(&qgrid, &mesh).max_error_m);
         let mut payload = stated.to_le_bytes().to_vec();
         payload.extend_from_slice(&block);
         out.push(EncodedStep {
@@ -618,10 +484,59 @@ pub fn encode_marks_steps(
     })
 }
 
+/// The sender of a marks stream between steps.
+struct StepEncoder<'g> {
+    state: State,
+    models: Models,
+    /// The quantised grid and its heights in quanta.
+    qgrid: &'g HeightGrid,
+    q: &'g [i64],
+    quantum_m: f64,
+    mode: Mode,
+}
+
+impl StepEncoder<'_> {
+    /// Step `k` of `marks` after `prev`: its coded block, the marks the
+    /// receiver derives, the step's mesh and the heights sent. Fails with
+    /// `(expected, found)`.
+    fn step(
+        &mut self,
+        prev: Option<&Marks>,
+        k: usize,
+        marks: &Marks,
+    ) -> Result<(Vec<u8>, Marks, Mesh, usize), (String, String)> {
+        let closed_rule = || format!("marks closed under the {} rule", self.mode.name());
+        if marks.mode() != self.mode {
+            return Err((
+                closed_rule(),
+                format!("marks closed under the {} rule", marks.mode().name()),
+            ));
+        }
+        if prev.is_some_and(|p| !marks.contains(p)) {
+            return Err((
+                "marks containing the previous step's".into(),
+                "marks that drop a point or a split".into(),
+            ));
+        }
+        let mut c = Encoder::new(&mut self.models, marks, self.q);
+        let mut walk = Walk::new(self.state.hier, &mut self.state.q, prev, k, self.quantum_m);
+        walk.run(&mut c)
+            .map_err(|found| ("marks the encoder can walk".into(), found))?;
+        let derived = walk
+            .derive(self.mode)
+            .map_err(|found| ("closed marks".into(), found))?;
+        if derived != *marks {
+            return Err((closed_rule(), "marks that their closure changes".into()));
+        }
+        let mesh = triangulate(self.qgrid, marks, self.mode).mesh;
+        Ok((c.enc.finish(), derived, mesh, c.new_points))
+    }
+}
+
 /// Decodes one step of a marks stream into `st` (whose `marks` are the
 /// previous step's); returns the step's mesh and the number of heights read.
 /// On error `st` is unchanged.
-pub(crate) fn decode(
+pub(super) fn decode_step(
     st: &mut State,
     models: &mut Models,
     header: &StreamHeader,
@@ -629,11 +544,7 @@ pub(crate) fn decode(
     step: usize,
     block: &[u8],
 ) -> Result<(Mesh, usize), String> {
-    let mut c = Dec {
-        dec: RangeDecoder::new(block),
-        models,
-        new_points: 0,
-    };
+    let mut c = Decoder::new(models, block);
     let hier = st.hier;
     let mut q = st.q.clone();
     let mut w = Walk::new(hier, &mut q, st.marks.as_ref(), step, header.quantum_m);
@@ -656,9 +567,10 @@ pub(crate) fn decode(
 #[allow(clippy::unwrap_used, reason = "tests")]
 mod test {
     use super::*;
-    use crate::refine::{refine_marks, RefineOptions};
+    use crate::bitree::round_up_f32 as stated_f32;
+    use crate::refine::refine_marks;
     use crate::stream::StreamDecoder;
-    use crate::{check_mesh, CheckOptions, MaxVerticalError};
+    use crate::{check_mesh, CheckOptions};
 
     fn grid(w: usize, h: usize) -> HeightGrid {
         let v = (0..w * h)
