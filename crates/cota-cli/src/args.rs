@@ -3,6 +3,8 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use cota_core::quadtree::QuadOptions;
+use cota_core::{CriterionKind, Mode};
 
 /// cota: terrain level of detail with guaranteed error, from real DEMs.
 #[derive(Debug, Parser)]
@@ -253,6 +255,17 @@ pub enum ModeArg {
     FictitiousFaithful,
 }
 
+impl ModeArg {
+    /// The library's mode.
+    pub fn mode(self) -> Mode {
+        match self {
+            ModeArg::Conforming => Mode::Conforming,
+            ModeArg::Fictitious => Mode::Fictitious { watertight: true },
+            ModeArg::FictitiousFaithful => Mode::Fictitious { watertight: false },
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum CriterionArg {
     /// Exact vertical error <= --max-error at every sample.
@@ -271,6 +284,22 @@ pub enum CriterionArg {
     Paper001,
     /// Curvature x cos(theta) / distance <= --tolerance (paper 003): --observer, --look.
     Paper003,
+}
+
+impl CriterionArg {
+    /// The library's criterion.
+    pub fn kind(self) -> CriterionKind {
+        match self {
+            CriterionArg::MaxError => CriterionKind::MaxError,
+            CriterionArg::Euclidean => CriterionKind::Euclidean,
+            CriterionArg::Curvature => CriterionKind::Curvature,
+            CriterionArg::Size => CriterionKind::Size,
+            CriterionArg::Light => CriterionKind::Light,
+            CriterionArg::View => CriterionKind::View,
+            CriterionArg::Paper001 => CriterionKind::Paper001,
+            CriterionArg::Paper003 => CriterionKind::Paper003,
+        }
+    }
 }
 
 /// Parses `X,Y,Z`.
@@ -297,6 +326,17 @@ pub enum BitreeMode {
     Faithful,
 }
 
+impl BitreeMode {
+    /// The library's mode.
+    pub fn mode(self) -> Mode {
+        match self {
+            BitreeMode::Conforming => Mode::Conforming,
+            BitreeMode::Fictitious => Mode::Fictitious { watertight: true },
+            BitreeMode::Faithful => Mode::Fictitious { watertight: false },
+        }
+    }
+}
+
 /// A restricted-quadtree variant compared by `cota compare`.
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum QuadVariant {
@@ -305,6 +345,13 @@ pub enum QuadVariant {
     /// Leaves without finer neighbours may be 2 triangles without their centre
     /// (Pajarola 1998's unselected block centres).
     CentreWhenNeeded,
+}
+
+impl QuadVariant {
+    /// The library's options.
+    pub fn options(self) -> QuadOptions {
+        QuadOptions::DEFAULT.with_centre_when_needed(matches!(self, QuadVariant::CentreWhenNeeded))
+    }
 }
 
 /// A window of a grid: first column, first row, width, height (samples).
@@ -443,6 +490,23 @@ pub enum StreamModeArg {
     /// Steps of the refinement with fictitious points as in paper 000
     /// (hanging vertices).
     FictitiousFaithful,
+}
+
+impl StreamModeArg {
+    /// The refinement mode streamed, `None` for the error-map steps.
+    pub fn mode(self) -> Option<Mode> {
+        match self {
+            StreamModeArg::Progressive => None,
+            StreamModeArg::Conforming => Some(Mode::Conforming),
+            StreamModeArg::Fictitious => Some(Mode::Fictitious { watertight: true }),
+            StreamModeArg::FictitiousFaithful => Some(Mode::Fictitious { watertight: false }),
+        }
+    }
+
+    /// The name reported: `progressive` or the mode's.
+    pub fn name(self) -> &'static str {
+        self.mode().map_or("progressive", |m| m.name())
+    }
 }
 
 #[derive(Debug, Args)]

@@ -11,7 +11,6 @@ mod info;
 mod input;
 mod mesh;
 mod progress;
-mod refine;
 mod stream;
 
 fn main() -> ExitCode {

@@ -1,23 +1,25 @@
-//! `cota mesh`: read, fill voids, build the exact-error bitree, extract a
-//! conforming mesh by error or budget, measure it exactly, optionally check it,
-//! and write it atomically.
+//! `cota mesh`: read, fill voids, mesh with `cota_core::Mesher` (the
+//! exact-error bitree's extraction, the criterion-driven refinement, or the
+//! restricted quadtree), measure the mesh exactly, optionally check it and
+//! strip it, and write it atomically.
 
 use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::grid::voids::FillReport;
-use cota_core::refine::Mode;
-use cota_core::{check_mesh, measure, Bitree, CheckOptions, ExtractOptions, Mesh, Metrics};
+use cota_core::criteria::CriterionError;
+use cota_core::strip::{stripify_bitree_with, MeshStrip};
+use cota_core::{
+    check_mesh, measure, CriterionOptions, HeightGrid, HierarchyKind, MeshPlan, Meshed, Mesher,
+    Metrics, Mode,
+};
 use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use serde_json::json;
 
-use crate::args::{CoordsArg, HierarchyArg, MeshArgs, QuadVariant, StripMethodArg};
+use crate::args::{CoordsArg, CriterionArg, HierarchyArg, MeshArgs, StripMethodArg};
 use crate::input::load;
 use crate::progress;
-use crate::refine;
-use cota_core::quadtree::{QuadOptions, QuadTree};
 
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
@@ -49,7 +51,57 @@ fn check_output(out: &Path, base_m: Option<f64>) -> anyhow::Result<MeshFormat> {
     Ok(format)
 }
 
-pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
+/// True for the default conforming max-error meshing: the error map's fast
+/// path, whose other refinement flags are not looked at.
+fn is_fast(a: &MeshArgs) -> bool {
+    a.refine.mode.mode() == Mode::Conforming && a.refine.criterion == CriterionArg::MaxError
+}
+
+/// The criterion settings the flags give.
+fn criterion_options(a: &MeshArgs) -> CriterionOptions {
+    let r = &a.refine;
+    CriterionOptions::DEFAULT
+        .with_max_error_m(a.max_error.unwrap_or(CriterionOptions::DEFAULT.max_error_m))
+        .with_tolerance(r.tolerance)
+        .with_observer_m(r.observer)
+        .with_look_dir(r.look)
+        .with_view(r.fov_deg, r.viewport_px, r.max_error_px)
+        .with_light(r.light, r.alpha)
+        .with_factors(r.size_factor, r.distance_factor, r.curvature_factor)
+}
+
+/// A criterion setting out of range, in the words of the flags.
+fn flag_error(a: &MeshArgs, e: CriterionError) -> anyhow::Error {
+    match e {
+        CriterionError::NeedsObserver { .. } => anyhow::anyhow!(
+            "--criterion {:?} needs --observer X,Y,Z (metres, local frame)",
+            a.refine.criterion
+        ),
+        CriterionError::OutOfRange {
+            setting,
+            expected,
+            found,
+        } => {
+            let flag = match setting {
+                "max_error_m" => "--max-error",
+                "fov_y_deg" => "--fov-deg",
+                "viewport_height_px" => "--viewport-px",
+                "max_error_px" => "--max-error-px",
+                "size_factor" => "--size-factor",
+                "distance_factor" => "--distance-factor",
+                "curvature_factor" => "--curvature-factor",
+                "alpha" => "--alpha",
+                "tolerance" => "--tolerance",
+                other => other,
+            };
+            anyhow::anyhow!("{flag}: expected {expected}, found {found}")
+        }
+        other => other.into(),
+    }
+}
+
+/// Validates the flags before any long work.
+fn validate(a: &MeshArgs) -> anyhow::Result<()> {
     if let Some(out) = &a.output {
         check_output(out, a.base_m)?;
     }
@@ -61,9 +113,19 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     if a.max_triangles == Some(0) {
         anyhow::bail!("--max-triangles: expected at least 2 triangles, found 0");
     }
-    crate::refine::validate(&a.refine, a.max_triangles)?;
+    if !is_fast(a) {
+        if a.max_triangles.is_some() {
+            anyhow::bail!(
+                "--max-triangles works with the default --mode conforming --criterion max-error only"
+            );
+        }
+        criterion_options(a)
+            .validate(a.refine.criterion.kind())
+            .map_err(|e| flag_error(a, e))?;
+    }
+    let quadtree = a.hierarchy == HierarchyArg::Quadtree;
     if a.strip {
-        if a.hierarchy == HierarchyArg::Quadtree {
+        if quadtree {
             anyhow::bail!(
                 "--strip: expected --hierarchy bitree (strips follow the bitree traversal)"
             );
@@ -77,157 +139,140 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
             }
         }
     }
-    let quadtree = a.hierarchy == HierarchyArg::Quadtree;
-    if quadtree && (refine::mode(&a.refine) != Mode::Conforming || a.max_triangles.is_some()) {
+    if quadtree && (a.refine.mode.mode() != Mode::Conforming || a.max_triangles.is_some()) {
         anyhow::bail!(
             "--hierarchy quadtree: expected --mode conforming and --max-error or another criterion (no --max-triangles)"
         );
     }
-    let opts = match (a.max_error, a.max_triangles) {
-        (_, Some(n)) => ExtractOptions::max_triangles(n),
-        (Some(e), None) => ExtractOptions::max_error_m(e),
-        (None, None) => ExtractOptions::max_error_m(1.0),
-    };
+    Ok(())
+}
 
-    let input = load(&a.input)?;
-    let mut grid = input.grid;
-    let nodata = grid.void_count();
+/// The mesh the flags ask for, and the build and extraction times (ms).
+fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f64)> {
+    let mesher = Mesher::new(grid);
     let t = Instant::now();
-    let fill: FillReport = crate::input::fill(&mut grid, a.voids)?;
-    let fill_ms = ms(t);
-
-    let (mesh, threshold_m, build_ms, extract_ms, check_opts, generic) = if quadtree {
-        let t = Instant::now();
-        let qt = QuadTree::build(&grid)?;
-        let build_ms = ms(t);
-        let t = Instant::now();
-        let e = a.max_error.unwrap_or(1.0);
-        let leaves = QuadOptions::DEFAULT
-            .with_centre_when_needed(matches!(a.quadtree_leaves, QuadVariant::CentreWhenNeeded));
-        let (x, name) = refine::with_criterion(&a.refine, e, &grid, |c| {
-            (qt.refine_with(c, &leaves), c.name())
-        })?;
-        let extract_ms = ms(t);
-        // Only the max-error criterion promises a vertical bound.
-        let bound = refine::is_fast(&a.refine).then_some(e);
-        let check = CheckOptions::DEFAULT.with_max_error_m(bound);
-        let outcome = refine::Outcome {
-            mesh: Mesh::default(),
-            threshold_m: bound,
-            transmitted_points: x.mesh.vertex_count(),
-            fictitious_points: 0,
-            line_triangles: 0,
-            criterion: name,
-            rounds: 1,
-            check,
-        };
-        (x.mesh, bound, build_ms, extract_ms, check, Some(outcome))
-    } else if refine::is_fast(&a.refine) {
-        let t = Instant::now();
+    let criterion = mesher
+        .criterion(a.refine.criterion.kind(), &criterion_options(a))
+        .map_err(|e| flag_error(a, e))?;
+    let hierarchy = match a.hierarchy {
+        HierarchyArg::Bitree => HierarchyKind::Bitree,
+        HierarchyArg::Quadtree => HierarchyKind::Quadtree(a.quadtree_leaves.options()),
+    };
+    let plan = MeshPlan::new(&*criterion)
+        .with_hierarchy(hierarchy)
+        .with_mode(a.refine.mode.mode())
+        .with_max_triangles(a.max_triangles);
+    let criterion_ms = ms(t);
+    let t = Instant::now();
+    if plan.error_map_bound_m().is_some() {
         let pb = progress::bar(0, "building");
-        let tin = Bitree::build_with_progress(&grid, &|done, total| {
+        mesher.prepare(&plan, &|done, total| {
             pb.set_length(total as u64);
             pb.set_position(done as u64);
         })?;
         pb.finish_and_clear();
-        let build_ms = ms(t);
-
-        let t = Instant::now();
-        let x = tin.extract(&opts)?;
-        let extract_ms = ms(t);
-        let check = CheckOptions::conforming(x.threshold_m);
-        (
-            x.mesh,
-            Some(x.threshold_m),
-            build_ms,
-            extract_ms,
-            check,
-            None,
-        )
     } else {
-        // Generic criterion-driven refinement: no error map to build.
-        let t = Instant::now();
-        let mut o = refine::run(&a.refine, a.max_error.unwrap_or(1.0), &grid)?;
-        let extract_ms = ms(t);
-        let mesh = std::mem::take(&mut o.mesh);
-        (mesh, o.threshold_m, 0.0, extract_ms, o.check, Some(o))
-    };
-    let (transmitted, fictitious, line_triangles) = match &generic {
-        Some(o) => (o.transmitted_points, o.fictitious_points, o.line_triangles),
-        None => (mesh.vertex_count(), 0, 0),
-    };
-    let criterion = match &generic {
-        Some(o) => o.criterion.clone(),
-        None => cota_core::Criterion::name(&cota_core::MaxVerticalError {
-            max_error_m: threshold_m.unwrap_or(0.0),
-        }),
-    };
-
+        mesher.prepare(&plan, &|_, _| {})?;
+    }
+    let build_ms = ms(t);
     let t = Instant::now();
-    let metrics: Metrics = if a.check {
-        check_mesh(&grid, &mesh, &check_opts)
+    let meshed = mesher.mesh(&plan)?;
+    Ok((meshed, build_ms, criterion_ms + ms(t)))
+}
+
+/// The mesh's exact metrics, through the checker with `--check`.
+fn measure_mesh(a: &MeshArgs, grid: &HeightGrid, m: &Meshed) -> anyhow::Result<Metrics> {
+    Ok(if a.check {
+        check_mesh(grid, &m.mesh, &m.check)
             .context("the invariant checker rejected the mesh (this is a bug in cota)")?
             .metrics
     } else {
-        measure(&grid, &mesh)
-    };
-    let measure_ms = ms(t);
+        measure(grid, &m.mesh)
+    })
+}
 
-    let t = Instant::now();
-    // Strips cost time and about 60 bytes per triangle of scratch: made only
-    // when asked for (--strip, or --strip-method to report the references).
-    let strip = if !quadtree && (a.strip || a.strip_method.is_some()) {
-        let method = a.strip_method.unwrap_or(StripMethodArg::Cells).method();
-        Some(cota_core::strip::stripify_bitree_with(&mesh, method).context("triangle strip")?)
-    } else {
-        None
-    };
-    let strip_ms = ms(t);
-    if let (Some(s), true) = (&strip, a.check) {
+/// The strip, made only when asked for (`--strip`, or `--strip-method` to
+/// report the references): it costs time and about 60 bytes per triangle of
+/// scratch. A re-triangulated strip mesh is checked too with `--check`.
+fn strip<'m>(
+    a: &MeshArgs,
+    grid: &HeightGrid,
+    m: &'m Meshed,
+) -> anyhow::Result<Option<MeshStrip<'m>>> {
+    if a.hierarchy == HierarchyArg::Quadtree || !(a.strip || a.strip_method.is_some()) {
+        return Ok(None);
+    }
+    let method = a.strip_method.unwrap_or(StripMethodArg::Cells).method();
+    let s = stripify_bitree_with(&m.mesh, method).context("triangle strip")?;
+    if a.check && s.retriangulated() {
         // The strip's own mesh when it re-triangulated unit cells: exact, so
         // the same checks must pass.
-        if s.retriangulated() {
-            check_mesh(&grid, &s.mesh, &check_opts).context(
-                "the invariant checker rejected the strip's re-triangulated mesh (this is a bug in cota)",
-            )?;
-        }
+        check_mesh(grid, &s.mesh, &m.check).context(
+            "the invariant checker rejected the strip's re-triangulated mesh (this is a bug in cota)",
+        )?;
     }
+    Ok(Some(s))
+}
 
-    let mut write_ms = 0.0;
-    if let Some(out) = &a.output {
-        let coords = match a.coords {
-            CoordsArg::Local => Coords::LocalMetres,
-            CoordsArg::Grid => Coords::Grid,
-        };
-        let eo = ExportOptions::DEFAULT
-            .with_coords(coords)
-            .with_base_m(a.base_m);
-        let t = Instant::now();
-        match (&strip, a.strip) {
-            (Some(s), true) => cota_io::export::write_atomically(out, |w| {
-                cota_io::export::write_glb_strip(w, &s.mesh, &s.strip.indices, &grid, &eo)
-            })?,
-            _ => write_mesh(out, &mesh, &grid, &eo)?,
-        }
-        write_ms = ms(t);
+/// Writes the mesh (or its strip with `--strip`); returns the time taken (ms).
+fn write(
+    a: &MeshArgs,
+    grid: &HeightGrid,
+    m: &Meshed,
+    strip: Option<&MeshStrip<'_>>,
+) -> anyhow::Result<f64> {
+    let Some(out) = &a.output else {
+        return Ok(0.0);
+    };
+    let coords = match a.coords {
+        CoordsArg::Local => Coords::LocalMetres,
+        CoordsArg::Grid => Coords::Grid,
+    };
+    let eo = ExportOptions::DEFAULT
+        .with_coords(coords)
+        .with_base_m(a.base_m);
+    let t = Instant::now();
+    match (strip, a.strip) {
+        (Some(s), true) => cota_io::export::write_atomically(out, |w| {
+            cota_io::export::write_glb_strip(w, &s.mesh, &s.strip.indices, grid, &eo)
+        })?,
+        _ => write_mesh(out, &m.mesh, grid, &eo)?,
     }
+    Ok(ms(t))
+}
 
-    let name = crate::input::name(&input.files);
+pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
+    validate(a)?;
+    let input = load(&a.input)?;
+    let mut grid = input.grid;
+    let nodata = grid.void_count();
+    let t = Instant::now();
+    let fill = crate::input::fill(&mut grid, a.voids)?;
+    let fill_ms = ms(t);
+    let (m, build_ms, extract_ms) = mesh_grid(a, &grid)?;
+    let t = Instant::now();
+    let metrics = measure_mesh(a, &grid, &m)?;
+    let measure_ms = ms(t);
+    let t = Instant::now();
+    let strip = strip(a, &grid, &m)?;
+    let strip_ms = ms(t);
+    let write_ms = write(a, &grid, &m, strip.as_ref())?;
+    let mesh = &m.mesh;
     let report = json!({
-        "input": name,
+        "input": crate::input::name(&input.files),
         "width": grid.width(),
         "height": grid.height(),
         "voids_filled": fill.filled,
         "nodata_count": nodata,
-        "threshold_m": threshold_m,
-        "hierarchy": if quadtree { "quadtree" } else { "bitree" },
-        "mode": refine::mode(&a.refine).name(),
-        "criterion": criterion,
-        "refine_rounds": generic.as_ref().map(|o| o.rounds),
+        "threshold_m": m.bound_m,
+        "hierarchy": if a.hierarchy == HierarchyArg::Quadtree { "quadtree" } else { "bitree" },
+        "mode": a.refine.mode.mode().name(),
+        "criterion": m.criterion,
+        "refine_rounds": m.rounds,
         "vertices": mesh.vertex_count(),
-        "transmitted_points": transmitted,
-        "fictitious_points": fictitious,
-        "line_triangles": line_triangles,
+        "transmitted_points": m.transmitted_points,
+        "fictitious_points": m.fictitious_points,
+        "line_triangles": m.line_triangles,
         "triangles": mesh.triangle_count(),
         "full_triangles": 2 * (grid.width() - 1) * (grid.height() - 1),
         "max_error_m": metrics.max_error_m,

@@ -13,14 +13,13 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::refine::Mode;
 use cota_core::stream::{encode, encode_marks_progressive, StreamOptions};
 use cota_core::HeightGrid;
 use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use cota_io::stream_file::{read_stream, step_end_offsets, write_stream, StreamLimit};
 use serde_json::json;
 
-use crate::args::{CoordsArg, StreamCommand, StreamDecodeArgs, StreamEncodeArgs, StreamModeArg};
+use crate::args::{CoordsArg, StreamCommand, StreamDecodeArgs, StreamEncodeArgs};
 use crate::input::load;
 
 pub fn run(c: &StreamCommand) -> anyhow::Result<ExitCode> {
@@ -56,16 +55,9 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         .with_quantum_m(a.quantum_m)
         .with_max_error_m(a.max_error)
         .with_thresholds_m(a.thresholds.clone());
-    let s = match a.mode {
-        StreamModeArg::Progressive => encode(&grid, &opts)?,
-        m => {
-            let mode = match m {
-                StreamModeArg::Fictitious => Mode::Fictitious { watertight: true },
-                StreamModeArg::FictitiousFaithful => Mode::Fictitious { watertight: false },
-                _ => Mode::Conforming,
-            };
-            encode_marks_progressive(&grid, mode, &opts)?
-        }
+    let s = match a.mode.mode() {
+        None => encode(&grid, &opts)?,
+        Some(mode) => encode_marks_progressive(&grid, mode, &opts)?,
     };
     let encode_ms = t.elapsed().as_secs_f64() * 1e3;
     write_stream(&a.output, &s, grid.georef())?;
@@ -103,12 +95,7 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         "width": grid.width(),
         "height": grid.height(),
         "quantum_m": a.quantum_m,
-        "mode": match a.mode {
-            StreamModeArg::Progressive => "progressive",
-            StreamModeArg::Conforming => "conforming",
-            StreamModeArg::Fictitious => "fictitious",
-            StreamModeArg::FictitiousFaithful => "fictitious-faithful",
-        },
+        "mode": a.mode.name(),
         "lossless": s.lattice_exact && a.max_error == 0.0,
         "lattice_exact": s.lattice_exact,
         "bytes": total,

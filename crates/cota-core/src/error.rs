@@ -50,6 +50,9 @@ pub enum MeshError {
         /// Grid height.
         height: usize,
     },
+    /// A plan no hierarchy offers ([`crate::MeshPlan`]): the reason.
+    #[error("unsupported meshing plan: {0}")]
+    UnsupportedPlan(&'static str),
     /// Point marks made for a grid of another size.
     #[error(
         "expected point marks for the {width}x{height} grid being refined, found marks for a {marks_width}x{marks_height} grid"

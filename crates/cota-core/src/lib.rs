@@ -12,30 +12,34 @@
 #![warn(missing_docs)]
 
 pub mod bitree;
+pub mod compare;
 pub mod criteria;
 pub mod error;
 pub mod grid;
 pub mod hierarchy;
 pub mod mesh;
+pub mod mesher;
 mod par;
 pub mod quadtree;
 pub mod refine;
 pub mod stream;
 pub mod strip;
+#[cfg(test)]
+#[allow(clippy::unwrap_used, reason = "tests")]
+mod testing;
 
-pub use bitree::Bitree;
-pub use bitree::PointCounts;
-pub use bitree::{ExtractOptions, Extraction, Target};
-pub use criteria::{
-    AccumulatedCurvature, All, Any, Criterion, CriterionKind, CriterionOptions, Element,
-    EuclideanDistance, IlluminationMask, MaxVerticalError, Paper001, Paper003, RelativeSize,
-    ScreenSpaceError,
-};
+// The public face: the types and entry points of the pipeline, in its
+// order; everything else by its module's path.
+pub use bitree::{Bitree, ExtractOptions};
+pub use criteria::{Criterion, CriterionKind, CriterionOptions, MaxVerticalError};
 pub use error::{MeshError, Result};
-pub use grid::mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy, SeamReport};
-pub use grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidError, VoidPolicy};
+pub use grid::mosaic::{mosaic, MosaicOptions, SeamPolicy, SeamReport};
+pub use grid::voids::{fill_voids, FillMethod, FillOptions, VoidPolicy};
 pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
-pub use mesh::check::{check_mesh, CheckError, CheckOptions, CheckReport, Violation};
+pub use mesh::check::{check_mesh, CheckOptions};
 pub use mesh::metrics::{measure, Metrics};
 pub use mesh::{Mesh, MeshVertex};
-pub use quadtree::{QuadExtraction, QuadTree};
+pub use mesher::{mesh, HierarchyKind, MeshPlan, Meshed, Mesher};
+pub use quadtree::{QuadOptions, QuadTree};
+pub use refine::{refine, Mode, RefineOptions};
+pub use strip::{stripify_bitree, Strip, StripMethod};

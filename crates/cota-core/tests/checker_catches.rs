@@ -2,9 +2,8 @@
 //! rely on it prove nothing.
 #![allow(clippy::unwrap_used, reason = "tests unwrap to fail loudly")]
 
-use cota_core::{
-    check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, Mesh, Violation,
-};
+use cota_core::mesh::check::Violation;
+use cota_core::{check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, Mesh};
 
 fn setup() -> (HeightGrid, Mesh) {
     let (w, h) = (33, 33);

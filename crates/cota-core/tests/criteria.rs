@@ -7,13 +7,12 @@ use std::path::PathBuf;
 use cota_core::criteria::curvature::{AccumulatedCurvature, CurvatureMap};
 use cota_core::criteria::light::IlluminationMask;
 use cota_core::criteria::view::{Paper001, Paper003, ScreenSpaceError};
-use cota_core::criteria::{local_m, longest_edge_m, terrain_diagonal_m};
+use cota_core::criteria::{
+    local_m, longest_edge_m, terrain_diagonal_m, Element, EuclideanDistance, RelativeSize,
+};
 use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::refine::{refine, Mode, RefineOptions, Refined};
-use cota_core::{
-    check_mesh, CheckOptions, Criterion, Element, EuclideanDistance, GeoRef, HeightGrid,
-    MaxVerticalError, Mesh, RelativeSize,
-};
+use cota_core::{check_mesh, CheckOptions, Criterion, GeoRef, HeightGrid, MaxVerticalError, Mesh};
 
 const MODES: [Mode; 3] = [
     Mode::Conforming,

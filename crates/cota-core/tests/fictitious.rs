@@ -6,11 +6,12 @@ use std::path::PathBuf;
 
 use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::hierarchy::Hierarchy;
+use cota_core::mesh::check::Violation;
 use cota_core::refine::Marks;
 use cota_core::refine::{refine, triangulate, Mode, RefineOptions, Refined};
 use cota_core::{
     check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError,
-    MeshError, Violation,
+    MeshError,
 };
 
 const MODES: [Mode; 3] = [

@@ -4,15 +4,15 @@
 //! references per triangle. The cells strip (`StripMethod::Cells`) holds
 //! exactly the triangles of the mesh it returns, which passes the invariant
 //! checker with the input's bound, and is never longer than the guided one.
+//! (The full-resolution mesh's tests are unit tests: that mesh is
+//! crate-private.)
 #![allow(clippy::unwrap_used, reason = "tests")]
 
 use std::path::PathBuf;
 
 use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::refine::{refine, Mode, RefineOptions};
-use cota_core::strip::{
-    full_bitree_mesh, stripify_bitree, stripify_bitree_with, MeshStrip, Strip, StripMethod,
-};
+use cota_core::strip::{stripify_bitree, stripify_bitree_with, MeshStrip, Strip, StripMethod};
 use cota_core::{
     check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError, Mesh,
 };
@@ -157,30 +157,6 @@ fn fictitious_real_data() {
     }
 }
 
-/// The full-resolution mesh of the real tile (every sample a vertex, with
-/// its height): the cells strip needs about (2W+1)/(2W−2) references per
-/// triangle, and its mesh has zero error.
-#[test]
-fn full_real_grid_cells() {
-    let g = real();
-    let (w, h) = (g.width() as u32, g.height() as u32);
-    let mut mesh = full_bitree_mesh(w, h);
-    for v in &mut mesh.vertices {
-        v.z_m = g.get(v.col as usize, v.row as usize);
-    }
-    let c = stripify_bitree(&mesh).unwrap();
-    report("full real grid cells", &mesh, &c.strip);
-    let tris = 2 * (w as usize - 1) * (h as usize - 1);
-    assert_eq!(c.strip.triangles, tris);
-    // Every unit cell of the "4-8" pattern is flipped in every other row.
-    assert!(c.flipped_cells >= tris / 4, "{}", c.flipped_cells);
-    assert_cells(&g, &mesh, &c, &CheckOptions::conforming(0.0));
-    // One row strip of 2W references per row of cells, and one more per row
-    // join (a repeated index fixing the parity).
-    assert_eq!(c.strip.refs(), (h as usize - 1) * (2 * w as usize + 1) - 1);
-    assert!(c.strip.refs_per_triangle() <= 1.05);
-}
-
 /// A rough `w × h` grid: E = 0 keeps (nearly) every unit triangle.
 fn rough(w: usize, h: usize) -> HeightGrid {
     let heights: Vec<f32> = (0..w * h)
@@ -266,20 +242,4 @@ fn quadtree_leaves() {
         // Measured 1.39 and 1.43.
         assert!(s.refs_per_triangle() < 1.45);
     }
-}
-
-#[test]
-fn full_mesh_helper_matches_extraction() {
-    let (w, h) = (129, 97);
-    let g = rough(w, h);
-    let mut got = cota_core::strip::full_bitree_mesh(w as u32, h as u32).triangles;
-    let mut want = Bitree::build(&g)
-        .unwrap()
-        .extract(&ExtractOptions::max_error_m(0.0))
-        .unwrap()
-        .mesh
-        .triangles;
-    got.sort_unstable();
-    want.sort_unstable();
-    assert_eq!(got, want);
 }

@@ -340,19 +340,7 @@ mod test {
         codes
     }
 
-    /// A real grid from the bundled fixtures, as this crate's own type.
-    pub(super) fn fixture(name: &str) -> HeightGrid {
-        let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../fixtures")
-            .join(name);
-        let g = cota_io::read_dem(&p, &cota_io::ReadOptions::DEFAULT)
-            .unwrap()
-            .grid;
-        let (w, h) = (g.width(), g.height());
-        let mut g = HeightGrid::new(w, h, g.heights().to_vec(), GeoRef::unreferenced(1.0)).unwrap();
-        crate::grid::voids::fill_voids(&mut g, &crate::grid::voids::FillOptions::DEFAULT).unwrap();
-        g
-    }
+    pub(super) use crate::testing::fixture;
 
     /// Brute force e(T) by testing every sample of the bounding box.
     fn brute(g: &HeightGrid, t: &Tri) -> f64 {

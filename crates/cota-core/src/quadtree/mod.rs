@@ -95,6 +95,16 @@ impl QuadOptions {
         centre_when_needed: false,
     };
 
+    /// `templates`, or `centre-when-needed` with
+    /// [`QuadOptions::centre_when_needed`], for reports.
+    pub fn name(&self) -> &'static str {
+        if self.centre_when_needed {
+            "centre-when-needed"
+        } else {
+            "templates"
+        }
+    }
+
     /// Sets [`QuadOptions::centre_when_needed`].
     pub const fn with_centre_when_needed(mut self, yes: bool) -> Self {
         self.centre_when_needed = yes;

@@ -105,7 +105,7 @@ pub use quadtree::stripify_quadtree;
 pub use traversal::{bitree_order, StripError};
 
 pub(crate) use emit::strip_from_order;
-pub use traversal::full_bitree_mesh;
+pub(crate) use traversal::full_bitree_mesh;
 
 /// How the strip follows the hierarchy.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -217,3 +217,6 @@ pub fn stripify_bitree_with(mesh: &Mesh, method: StripMethod) -> Result<MeshStri
         }
     })
 }
+
+#[cfg(test)]
+mod tests;

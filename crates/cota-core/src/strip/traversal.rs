@@ -231,7 +231,7 @@ fn right_angle(p: [Pt; 3]) -> Option<usize> {
 /// triangle inside it, heights 0): what extraction at `E = 0` gives on a
 /// rough grid, for reporting the strip of the full grid. The second root's
 /// triangles come first.
-pub fn full_bitree_mesh(width: u32, height: u32) -> Mesh {
+pub(crate) fn full_bitree_mesh(width: u32, height: u32) -> Mesh {
     let hier = Hierarchy::new(width.max(2), height.max(2));
     let (w, h) = (hier.width(), hier.height());
     let vertices = (0..h)
