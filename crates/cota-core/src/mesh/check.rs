@@ -25,8 +25,10 @@
 //! hanging vertices on their neighbour's edge) check 3 only forbids repeated
 //! directed edges, and coverage rests on (4) plus the per-sample coverage test.
 
+use rayon::prelude::*;
+
 use super::metrics::{measure, Metrics};
-use super::Mesh;
+use super::{Mesh, MeshVertex};
 use crate::grid::HeightGrid;
 use crate::hierarchy::{diagonal_of, Hierarchy};
 
@@ -278,6 +280,15 @@ pub fn check_mesh(
     mesh: &Mesh,
     opts: &CheckOptions,
 ) -> Result<CheckReport, CheckError> {
+    crate::par::on_pool(|| check_on_pool(grid, mesh, opts))
+}
+
+/// [`check_mesh`] on a pool thread: its parallel sections enter the pool once.
+fn check_on_pool(
+    grid: &HeightGrid,
+    mesh: &Mesh,
+    opts: &CheckOptions,
+) -> Result<CheckReport, CheckError> {
     let mut found = Found {
         list: Vec::new(),
         total: 0,
@@ -405,7 +416,6 @@ fn check_fictitious(grid: &HeightGrid, mesh: &Mesh, owner: &[u32], found: &mut F
 fn check_triangles(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &mut Found) {
     let n = mesh.vertices.len();
     let mut area2 = 0i64;
-    let mut edges: Vec<u64> = Vec::with_capacity(mesh.triangles.len() * 3);
     for (k, t) in mesh.triangles.iter().enumerate() {
         if let Some(&bad) = t.iter().find(|&&i| i as usize >= n) {
             found.push(Violation::IndexOutOfRange {
@@ -422,40 +432,19 @@ fn check_triangles(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &
             found.push(Violation::Flipped { tri: k });
         }
         area2 += a;
-        for e in 0..3 {
-            edges.push(((t[e] as u64) << 32) | t[(e + 1) % 3] as u64);
-        }
     }
-    edges.sort_unstable();
-    for pair in edges.windows(2) {
-        if pair[0] == pair[1] {
-            found.push(Violation::EdgeOveruse {
-                from: (pair[0] >> 32) as u32,
-                to: pair[0] as u32,
-            });
-        }
+    let edges = Edges::new(mesh);
+    let (overused, open) = edges.faults(grid, mesh, opts.conforming);
+    for (from, to) in overused {
+        found.push(Violation::EdgeOveruse { from, to });
     }
-    if opts.conforming {
-        let (w, h) = (grid.width() as u32, grid.height() as u32);
-        for &e in &edges {
-            let (i, j) = ((e >> 32) as u32, e as u32);
-            let rev = ((j as u64) << 32) | i as u64;
-            if edges.binary_search(&rev).is_err() {
-                let (a, b) = (mesh.vertices[i as usize], mesh.vertices[j as usize]);
-                let on_border = (a.col == 0 && b.col == 0)
-                    || (a.col == w - 1 && b.col == w - 1)
-                    || (a.row == 0 && b.row == 0)
-                    || (a.row == h - 1 && b.row == h - 1);
-                if !on_border {
-                    found.push(Violation::OpenEdge {
-                        ac: a.col,
-                        ar: a.row,
-                        bc: b.col,
-                        br: b.row,
-                    });
-                }
-            }
-        }
+    for (a, b) in open {
+        found.push(Violation::OpenEdge {
+            ac: a.col,
+            ar: a.row,
+            bc: b.col,
+            br: b.row,
+        });
     }
     let expected = 2 * (grid.width() as i64 - 1) * (grid.height() as i64 - 1);
     if area2 != expected {
@@ -464,4 +453,103 @@ fn check_triangles(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &
             expected,
         });
     }
+}
+
+/// The directed edges of the triangles with valid indices, by their first
+/// vertex (compressed rows), each vertex's second vertices sorted: so read
+/// vertex by vertex they are all the edges in sorted order.
+struct Edges {
+    start: Vec<u32>,
+    to: Vec<u32>,
+}
+
+impl Edges {
+    fn new(mesh: &Mesh) -> Self {
+        let n = mesh.vertices.len();
+        let valid = |t: &&[u32; 3]| t.iter().all(|&i| (i as usize) < n);
+        let mut start = vec![0u32; n + 1];
+        for t in mesh.triangles.iter().filter(valid) {
+            for &v in t {
+                start[v as usize + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut to = vec![0u32; start[n] as usize];
+        for t in mesh.triangles.iter().filter(valid) {
+            for e in 0..3 {
+                let from = t[e] as usize;
+                to[fill[from] as usize] = t[(e + 1) % 3];
+                fill[from] += 1;
+            }
+        }
+        let mut edges = Edges { start, to };
+        let lists = split_lengths(&mut edges.to, &edges.start);
+        lists.into_par_iter().for_each(|l| l.sort_unstable());
+        edges
+    }
+
+    /// The second vertices of the edges leaving `v`, sorted.
+    fn of(&self, v: u32) -> &[u32] {
+        &self.to[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+
+    /// The edges used twice in one direction (once per repeat), and, when
+    /// `conforming`, the ends of every edge without its reverse that is not on
+    /// the grid's border; both in sorted edge order.
+    fn faults(
+        &self,
+        grid: &HeightGrid,
+        mesh: &Mesh,
+        conforming: bool,
+    ) -> (Vec<(u32, u32)>, Vec<(MeshVertex, MeshVertex)>) {
+        let (w, h) = (grid.width() as u32, grid.height() as u32);
+        let per_vertex: Vec<_> = (0..mesh.vertices.len() as u32)
+            .into_par_iter()
+            .with_min_len(1 << 12)
+            .filter_map(|i| {
+                let out = self.of(i);
+                let overused: Vec<(u32, u32)> = out
+                    .windows(2)
+                    .filter(|p| p[0] == p[1])
+                    .map(|p| (i, p[0]))
+                    .collect();
+                let open: Vec<(MeshVertex, MeshVertex)> = if conforming {
+                    out.iter()
+                        .filter(|&&j| self.of(j).binary_search(&i).is_err())
+                        .map(|&j| (mesh.vertices[i as usize], mesh.vertices[j as usize]))
+                        .filter(|(a, b)| {
+                            !((a.col == 0 && b.col == 0)
+                                || (a.col == w - 1 && b.col == w - 1)
+                                || (a.row == 0 && b.row == 0)
+                                || (a.row == h - 1 && b.row == h - 1))
+                        })
+                        .collect()
+                } else {
+                    Vec::new()
+                };
+                (!overused.is_empty() || !open.is_empty()).then_some((overused, open))
+            })
+            .collect();
+        let mut faults = (Vec::new(), Vec::new());
+        for (o, p) in per_vertex {
+            faults.0.extend(o);
+            faults.1.extend(p);
+        }
+        faults
+    }
+}
+
+/// `v` cut into the consecutive slices the prefix `start` delimits.
+fn split_lengths<'a>(v: &'a mut [u32], start: &[u32]) -> Vec<&'a mut [u32]> {
+    let mut out = Vec::with_capacity(start.len().saturating_sub(1));
+    let mut rest = v;
+    for w in start.windows(2) {
+        let (head, tail) = rest.split_at_mut((w[1] - w[0]) as usize);
+        out.push(head);
+        rest = tail;
+    }
+    out
 }

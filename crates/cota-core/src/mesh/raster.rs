@@ -15,7 +15,12 @@ use crate::hierarchy::Pt;
 /// Calls `f(row, first_col, last_col)` for each row of samples inside or on the
 /// triangle `p` (any orientation, integer vertices). Degenerate triangles yield
 /// nothing.
-pub fn for_each_span(p: [Pt; 3], mut f: impl FnMut(u32, u32, u32)) {
+pub fn for_each_span(p: [Pt; 3], f: impl FnMut(u32, u32, u32)) {
+    for_each_span_in(p, (0, i64::MAX), f);
+}
+
+/// [`for_each_span`] on the rows `rows.0..=rows.1` only.
+pub(crate) fn for_each_span_in(p: [Pt; 3], rows: (i64, i64), mut f: impl FnMut(u32, u32, u32)) {
     let q: [(i64, i64); 3] = p.map(|v| (v[0] as i64, v[1] as i64));
     let area = (q[1].0 - q[0].0) * (q[2].1 - q[0].1) - (q[1].1 - q[0].1) * (q[2].0 - q[0].0);
     if area == 0 {
@@ -24,8 +29,8 @@ pub fn for_each_span(p: [Pt; 3], mut f: impl FnMut(u32, u32, u32)) {
     let sign = area.signum();
     // Edge k from q[k] to q[k+1]: inside when sign·cross(e, r − q[k]) ≥ 0, i.e.
     // A·x + B(y) ≥ 0 with A = −sign·ey and B = sign·(ex·(y − qy) + ey·qx).
-    let ymin = q.iter().map(|v| v.1).min().unwrap_or(0);
-    let ymax = q.iter().map(|v| v.1).max().unwrap_or(0);
+    let ymin = q.iter().map(|v| v.1).min().unwrap_or(0).max(rows.0);
+    let ymax = q.iter().map(|v| v.1).max().unwrap_or(0).min(rows.1);
     for y in ymin..=ymax {
         let (mut lo, mut hi) = (i64::MIN, i64::MAX);
         let mut empty = false;
