@@ -1,7 +1,7 @@
 //! The errors of meshing a grid, and the check every hierarchy starts with.
 //!
 //! Shared by the bitree ([`crate::bitree`]), the restricted quadtree
-//! ([`crate::quadtree`]), the criterion-driven refinement ([`crate::refine`])
+//! ([`crate::quadtree`]), the criterion-driven refinement ([`crate::refine`](mod@crate::refine))
 //! and the one meshing entry point ([`crate::mesher`]).
 
 use crate::grid::{GridError, HeightGrid};

@@ -15,7 +15,7 @@
 //!   ([`Mesher::criterion`]).
 //!
 //! Every other plan (the fictitious modes, any other criterion) runs the
-//! criterion-driven refinement of [`crate::refine`], which judges every leaf
+//! criterion-driven refinement of [`crate::refine`](mod@crate::refine), which judges every leaf
 //! with its actual heights. Whatever the path, the result ([`Meshed`]) says
 //! what the mesh promises ([`Meshed::bound_m`], [`Meshed::check`]) and
 //! counts its points as paper 000 does.

@@ -73,10 +73,10 @@ mod by_level;
 mod coarse;
 mod error;
 pub mod error_code;
-mod extract;
+pub mod extract;
 mod fused;
 mod kernels;
-mod points;
+pub mod points;
 
 use crate::error::{hierarchy_for, MeshError};
 use crate::grid::HeightGrid;

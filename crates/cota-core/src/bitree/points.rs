@@ -31,7 +31,7 @@
 //!
 //! In a conforming mesh every vertex carries its true height, so all of them
 //! must be transmitted; a fictitious-point mode transmits the vertices with a
-//! real height only (paper 000 §3.3, [`crate::refine`]).
+//! real height only (paper 000 §3.3, [`crate::refine`](mod@crate::refine)).
 
 use super::{round_up_f32, Bitree};
 use crate::mesh::Mesh;

@@ -1,5 +1,7 @@
 //! The padded square of a W×H grid and how each triangle relates to the
-//! grid's rectangle: inside, outside or straddling (see [`super`]).
+//! grid's rectangle: inside, outside or straddling (see [`super`]). Paper
+//! `000_ebf7e3a88dffd361.txt` §2 builds the bitree on a `2^k + 1` square;
+//! cota pads any grid to the smallest such square and clips.
 
 use super::tri::{Pt, Tri};
 

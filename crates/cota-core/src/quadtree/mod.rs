@@ -29,7 +29,7 @@
 //!    `f32`.
 //! 2. **Refine** ([`QuadTree::refine`], per criterion): top-down from the root,
 //!    coarse levels first. A leaf is split when it straddles the border or when
-//!    the [`Criterion`] wants it, given the leaf's *current* template (the
+//!    the [`crate::Criterion`] wants it, given the leaf's *current* template (the
 //!    midpoints of the sides whose same-size neighbour is split).
 //! 3. **Restriction**: before a block of depth `d` splits, its 4 edge
 //!    neighbours of depth `d` must exist; a missing one is created by splitting

@@ -15,7 +15,7 @@
 //!    mesh height: the sample's for a selected point, the midpoint
 //!    interpolation of its diagonal's two ends (already known, they are
 //!    vertices of an ancestor) for a fictitious one, rounded to `f32`.
-//! 4. For every leaf, build its [`Element`] from its **actual** vertex heights,
+//! 4. For every leaf, build its [`crate::criteria::Element`] from its **actual** vertex heights,
 //!    with `vertical_error_m` the exact largest `|plane − h|` over every sample
 //!    in or on it (the plane through the mesh's own `f32` heights, as
 //!    [`crate::measure`] and the checker compute it), and ask the criterion.
@@ -158,7 +158,7 @@ pub fn refine_marks(
 /// tolerance): points are only added, so the result's selection contains
 /// `marks`' selection, and at the fixed point every leaf meets `criterion`
 /// with its actual heights, as in [`refine`]. The progressive marks streams
-/// ([`crate::stream_marks`]) build their nested steps this way.
+/// ([`crate::stream::encode_marks_progressive`]) build their nested steps this way.
 ///
 /// # Errors
 /// As [`refine`], and [`MeshError::MarksSizeMismatch`] for marks made for a

@@ -17,13 +17,13 @@
 //!    otherwise add `quantum_m / 2` to the stated errors for the source grid.
 //! 2. **Steps.** Thresholds `E_0 = f32::MAX > E_1 > … > E_last`: powers of two
 //!    from the largest finite error down to `quantum_m`, then the requested
-//!    `max_error_m` (default 0). Because [`Bitree`]'s error map is monotone and
+//!    `max_error_m` (default 0). Because [`crate::Bitree`]'s error map is monotone and
 //!    diamond-shared, the split set `{m : err[m] > E_k}` is closed under the
 //!    hierarchy's dependencies, so after step `k` the receiver holds exactly the
 //!    mesh of `Bitree::extract(E_k)`. Step 0 is paper 000's `N0`: the coarsest
 //!    mesh the grid's border allows.
 //! 3. **Walk.** Each step walks the tree from the two roots exactly as
-//!    extraction does (children in [`Tri::children`] order). Straddling
+//!    extraction does (children in [`crate::hierarchy::Tri::children`] order). Straddling
 //!    triangles split without a bit. At an inside triangle whose split point is
 //!    not yet split and not yet decided in this step, one bit says whether it
 //!    splits now. When it splits and its split point has no height yet, the
@@ -34,7 +34,7 @@
 //!    decision, so the receiver's mesh is crack-free after every step.
 //! 4. **Contexts.** Split bits use an adaptive probability per (level, step,
 //!    whether the triangle was created in this step); residuals one
-//!    [`ResidualModel`] per (level, step). Level `= 2·log2(s) + [A]` for a
+//!    [`coder::ResidualModel`] per (level, step). Level `= 2·log2(s) + [A]` for a
 //!    triangle on an `s`-square (`A`: the square's halves, `B`: their
 //!    children). Steps above 15 share the context of step 15. Models persist
 //!    across steps, and each step is its own range-coded block, so a receiver
@@ -49,12 +49,12 @@
 //! `(0,0), (N,0), (0,N), (N,N)` as four `i64` (0 for corners outside the grid),
 //! then `kind: u32` ([`StreamKind`]: 0 error steps, this file; 1–3 a refined
 //! mesh's marks in conforming, fictitious or faithful mode,
-//! [`marks`]).
+//! `marks`).
 //!
 //! Step payload: `max_error_m: f32` (little-endian, the stated `E_k`), then one
-//! range-coded block ([`RangeEncoder`]) holding, in walk order, for each
+//! range-coded block ([`coder::RangeEncoder`]) holding, in walk order, for each
 //! candidate triangle `split: bit` and, for each new point,
-//! `residual` as binarised by [`ResidualModel`]. Framing (magic, lengths,
+//! `residual` as binarised by [`coder::ResidualModel`]. Framing (magic, lengths,
 //! checksums, georeference) is `cota-io`'s business.
 //!
 //! # Decoding
@@ -66,7 +66,7 @@
 //! Meshes of other criteria and of the fictitious modes (`refine`'s `Marks`,
 //! where fictitious points cost a flag and no height) are streamed coarse to
 //! fine by [`encode_marks_progressive`] (vertical-error tolerances) or
-//! [`encode_marks_steps`] (any nested marks), [`marks`], and
+//! [`encode_marks_steps`] (any nested marks), `marks`, and
 //! decoded step by step by the same [`StreamDecoder`]; their stated errors
 //! are measured exactly and need not decrease from step to step.
 

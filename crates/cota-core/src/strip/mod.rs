@@ -9,7 +9,7 @@
 //! Varshney, "Optimizing triangle strips for fast rendering" (1996).
 //!
 //! 1. **Recover the hierarchy from the mesh.** Every triangle of a bitree mesh
-//!    (any mode of [`crate::bitree::extract`] or [`crate::refine`]) is a triangle of the
+//!    (any mode of [`crate::bitree::extract`] or [`crate::refine`](mod@crate::refine)) is a triangle of the
 //!    hierarchy: its right-angle vertex and its hypotenuse identify it. The
 //!    grid's extent is read from the vertices, so no grid is needed.
 //! 2. **Traverse.** From the two roots, a triangle entered at one end of its
@@ -47,7 +47,7 @@
 //!    1.50 on a full 1201² grid (traversal alone: 1.57–1.66, and 1.667 on a full
 //!    grid, exactly paper 000's 13655 / 8192).
 //! 5. **Unit cells re-triangulated** ([`StripMethod::Cells`], the default,
-//!    [`cells`]): a 1×1 cell covered by two unit leaves has no
+//!    `cells`): a 1×1 cell covered by two unit leaves has no
 //!    sample but its corners, so its diagonal can be flipped without changing
 //!    the error at any sample or its boundary edges. Long horizontal runs of
 //!    such cells are written as row strips (one reference per triangle), the
@@ -114,7 +114,7 @@ pub enum StripMethod {
     Traversal,
     /// The traversal order as a guide for greedy growth (step 4).
     Guided,
-    /// Rows of re-triangulated unit cells ([`cells`], step 5),
+    /// Rows of re-triangulated unit cells (`cells`, step 5),
     /// or the [`StripMethod::Guided`] strip of the unchanged mesh when that
     /// is shorter. Default: the fewest references on every mesh measured.
     #[default]

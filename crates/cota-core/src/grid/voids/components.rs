@@ -1,5 +1,6 @@
-//! The 4-connected components of a grid's voids: each is filled on its own
-//! (see [`super`]).
+//! The 4-connected components of a grid's voids, found by a flood fill in
+//! raster order: each is filled on its own (step 1 of [`super`], the
+//! standard connected-component labelling).
 
 use crate::grid::HeightGrid;
 

@@ -50,6 +50,13 @@
 //!
 //! A grid whose every sample is void has nothing to fill from: [`VoidError::AllVoid`].
 //!
+//! The papers in `../shared/seeds/` assume void-free grids; the methods are
+//! the standard ones: multigrid after Briggs, Henson & McCormick, *A
+//! Multigrid Tutorial* (2nd ed., SIAM 2000), inverse distance after Shepard
+//! (1968). The files: `components` (the voids' 4-connected components),
+//! `patch` (one component's problem on one multigrid level), `harmonic`
+//! (the cycles), `idw`.
+//!
 //! ```
 //! use cota_core::{GeoRef, HeightGrid};
 //! use cota_core::grid::voids::{fill_voids, FillOptions};
