@@ -433,12 +433,11 @@ fn check_triangles(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &
         }
         area2 += a;
     }
-    let edges = Edges::new(mesh);
-    let (overused, open) = edges.faults(grid, mesh, opts.conforming);
-    for (from, to) in overused {
+    let faults = Edges::new(mesh).faults(grid, mesh, opts.conforming);
+    for (from, to) in faults.overused {
         found.push(Violation::EdgeOveruse { from, to });
     }
-    for (a, b) in open {
+    for (a, b) in faults.open {
         found.push(Violation::OpenEdge {
             ac: a.col,
             ar: a.row,
@@ -499,12 +498,7 @@ impl Edges {
     /// The edges used twice in one direction (once per repeat), and, when
     /// `conforming`, the ends of every edge without its reverse that is not on
     /// the grid's border; both in sorted edge order.
-    fn faults(
-        &self,
-        grid: &HeightGrid,
-        mesh: &Mesh,
-        conforming: bool,
-    ) -> (Vec<(u32, u32)>, Vec<(MeshVertex, MeshVertex)>) {
+    fn faults(&self, grid: &HeightGrid, mesh: &Mesh, conforming: bool) -> Faults {
         let (w, h) = (grid.width() as u32, grid.height() as u32);
         let per_vertex: Vec<_> = (0..mesh.vertices.len() as u32)
             .into_par_iter()
@@ -533,13 +527,22 @@ impl Edges {
                 (!overused.is_empty() || !open.is_empty()).then_some((overused, open))
             })
             .collect();
-        let mut faults = (Vec::new(), Vec::new());
+        let mut faults = Faults::default();
         for (o, p) in per_vertex {
-            faults.0.extend(o);
-            faults.1.extend(p);
+            faults.overused.extend(o);
+            faults.open.extend(p);
         }
         faults
     }
+}
+
+/// The edges' faults, in sorted edge order.
+#[derive(Default)]
+struct Faults {
+    /// Edges used twice in one direction, once per repeat.
+    overused: Vec<(u32, u32)>,
+    /// The ends of edges without their reverse, off the grid's border.
+    open: Vec<(MeshVertex, MeshVertex)>,
 }
 
 /// `v` cut into the consecutive slices the prefix `start` delimits.

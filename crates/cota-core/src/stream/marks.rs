@@ -328,7 +328,6 @@ fn describe(selected: bool, present: bool) -> &'static str {
 }
 
 /// The mesh of closed `marks` with heights `q · quantum_m` (0 where unknown:
-
 /// only fictitious or absent samples, never read).
 fn mesh_of(
     hier: &Hierarchy,
@@ -457,13 +456,18 @@ pub fn encode_marks_steps(
     let mut prev: Option<Marks> = None;
     let mut out = Vec::with_capacity(steps.len());
     for (k, (label, marks)) in steps.iter().enumerate() {
-        let (block, derived, mesh, new_points) =
-            enc.step(prev.as_ref(), k, marks)
-                .map_err(|(expected, found)| StreamError::BadStep {
-                    step: k,
-                    expected,
-                    found,
-                })?;
+        let Step {
+            block,
+            derived,
+            mesh,
+            new_points,
+        } = enc
+            .step(prev.as_ref(), k, marks)
+            .map_err(|(expected, found)| StreamError::BadStep {
+                step: k,
+                expected,
+                found,
+            })?;
         let stated = round_up_f32(measure(&qgrid, &mesh).max_error_m);
         let mut payload = stated.to_le_bytes().to_vec();
         payload.extend_from_slice(&block);
@@ -484,6 +488,21 @@ pub fn encode_marks_steps(
     })
 }
 
+/// One encoded step of a marks stream.
+struct Step {
+    /// The range-coded block.
+    block: Vec<u8>,
+    /// The closed marks the receiver derives (equal to the step's).
+    derived: Marks,
+    /// The step's mesh.
+    mesh: Mesh,
+    /// Heights sent.
+    new_points: usize,
+}
+
+/// Why a step cannot be encoded: what was expected, what was found.
+type Refusal = (String, String);
+
 /// The sender of a marks stream between steps.
 struct StepEncoder<'g> {
     state: State,
@@ -499,12 +518,7 @@ impl StepEncoder<'_> {
     /// Step `k` of `marks` after `prev`: its coded block, the marks the
     /// receiver derives, the step's mesh and the heights sent. Fails with
     /// `(expected, found)`.
-    fn step(
-        &mut self,
-        prev: Option<&Marks>,
-        k: usize,
-        marks: &Marks,
-    ) -> Result<(Vec<u8>, Marks, Mesh, usize), (String, String)> {
+    fn step(&mut self, prev: Option<&Marks>, k: usize, marks: &Marks) -> Result<Step, Refusal> {
         let closed_rule = || format!("marks closed under the {} rule", self.mode.name());
         if marks.mode() != self.mode {
             return Err((
@@ -529,7 +543,12 @@ impl StepEncoder<'_> {
             return Err((closed_rule(), "marks that their closure changes".into()));
         }
         let mesh = triangulate(self.qgrid, marks, self.mode).mesh;
-        Ok((c.enc.finish(), derived, mesh, c.new_points))
+        Ok(Step {
+            new_points: c.new_points,
+            block: c.enc.finish(),
+            derived,
+            mesh,
+        })
     }
 }
 

@@ -8,9 +8,11 @@ use crate::{Bitree, ExtractOptions, GeoRef, HeightGrid};
 
 /// The strip has exactly the mesh's triangles, same orientation, each once.
 fn assert_same_triangles(mesh: &Mesh, strip: &Strip) {
-    if let Err(e) = strip.validate(mesh) {
-        panic!("strip triangles differ from the mesh's: {e}");
-    }
+    let valid = strip.validate(mesh);
+    assert!(
+        valid.is_ok(),
+        "strip triangles differ from the mesh's: {valid:?}"
+    );
     assert_eq!(strip.triangles, mesh.triangles.len());
     assert_eq!(strip.triangles + strip.degenerate + 2, strip.indices.len());
 }
