@@ -165,6 +165,13 @@ fn text(r: &Report) -> String {
             let _ = writeln!(s);
         }
     }
+    table2(&mut s, r);
+
+    s
+}
+
+/// Table 2: the references as separate triangles and as strips.
+fn table2(s: &mut String, r: &Report) {
     let how = if r.strip_method == StripMethod::Guided.name() {
         String::new()
     } else {
@@ -208,7 +215,6 @@ fn text(r: &Report) -> String {
         }
         let _ = writeln!(s);
     }
-    s
 }
 
 /// A strip reference count for the tables.

@@ -351,6 +351,24 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
         "volume      {:.4e} m3 between mesh and grid",
         f("volume_m3")
     );
+    print_strip_and_check(r);
+    println!(
+        "time        read {:.1} ms, fill {:.1} ms, build {:.1} ms, extract {:.2} ms, measure {:.1} ms, write {:.1} ms",
+        f("read_ms"),
+        f("fill_ms"),
+        f("build_ms"),
+        f("extract_ms"),
+        f("measure_ms"),
+        f("write_ms")
+    );
+    if let Some(out) = r["output"].as_str() {
+        println!("wrote       {out}");
+    }
+}
+
+/// The strip and check lines of the text report.
+fn print_strip_and_check(r: &serde_json::Value) {
+    let f = |k: &str| r[k].as_f64().unwrap_or(0.0);
     if let Some(refs) = r["strip_refs"].as_u64() {
         let cells = match r["strip_flipped_cells"].as_u64() {
             Some(n) if n > 0 => format!(", {n} unit cells re-triangulated (same error)"),
@@ -375,17 +393,5 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
             ", bound holds at every sample"
         };
         println!("check       passed: covers the grid exactly, {joints}{bound}");
-    }
-    println!(
-        "time        read {:.1} ms, fill {:.1} ms, build {:.1} ms, extract {:.2} ms, measure {:.1} ms, write {:.1} ms",
-        f("read_ms"),
-        f("fill_ms"),
-        f("build_ms"),
-        f("extract_ms"),
-        f("measure_ms"),
-        f("write_ms")
-    );
-    if let Some(out) = r["output"].as_str() {
-        println!("wrote       {out}");
     }
 }
