@@ -42,11 +42,13 @@ use json::mesh::{Mode, Primitive, Semantic};
 use json::scene::UnitQuaternion;
 use json::validation::{Checked, USize64};
 use json::{Accessor, Index};
+use rayon::prelude::*;
 
 use super::coords::{Frame, GeoInfo};
 use super::error::ExportError;
-use super::geometry::{check_mesh, to_f32, vertex_normals, write_f32s};
+use super::geometry::{check_mesh, push_f32s, to_f32, vertex_normals};
 use super::options::{ExportOptions, IndexWidth};
+use super::par::{on_pool, write_chunks};
 
 /// `glTF` as a little-endian u32.
 const MAGIC: u32 = 0x4654_6C67;
@@ -72,7 +74,17 @@ const MAX_U32_VERTICES: usize = u32::MAX as usize;
 /// [`ExportError::Io`] from `w`; the mesh checks of [`ExportError`];
 /// [`ExportError::TooLarge`] when the indices do not fit the chosen
 /// [`IndexWidth`] or the file would exceed 4 GiB; [`ExportError::Json`].
-pub fn write_glb<W: Write>(
+pub fn write_glb<W: Write + Send>(
+    w: W,
+    mesh: &Mesh,
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+) -> Result<(), ExportError> {
+    on_pool(|| encode_glb(w, mesh, grid, opts))
+}
+
+/// The body of [`write_glb`], on the pool.
+fn encode_glb<W: Write + Send>(
     w: W,
     mesh: &Mesh,
     grid: &HeightGrid,
@@ -97,7 +109,18 @@ pub fn write_glb<W: Write>(
 /// of range (`triangle` is then the strip position minus 2);
 /// [`ExportError::StripMismatch`] when the strip's triangles are not the
 /// mesh's.
-pub fn write_glb_strip<W: Write>(
+pub fn write_glb_strip<W: Write + Send>(
+    w: W,
+    mesh: &Mesh,
+    strip: &[u32],
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+) -> Result<(), ExportError> {
+    on_pool(|| encode_glb_strip(w, mesh, strip, grid, opts))
+}
+
+/// The body of [`write_glb_strip`], on the pool.
+fn encode_glb_strip<W: Write + Send>(
     w: W,
     mesh: &Mesh,
     strip: &[u32],
@@ -134,7 +157,7 @@ fn check_strip_triangles(mesh: &Mesh, strip: &[u32]) -> Result<(), ExportError> 
 }
 
 /// [`write_glb`] (`strip = None`) or [`write_glb_strip`].
-fn write_glb_primitive<W: Write>(
+fn write_glb_primitive<W: Write + Send>(
     mut w: W,
     mesh: &Mesh,
     strip: Option<&[u32]>,
@@ -145,7 +168,7 @@ fn write_glb_primitive<W: Write>(
     let frame = Frame::new(grid, opts.coords);
     let positions: Vec<[f32; 3]> = mesh
         .vertices
-        .iter()
+        .par_iter()
         .map(|v| to_f32(frame.vertex(v)))
         .collect();
     let normals = vertex_normals(mesh, &frame);
@@ -376,16 +399,21 @@ impl WithBounds for Accessor {
     }
 }
 
-/// Component-wise minimum and maximum (the mesh has at least one vertex).
+/// Component-wise minimum and maximum (the mesh has at least one vertex; no
+/// value is NaN, so the order of the reduction does not matter).
 fn bounds(positions: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
-    let init = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    positions.iter().fold(init, |(mut lo, mut hi), p| {
+    let init = || ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    let widen = |(mut lo, mut hi): ([f32; 3], [f32; 3]), p: &[f32; 3]| {
         for k in 0..3 {
             lo[k] = lo[k].min(p[k]);
             hi[k] = hi[k].max(p[k]);
         }
         (lo, hi)
-    })
+    };
+    positions
+        .par_iter()
+        .fold(init, widen)
+        .reduce(init, |a, b| widen(widen(a, &b.0), &b.1))
 }
 
 /// Light grey, non-metallic, fully rough: reads as terrain under any light
@@ -427,8 +455,9 @@ fn write_padding<W: Write>(w: &mut W, len: u64, byte: u8) -> Result<(), ExportEr
     Ok(())
 }
 
-/// The BIN chunk's content: positions, normals, indices.
-fn write_bin<W: Write>(
+/// The BIN chunk's content: positions, normals, indices (each section
+/// encoded in parallel chunks, written in order).
+fn write_bin<W: Write + Send>(
     w: &mut W,
     mesh: &Mesh,
     strip: Option<&[u32]>,
@@ -437,34 +466,28 @@ fn write_bin<W: Write>(
     normals: &[[f32; 3]],
     index: ComponentType,
 ) -> Result<(), ExportError> {
-    for p in positions {
-        write_f32s(w, p)?;
+    for section in [positions, normals] {
+        write_chunks(w, section, 12, |_, chunk, buf| {
+            push_f32s(buf, chunk.as_flattened());
+            Ok(())
+        })?;
     }
-    for n in normals {
-        write_f32s(w, n)?;
-    }
-    if let Some(s) = strip {
-        for &i in s {
-            if index == ComponentType::U16 {
-                // Fits: index_type allowed u16 only for at most 65 535 vertices.
-                w.write_all(&(i as u16).to_le_bytes())?;
-            } else {
-                w.write_all(&i.to_le_bytes())?;
-            }
-        }
+    // Fits: index_type allowed u16 only for at most 65 535 vertices.
+    let push_index = |buf: &mut Vec<u8>, i: u32| match index {
+        ComponentType::U16 => buf.extend_from_slice(&(i as u16).to_le_bytes()),
+        _ => buf.extend_from_slice(&i.to_le_bytes()),
+    };
+    match strip {
         // The chunk's padding follows (write_glb_primitive).
-        return Ok(());
+        Some(s) => write_chunks(w, s, 4, |_, chunk, buf| {
+            chunk.iter().for_each(|&i| push_index(buf, i));
+            Ok(())
+        }),
+        None => write_chunks(w, &mesh.triangles, 12, |_, chunk, buf| {
+            for &t in chunk {
+                frame.orient(t).into_iter().for_each(|i| push_index(buf, i));
+            }
+            Ok(())
+        }),
     }
-    for &t in &mesh.triangles {
-        let t = frame.orient(t);
-        if index == ComponentType::U16 {
-            // Fits: index_type allowed u16 only for at most 65 535 vertices.
-            let b = t.map(|i| (i as u16).to_le_bytes());
-            w.write_all(&[b[0][0], b[0][1], b[1][0], b[1][1], b[2][0], b[2][1]])?;
-        } else {
-            let b = t.map(u32::to_le_bytes);
-            w.write_all(b.as_flattened())?;
-        }
-    }
-    Ok(())
 }

@@ -81,9 +81,7 @@ pub(crate) fn decode_bytes(
         Sniffed::Png => png::decode(bytes, path, opts),
         Sniffed::Ascii => asc::decode(bytes, path, opts),
         // A raw .hgt has no magic: the SRTM reader decides by size and name.
-        Sniffed::Unknown if srtm::looks_like_hgt(bytes, path) => {
-            srtm::decode(bytes, path, opts)
-        }
+        Sniffed::Unknown if srtm::looks_like_hgt(bytes, path) => srtm::decode(bytes, path, opts),
         Sniffed::Unknown => Err(ReadErrorKind::UnknownFormat {
             found: format!("{}{}", describe_bytes(bytes), name_hint(path)),
         }),

@@ -6,7 +6,9 @@
 //! georeference, overlaps compared and combined, samples no tile covers left
 //! as voids), then, when [`RegionOptions::fill`] asks for it, [`fill_voids`].
 
-use cota_core::{fill_voids, mosaic, FillOptions, FillReport, HeightGrid, MosaicOptions, SeamReport};
+use cota_core::{
+    fill_voids, mosaic, FillOptions, FillReport, HeightGrid, MosaicOptions, SeamReport,
+};
 
 use crate::dem::{Dem, DemSummary, ReadOptions};
 use crate::error::RegionError;
