@@ -1,9 +1,7 @@
-//! Binary glTF 2.0 (GLB) writer; the JSON is built with the `gltf-json` crate.
-//!
-//! Container (glTF 2.0 spec, "GLB File Format Specification"): a 12-byte
-//! header (magic `glTF`, version 2, total length), a JSON chunk (type `JSON`,
-//! padded with spaces to a multiple of 4 bytes) and a BIN chunk (type `BIN\0`,
-//! padded with zeros to a multiple of 4), all little-endian.
+//! Binary glTF 2.0 (GLB) writer; the JSON is built with the `gltf-json` crate,
+//! the container is written by `container` (header, JSON chunk, BIN chunk).
+//! With [`ExportOptions::quantize`] the layout is `quantized`'s instead
+//! (`KHR_mesh_quantization`); what follows is the default, float layout.
 //!
 //! Content: one scene, one node, one mesh with one primitive, mode TRIANGLES
 //! (the default, so not spelled out), one material (grey, non-metallic,
@@ -35,33 +33,24 @@ use std::io::Write;
 
 use cota_core::{HeightGrid, Mesh};
 use gltf_json as json;
-use json::accessor::{ComponentType, GenericComponentType, Type};
+use json::accessor::{ComponentType, Type};
 use json::buffer::Target;
-use json::material::{PbrBaseColorFactor, PbrMetallicRoughness, StrengthFactor};
 use json::mesh::{Mode, Primitive, Semantic};
-use json::scene::UnitQuaternion;
-use json::validation::{Checked, USize64};
-use json::{Accessor, Index};
+use json::validation::Checked;
+use json::Index;
 use rayon::prelude::*;
 
+use self::container::{
+    accessor, asset, buffer, terrain_material, view, write_container, z_up_to_y_up, WithBounds,
+};
 use super::coords::{Frame, GeoInfo};
 use super::error::ExportError;
 use super::geometry::{check_mesh, push_f32s, to_f32, vertex_normals};
 use super::options::{ExportOptions, IndexWidth};
 use super::par::{on_pool, write_chunks};
 
-/// `glTF` as a little-endian u32.
-const MAGIC: u32 = 0x4654_6C67;
-/// Container version.
-const VERSION: u32 = 2;
-/// Chunk type `JSON`.
-const CHUNK_JSON: u32 = 0x4E4F_534A;
-/// Chunk type `BIN\0`.
-const CHUNK_BIN: u32 = 0x004E_4942;
-/// Bytes of the file header and of a chunk header.
-const HEADER_BYTES: u64 = 12;
-/// Bytes of a chunk header (length and type).
-const CHUNK_HEADER_BYTES: u64 = 8;
+mod container;
+
 /// Largest vertex count with u16 indices (65 535 is the primitive restart value).
 const MAX_U16_VERTICES: usize = 65_535;
 /// Largest vertex count with u32 indices (u32::MAX is the restart value).
@@ -207,32 +196,17 @@ fn write_glb_primitive<W: Write + Send>(
         index_type(mesh.vertices.len(), opts.index_width)?,
     );
     let root = build_root(&positions, &layout, mode, &GeoInfo::new(grid, opts.coords))?;
-    let json = json::serialize::to_vec(&root).map_err(|e| ExportError::Json(e.to_string()))?;
-    let json_padded = pad4(json.len() as u64);
-    let bin_padded = pad4(layout.buffer_bytes);
-    let total = HEADER_BYTES + 2 * CHUNK_HEADER_BYTES + json_padded + bin_padded;
-    let total = u32::try_from(total).map_err(|_| ExportError::TooLarge {
-        what: "bytes in a GLB",
-        count: total,
-        max: u64::from(u32::MAX),
-    })?;
-    write_u32s(&mut w, &[MAGIC, VERSION, total])?;
-    write_chunk_header(&mut w, json_padded, CHUNK_JSON)?;
-    w.write_all(&json)?;
-    write_padding(&mut w, json.len() as u64, b' ')?;
-    write_chunk_header(&mut w, bin_padded, CHUNK_BIN)?;
-    write_bin(
-        &mut w,
-        mesh,
-        strip.as_deref(),
-        &frame,
-        &positions,
-        &normals,
-        layout.index,
-    )?;
-    write_padding(&mut w, layout.buffer_bytes, 0)?;
-    w.flush()?;
-    Ok(())
+    write_container(&mut w, &root, layout.buffer_bytes, |w| {
+        write_bin(
+            w,
+            mesh,
+            strip.as_deref(),
+            &frame,
+            &positions,
+            &normals,
+            layout.index,
+        )
+    })
 }
 
 /// The index component type for `vertices` vertices.
@@ -297,33 +271,13 @@ fn build_root(
     info: &GeoInfo,
 ) -> Result<json::Root, ExportError> {
     let (min, max) = bounds(positions);
-    let extras = json::extras::RawValue::from_string(info.json().to_string())
-        .map_err(|e| ExportError::Json(e.to_string()))?;
-    let view = |offset: u64, bytes: u64, target: Target| json::buffer::View {
-        buffer: Index::new(0),
-        byte_length: USize64(bytes),
-        byte_offset: Some(USize64(offset)),
-        byte_stride: None,
-        target: Some(Checked::Valid(target)),
-        extensions: None,
-        extras: None,
-    };
+    let view = |offset: u64, bytes: u64, target: Target| view(offset, bytes, None, target);
     let mut attributes = BTreeMap::new();
     attributes.insert(Checked::Valid(Semantic::Positions), Index::new(0));
     attributes.insert(Checked::Valid(Semantic::Normals), Index::new(1));
-    let half_turn = std::f32::consts::FRAC_1_SQRT_2;
     Ok(json::Root {
-        asset: json::Asset {
-            generator: Some("cota".to_string()),
-            extras: Some(extras),
-            ..json::Asset::default()
-        },
-        buffers: vec![json::Buffer {
-            byte_length: USize64(layout.buffer_bytes),
-            uri: None,
-            extensions: None,
-            extras: None,
-        }],
+        asset: asset(info)?,
+        buffers: vec![buffer(layout.buffer_bytes)],
         buffer_views: vec![
             view(0, layout.vec3_bytes, Target::ArrayBuffer),
             view(layout.vec3_bytes, layout.vec3_bytes, Target::ArrayBuffer),
@@ -334,7 +288,8 @@ fn build_root(
             ),
         ],
         accessors: vec![
-            accessor(0, layout.vertices, ComponentType::F32, Type::Vec3).with_bounds(&min, &max),
+            accessor(0, layout.vertices, ComponentType::F32, Type::Vec3)
+                .with_bounds(serde_json::json!(min), serde_json::json!(max)),
             accessor(1, layout.vertices, ComponentType::F32, Type::Vec3),
             accessor(2, layout.indices, layout.index, Type::Scalar),
         ],
@@ -355,7 +310,7 @@ fn build_root(
         }],
         nodes: vec![json::Node {
             mesh: Some(Index::new(0)),
-            rotation: Some(UnitQuaternion([-half_turn, 0.0, 0.0, half_turn])),
+            rotation: Some(z_up_to_y_up()),
             ..json::Node::default()
         }],
         scenes: vec![json::Scene {
@@ -366,37 +321,6 @@ fn build_root(
         scene: Some(Index::new(0)),
         ..json::Root::default()
     })
-}
-
-/// An accessor over the whole of buffer view `view`.
-fn accessor(view: u32, count: u64, component: ComponentType, ty: Type) -> Accessor {
-    Accessor {
-        buffer_view: Some(Index::new(view)),
-        byte_offset: None,
-        count: USize64(count),
-        component_type: Checked::Valid(GenericComponentType(component)),
-        extensions: None,
-        extras: None,
-        type_: Checked::Valid(ty),
-        min: None,
-        max: None,
-        normalized: false,
-        sparse: None,
-    }
-}
-
-/// Sets an accessor's `min` and `max`.
-trait WithBounds {
-    /// The accessor with `min` and `max` set.
-    fn with_bounds(self, min: &[f32; 3], max: &[f32; 3]) -> Self;
-}
-
-impl WithBounds for Accessor {
-    fn with_bounds(mut self, min: &[f32; 3], max: &[f32; 3]) -> Self {
-        self.min = Some(serde_json::json!(min));
-        self.max = Some(serde_json::json!(max));
-        self
-    }
 }
 
 /// Component-wise minimum and maximum (the mesh has at least one vertex; no
@@ -414,45 +338,6 @@ fn bounds(positions: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
         .par_iter()
         .fold(init, widen)
         .reduce(init, |a, b| widen(widen(a, &b.0), &b.1))
-}
-
-/// Light grey, non-metallic, fully rough: reads as terrain under any light
-/// (glTF's default material is fully metallic, which renders dark).
-fn terrain_material() -> json::Material {
-    json::Material {
-        pbr_metallic_roughness: PbrMetallicRoughness {
-            base_color_factor: PbrBaseColorFactor([0.8, 0.8, 0.8, 1.0]),
-            metallic_factor: StrengthFactor(0.0),
-            roughness_factor: StrengthFactor(1.0),
-            ..PbrMetallicRoughness::default()
-        },
-        ..json::Material::default()
-    }
-}
-
-/// `n` rounded up to a multiple of 4.
-fn pad4(n: u64) -> u64 {
-    n.div_ceil(4) * 4
-}
-
-/// Little-endian u32s.
-fn write_u32s<W: Write>(w: &mut W, v: &[u32]) -> Result<(), ExportError> {
-    for x in v {
-        w.write_all(&x.to_le_bytes())?;
-    }
-    Ok(())
-}
-
-/// A chunk header: padded length and type. The length fits: the total was checked.
-fn write_chunk_header<W: Write>(w: &mut W, length: u64, ty: u32) -> Result<(), ExportError> {
-    write_u32s(w, &[length as u32, ty])
-}
-
-/// The bytes that pad `len` to a multiple of 4.
-fn write_padding<W: Write>(w: &mut W, len: u64, byte: u8) -> Result<(), ExportError> {
-    let n = (pad4(len) - len) as usize;
-    w.write_all(&[byte; 3][..n])?;
-    Ok(())
 }
 
 /// The BIN chunk's content: positions, normals, indices (each section
