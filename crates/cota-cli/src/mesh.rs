@@ -10,7 +10,7 @@ use anyhow::Context;
 use cota_core::refine::Mode;
 use cota_core::voids::FillReport;
 use cota_core::{check_mesh, measure, Bitree, CheckOptions, ExtractOptions, Mesh, Metrics};
-use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
+use cota_io::export::{write_mesh, Coords, ExportOptions, GlbQuantization, MeshFormat};
 use serde_json::json;
 
 use crate::args::{CoordsArg, HierarchyArg, MeshArgs, QuadVariant, StripMethodArg};
@@ -49,10 +49,57 @@ fn check_output(out: &Path, base_m: Option<f64>) -> anyhow::Result<MeshFormat> {
     Ok(format)
 }
 
+/// `--quantize` needs a .glb output, a triangle list and real heights.
+fn check_quantize(a: &MeshArgs) -> anyhow::Result<()> {
+    if !a.quantize {
+        return Ok(());
+    }
+    if let Some(out) = &a.output {
+        if MeshFormat::from_path(out)? != MeshFormat::Glb {
+            anyhow::bail!(
+                "{}: --quantize writes a quantized glTF, expected a .glb output",
+                out.display()
+            );
+        }
+    }
+    if a.strip {
+        anyhow::bail!(
+            "--quantize: expected a triangle list, found --strip (a quantized GLB holds no strip)"
+        );
+    }
+    if refine::mode(&a.refine) != Mode::Conforming {
+        anyhow::bail!(
+            "--quantize: expected --mode conforming (fictitious heights must stay on their diagonals)"
+        );
+    }
+    Ok(())
+}
+
+/// Runs `f` on `mesh` with the heights a quantized GLB writes (when `quant`
+/// is given), then puts the mesh's own heights back.
+fn with_written_heights<R>(
+    mesh: &mut Mesh,
+    quant: Option<&GlbQuantization>,
+    f: impl FnOnce(&Mesh) -> R,
+) -> R {
+    let Some(q) = quant else { return f(mesh) };
+    let mut heights = q.written_heights(mesh);
+    let swap = |mesh: &mut Mesh, heights: &mut Vec<f32>| {
+        for (v, h) in mesh.vertices.iter_mut().zip(heights.iter_mut()) {
+            std::mem::swap(&mut v.z_m, h);
+        }
+    };
+    swap(mesh, &mut heights);
+    let r = f(mesh);
+    swap(mesh, &mut heights);
+    r
+}
+
 pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     if let Some(out) = &a.output {
         check_output(out, a.base_m)?;
     }
+    check_quantize(a)?;
     if let Some(e) = a.max_error {
         if e.is_nan() || e < 0.0 {
             anyhow::bail!("--max-error: expected 0 m or more, found {e} m");
@@ -96,7 +143,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let fill: FillReport = crate::input::fill(&mut grid, a.voids)?;
     let fill_ms = ms(t);
 
-    let (mesh, threshold_m, build_ms, extract_ms, check_opts, generic) = if quadtree {
+    let (mut mesh, threshold_m, build_ms, extract_ms, check_opts, generic) = if quadtree {
         let t = Instant::now();
         let qt = QuadTree::build(&grid)?;
         let build_ms = ms(t);
@@ -163,14 +210,40 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         }),
     };
 
-    let t = Instant::now();
-    let metrics: Metrics = if a.check {
-        check_mesh(&grid, &mesh, &check_opts)
-            .context("the invariant checker rejected the mesh (this is a bug in cota)")?
-            .metrics
-    } else {
-        measure(&grid, &mesh)
+    let coords = match a.coords {
+        CoordsArg::Local => Coords::LocalMetres,
+        CoordsArg::Grid => Coords::Grid,
     };
+    let eo = ExportOptions::DEFAULT
+        .with_coords(coords)
+        .with_base_m(a.base_m)
+        .with_quantize(a.quantize);
+    // With --quantize: the mesh as written, and the bound plus half the step
+    // (planning the file counts as writing it).
+    let t = Instant::now();
+    let quant = match a.quantize {
+        true => Some(GlbQuantization::new(&mesh, &grid, &eo).context("quantizing the mesh")?),
+        false => None,
+    };
+    let quantize_ms = ms(t);
+    let t = Instant::now();
+    let half_step = quant.as_ref().map(|q| q.z_step_m() / 2.0);
+    let written_bound = threshold_m.zip(half_step).map(|(b, h)| b + h);
+    let check_opts = match half_step {
+        Some(h) => check_opts
+            .with_max_error_m(check_opts.max_error_m.map(|b| b + h))
+            .with_height_tolerance_m(h),
+        None => check_opts,
+    };
+    let metrics: Metrics = with_written_heights(&mut mesh, quant.as_ref(), |mesh| {
+        anyhow::Ok(if a.check {
+            check_mesh(&grid, mesh, &check_opts)
+                .context("the invariant checker rejected the mesh (this is a bug in cota)")?
+                .metrics
+        } else {
+            measure(&grid, mesh)
+        })
+    })?;
     let measure_ms = ms(t);
 
     let t = Instant::now();
@@ -195,21 +268,17 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
 
     let mut write_ms = 0.0;
     if let Some(out) = &a.output {
-        let coords = match a.coords {
-            CoordsArg::Local => Coords::LocalMetres,
-            CoordsArg::Grid => Coords::Grid,
-        };
-        let eo = ExportOptions::DEFAULT
-            .with_coords(coords)
-            .with_base_m(a.base_m);
         let t = Instant::now();
-        match (&strip, a.strip) {
-            (Some(s), true) => cota_io::export::write_atomically(out, |w| {
+        match (&strip, a.strip, &quant) {
+            (Some(s), true, _) => cota_io::export::write_atomically(out, |w| {
                 cota_io::export::write_glb_strip(w, &s.mesh, &s.strip.indices, &grid, &eo)
+            })?,
+            (_, _, Some(q)) => cota_io::export::write_atomically(out, |w| {
+                cota_io::export::write_glb_quantized(w, &mesh, &grid, &eo, q)
             })?,
             _ => write_mesh(out, &mesh, &grid, &eo)?,
         }
-        write_ms = ms(t);
+        write_ms = ms(t) + quantize_ms;
     }
 
     let name = crate::input::name(&input.files);
@@ -250,6 +319,10 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "strip_flipped_cells": strip.as_ref().map(|s| s.flipped_cells),
         "strip_ms": strip.as_ref().map(|_| strip_ms),
         "output": a.output.as_ref().map(|p| p.display().to_string()),
+        "quantized": a.quantize,
+        "z_step_m": quant.as_ref().map(|q| q.z_step_m()),
+        "written_bound_m": written_bound,
+        "primitives": quant.as_ref().map(|q| q.primitives()),
     });
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -283,9 +356,14 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::mosaic::SeamRepor
         100.0 * f("triangles") / f("full_triangles").max(1.0),
         r["full_triangles"]
     );
-    let bound = match r["threshold_m"].as_f64() {
-        Some(b) => format!("bound {b} m"),
-        None => "no vertical bound".to_string(),
+    let bound = match (r["threshold_m"].as_f64(), r["z_step_m"].as_f64()) {
+        (Some(b), Some(s)) => format!(
+            "bound {b} + {} m = {} m as written",
+            s / 2.0,
+            f("written_bound_m")
+        ),
+        (Some(b), None) => format!("bound {b} m"),
+        (None, _) => "no vertical bound".to_string(),
     };
     println!(
         "error       max {:.3} m ({bound}), RMSE {:.3} m, mean {:.3} m",
@@ -316,6 +394,12 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::mosaic::SeamRepor
             f("strip_refs_per_triangle"),
             r["strip_method"].as_str().unwrap_or(""),
             r["strip_degenerate"]
+        );
+    }
+    if let Some(s) = r["z_step_m"].as_f64() {
+        println!(
+            "quantized   KHR_mesh_quantization, height step {s} m, {} primitives; error and volume as written",
+            r["primitives"]
         );
     }
     if r["checked"].as_bool() == Some(true) {

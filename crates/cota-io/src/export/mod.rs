@@ -75,6 +75,7 @@ mod obj;
 mod options;
 mod par;
 mod ply;
+mod quantize;
 mod solid;
 mod stl;
 
@@ -86,10 +87,11 @@ use cota_core::{HeightGrid, Mesh};
 
 pub use atomic::write_atomically;
 pub use error::{ExportError, WriteError};
-pub use glb::{write_glb, write_glb_strip};
+pub use glb::{write_glb, write_glb_quantized, write_glb_strip};
 pub use obj::write_obj;
 pub use options::{Coords, ExportOptions, IndexWidth};
 pub use ply::write_ply;
+pub use quantize::GlbQuantization;
 pub use stl::write_stl;
 
 /// A mesh file format.

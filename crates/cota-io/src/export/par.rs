@@ -41,20 +41,41 @@ where
     W: Write + Send + ?Sized,
     F: Fn(usize, &[T], &mut Vec<u8>) -> Result<(), ExportError> + Sync,
 {
-    let batch = CHUNK_RECORDS * CHUNKS_PER_THREAD * rayon::current_num_threads().max(1);
+    write_chunks_of(w, records, CHUNK_RECORDS, bytes_per_record, encode)
+}
+
+/// [`write_chunks`] with `chunk_records` records per chunk (1 for records
+/// that are themselves large, such as a glTF primitive).
+///
+/// # Errors
+/// As [`write_chunks`].
+pub(crate) fn write_chunks_of<T, W, F>(
+    w: &mut W,
+    records: &[T],
+    chunk_records: usize,
+    bytes_per_record: usize,
+    encode: F,
+) -> Result<(), ExportError>
+where
+    T: Sync,
+    W: Write + Send + ?Sized,
+    F: Fn(usize, &[T], &mut Vec<u8>) -> Result<(), ExportError> + Sync,
+{
+    let chunk = chunk_records.max(1);
+    let batch = chunk * CHUNKS_PER_THREAD * rayon::current_num_threads().max(1);
     let encode_batch = |g: usize, bufs: &mut Vec<Vec<u8>>| -> Result<(), ExportError> {
         let group = &records[g * batch..records.len().min((g + 1) * batch)];
-        let chunks = group.len().div_ceil(CHUNK_RECORDS);
+        let chunks = group.len().div_ceil(chunk);
         // Buffers are kept from batch to batch (no new pages to fault in).
         bufs.resize_with(chunks, Vec::new);
         let done: Vec<Result<(), ExportError>> = group
-            .par_chunks(CHUNK_RECORDS)
+            .par_chunks(chunk)
             .zip(bufs.par_iter_mut())
             .enumerate()
-            .map(|(c, (chunk, buf))| {
+            .map(|(c, (records, buf))| {
                 buf.clear();
-                buf.reserve(chunk.len() * bytes_per_record);
-                encode(g * batch + c * CHUNK_RECORDS, chunk, buf)
+                buf.reserve(records.len() * bytes_per_record);
+                encode(g * batch + c * chunk, records, buf)
             })
             .collect();
         done.into_iter().collect()

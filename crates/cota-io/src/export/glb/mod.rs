@@ -48,8 +48,10 @@ use super::error::ExportError;
 use super::geometry::{check_mesh, push_f32s, to_f32, vertex_normals};
 use super::options::{ExportOptions, IndexWidth};
 use super::par::{on_pool, write_chunks};
+use super::quantize::GlbQuantization;
 
 mod container;
+mod quantized;
 
 /// Largest vertex count with u16 indices (65 535 is the primitive restart value).
 const MAX_U16_VERTICES: usize = 65_535;
@@ -74,12 +76,34 @@ pub fn write_glb<W: Write + Send>(
 
 /// The body of [`write_glb`], on the pool.
 fn encode_glb<W: Write + Send>(
-    w: W,
+    mut w: W,
     mesh: &Mesh,
     grid: &HeightGrid,
     opts: &ExportOptions,
 ) -> Result<(), ExportError> {
+    if opts.quantize {
+        check_mesh(mesh)?;
+        let q = GlbQuantization::plan(mesh, &Frame::new(grid, opts.coords))?;
+        return quantized::write_quantized(&mut w, mesh, grid, opts, &q);
+    }
     write_glb_primitive(w, mesh, None, grid, opts)
+}
+
+/// Writes `mesh` as the quantized GLB `q` plans (made by
+/// [`GlbQuantization::new`] for this mesh, grid and options): what
+/// [`write_glb`] writes with [`ExportOptions::quantize`], without planning
+/// again.
+///
+/// # Errors
+/// As [`write_glb`].
+pub fn write_glb_quantized<W: Write + Send>(
+    mut w: W,
+    mesh: &Mesh,
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+    q: &GlbQuantization,
+) -> Result<(), ExportError> {
+    on_pool(|| quantized::write_quantized(&mut w, mesh, grid, opts, q))
 }
 
 /// Writes `mesh` as a GLB whose primitive is one TRIANGLE_STRIP (mode 5) with
@@ -116,6 +140,12 @@ fn encode_glb_strip<W: Write + Send>(
     grid: &HeightGrid,
     opts: &ExportOptions,
 ) -> Result<(), ExportError> {
+    if opts.quantize {
+        return Err(ExportError::Incompatible {
+            expected: "a triangle list in a quantized GLB",
+            found: "a triangle strip",
+        });
+    }
     write_glb_primitive(w, mesh, Some(strip), grid, opts)
 }
 
