@@ -821,14 +821,9 @@ mod test {
 
     /// A real grid from the bundled fixtures, as this crate's own type.
     pub(super) fn fixture(name: &str) -> HeightGrid {
-        let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("../../fixtures")
-            .join(name);
-        let g = cota_io::read_dem(&p, &cota_io::ReadOptions::DEFAULT)
-            .unwrap()
-            .grid;
-        let (w, h) = (g.width(), g.height());
-        let mut g = HeightGrid::new(w, h, g.heights().to_vec(), GeoRef::unreferenced(1.0)).unwrap();
+        let s = cota_fixtures::bundled(name);
+        let mut g =
+            HeightGrid::new(s.width, s.height, s.heights, GeoRef::unreferenced(1.0)).unwrap();
         crate::voids::fill_voids(&mut g, &crate::voids::FillOptions::DEFAULT).unwrap();
         g
     }
