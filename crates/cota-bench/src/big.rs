@@ -385,7 +385,7 @@ mod test {
     /// (the tile's east column against its west column) reported.
     #[test]
     fn relabelled_layout_reads_back_as_a_mosaic() {
-        let fixture = crate::repo_root().join("fixtures").join("S29W072.hgt.zip");
+        let fixture = cota_fixtures::fixture(cota_fixtures::BUNDLED_TILE);
         let tile = read_dem(&fixture, &ReadOptions::DEFAULT).unwrap().grid;
         let dir = tempfile::tempdir().unwrap();
         let files =
