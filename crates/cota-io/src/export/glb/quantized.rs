@@ -164,9 +164,13 @@ fn build_root(
         children: Some((1..=q.parts.len() as u32).map(Index::new).collect()),
         ..json::Node::default()
     });
-    for (k, p) in q.parts.iter().enumerate() {
+    let bounds: Vec<_> = q
+        .parts
+        .par_iter()
+        .map(|p| stored_bounds(mesh, q, p))
+        .collect();
+    for (k, (p, (min, max))) in q.parts.iter().zip(bounds).enumerate() {
         let first = 3 * k as u32;
-        let (min, max) = stored_bounds(mesh, q, p);
         let v0 = layout.vertices_before[k];
         root.accessors.push(
             at(0, POSITION_BYTES * v0, p.vertices.len(), ComponentType::U16)
@@ -314,7 +318,8 @@ const UNIT_TOLERANCE: f64 = 0.006;
 /// under a node of scale `scale`: among the byte triples near `127·S·n`
 /// (renormalised) whose length is within [`UNIT_TOLERANCE`] of 127, the one
 /// whose decoded direction `S⁻¹·c` is closest to `n`. The eight roundings
-/// are tried first, then the 27 and 125 triples around the nearest.
+/// are tried first (almost always enough), then the 27 and 125 triples
+/// around the nearest.
 pub(crate) fn encode_normal(n: [f32; 3], scale: [f64; 3]) -> [i8; 3] {
     let n = n.map(f64::from);
     let s = [n[0] * scale[0], n[1] * scale[1], n[2] * scale[2]];
@@ -323,41 +328,68 @@ pub(crate) fn encode_normal(n: [f32; 3], scale: [f64; 3]) -> [i8; 3] {
         return [0, 0, 127];
     }
     let t = s.map(|c| 127.0 * c / len);
-    let best = |candidates: &mut dyn Iterator<Item = [f64; 3]>| {
+    let floor = t.map(|x| x.floor().clamp(-127.0, 126.0));
+    // Each corner picks floor or floor + 1 per axis: its squared length, its
+    // decoded direction's dot with n and squared length are sums of one term
+    // per axis, two choices each.
+    let terms: [[[f64; 3]; 2]; 3] = std::array::from_fn(|a| {
+        std::array::from_fn(|up| {
+            let c = floor[a] + up as f64;
+            let d = c / scale[a];
+            [c * c, d * n[a], d * d]
+        })
+    });
+    let (lo, hi) = unit_band();
+    let mut best: Option<(u32, f64)> = None;
+    for k in 0..8u32 {
+        let pick = |a: usize| terms[a][(k >> a & 1) as usize];
+        let (x, y, z) = (pick(0), pick(1), pick(2));
+        let len2 = x[0] + y[0] + z[0];
+        if !(lo..=hi).contains(&len2) {
+            continue;
+        }
+        let cos = (x[1] + y[1] + z[1]) / (x[2] + y[2] + z[2]).sqrt();
+        if best.is_none_or(|(_, b)| cos > b) {
+            best = Some((k, cos));
+        }
+    }
+    match best {
+        Some((k, _)) => std::array::from_fn(|a| (floor[a] + f64::from(k >> a & 1)) as i8),
+        None => encode_normal_wide(n, scale, t),
+    }
+}
+
+/// The band of squared lengths (in byte units) the validator takes for unit.
+fn unit_band() -> (f64, f64) {
+    let (lo, hi) = (127.0 * (1.0 - UNIT_TOLERANCE), 127.0 * (1.0 + UNIT_TOLERANCE));
+    (lo * lo, hi * hi)
+}
+
+/// [`encode_normal`] when no rounding of `t` (= `127·S·n` renormalised) has
+/// unit length: the 27, then 125 triples around its nearest.
+fn encode_normal_wide(n: [f64; 3], scale: [f64; 3], t: [f64; 3]) -> [i8; 3] {
+    let (lo, hi) = unit_band();
+    for r in [1i32, 2] {
+        let w = 2 * r + 1;
         let mut best: Option<([i8; 3], f64)> = None;
-        for c in candidates {
-            let l = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() / 127.0;
-            if (l - 1.0).abs() > UNIT_TOLERANCE {
+        for k in 0..w * w * w {
+            let off = [k % w - r, k / w % w - r, k / (w * w) - r];
+            let c: [f64; 3] =
+                std::array::from_fn(|a| (t[a].round() + f64::from(off[a])).clamp(-127.0, 127.0));
+            let len2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+            if !(lo..=hi).contains(&len2) {
                 continue;
             }
             let d = [c[0] / scale[0], c[1] / scale[1], c[2] / scale[2]];
-            let dl = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            let cos = (d[0] * n[0] + d[1] * n[1] + d[2] * n[2]) / dl;
+            let cos = (d[0] * n[0] + d[1] * n[1] + d[2] * n[2])
+                / (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             if best.is_none_or(|(_, b)| cos > b) {
                 best = Some((c.map(|x| x as i8), cos));
             }
         }
-        best.map(|(c, _)| c)
-    };
-    let corners = (0..8).map(|k: u32| {
-        std::array::from_fn(|a| {
-            let r = if k >> a & 1 == 1 {
-                t[a].ceil()
-            } else {
-                t[a].floor()
-            };
-            r.clamp(-127.0, 127.0)
-        })
-    });
-    let around = |r: i32| {
-        let w = 2 * r + 1;
-        (0..w * w * w).map(move |k| {
-            let d = [k % w - r, k / w % w - r, k / (w * w) - r];
-            std::array::from_fn(|a| (t[a].round() + f64::from(d[a])).clamp(-127.0, 127.0))
-        })
-    };
-    best(&mut corners.into_iter())
-        .or_else(|| best(&mut around(1)))
-        .or_else(|| best(&mut around(2)))
-        .unwrap_or_else(|| t.map(|x| x.round().clamp(-127.0, 127.0) as i8))
+        if let Some((c, _)) = best {
+            return c;
+        }
+    }
+    t.map(|x| x.round().clamp(-127.0, 127.0) as i8)
 }
