@@ -29,7 +29,7 @@ impl fmt::Display for PngEncoding {
     }
 }
 
-/// Options for [`read_dem`].
+/// Options for [`read_dem`](crate::read_dem).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub struct ReadOptions {

@@ -2,7 +2,7 @@
 //! format detection and dispatch), or several into one grid ([`read_region`]:
 //! read in parallel, mosaicked, voids filled).
 //!
-//! Detection ([`sniff`](self::sniff)) looks at the content first (magic bytes of
+//! Detection (`sniff`) looks at the content first (magic bytes of
 //! ZIP, TIFF, PNG, gzip; the keywords of an ESRI ASCII header; the exact byte
 //! size of an SRTM tile) and uses the file name only where content cannot
 //! decide (a raw `.hgt` has no header, so its size and name are all there is).

@@ -361,7 +361,10 @@ pub(crate) fn encode_normal(n: [f32; 3], scale: [f64; 3]) -> [i8; 3] {
 
 /// The band of squared lengths (in byte units) the validator takes for unit.
 fn unit_band() -> (f64, f64) {
-    let (lo, hi) = (127.0 * (1.0 - UNIT_TOLERANCE), 127.0 * (1.0 + UNIT_TOLERANCE));
+    let (lo, hi) = (
+        127.0 * (1.0 - UNIT_TOLERANCE),
+        127.0 * (1.0 + UNIT_TOLERANCE),
+    );
     (lo * lo, hi * hi)
 }
 
