@@ -24,10 +24,8 @@
 #![allow(clippy::unwrap_used, reason = "benchmark harness")]
 
 use std::hint::black_box;
-use std::path::PathBuf;
 
 use cota_bench::{bench_filters, load_cases, wanted};
-use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::refine::{refine, Mode, RefineOptions};
 use cota_core::strip::{stripify_bitree, stripify_bitree_with, StripMethod};
 use cota_core::{Bitree, ExtractOptions, GeoRef, HeightGrid, MaxVerticalError, Mesh};
@@ -35,25 +33,15 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use std::time::Duration;
 
 fn srtm() -> HeightGrid {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/S29W072.hgt.zip");
-    let mut g = cota_io::read_dem(&p, &cota_io::ReadOptions::DEFAULT)
+    let tile = [cota_fixtures::fixture(cota_fixtures::BUNDLED_TILE)];
+    cota_io::read_region(&tile, &cota_io::RegionOptions::DEFAULT)
         .unwrap()
-        .grid;
-    fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
-    g
+        .grid
 }
 
 /// A rough grid: every unit triangle survives E = 0.
 fn rough(w: usize, h: usize) -> HeightGrid {
-    let heights: Vec<f32> = (0..w * h)
-        .map(|i| {
-            let mut x = i as u64 + 0x9E37_79B9_7F4A_7C15;
-            x ^= x >> 31;
-            x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            x ^= x >> 29;
-            (x % 100_000) as f32 * 0.01
-        })
-        .collect();
+    let heights = cota_fixtures::rough_terrain(w, h, 1);
     HeightGrid::new(w, h, heights, GeoRef::unreferenced(30.0)).unwrap()
 }
 

@@ -7,9 +7,9 @@
 //! grids are built from the eight real tiles **placed side by side at
 //! relabelled positions**: each tile is written unchanged (same int16 samples,
 //! voids kept) as an SRTM `.hgt` file named after its new position, and the
-//! benchmarks read those files back with `cota_io::read_dem` and join them with
-//! `cota_core::mosaic` (default seam policy: mean of the shared edge), then
-//! fill the voids harmonically, as `cota mesh` does. **The adjacency is
+//! benchmarks read those files back with `cota_io::read_region` (in parallel,
+//! joined by `cota_core::mosaic`, default seam policy: mean of the shared
+//! edge, then the voids filled harmonically), as `cota mesh` does. **The adjacency is
 //! artificial**: except for the pairs that are really adjacent (kept
 //! adjacent), neighbouring tiles do not match on their shared edge, and the
 //! mosaic's [`SeamReport`] says by how much.
@@ -37,10 +37,9 @@
 
 use std::path::{Path, PathBuf};
 
-use cota_core::grid::mosaic::{mosaic, MosaicOptions, SeamPolicy, SeamReport};
-use cota_core::grid::voids::{fill_voids, FillOptions};
+use cota_core::grid::mosaic::{MosaicOptions, SeamPolicy, SeamReport};
 use cota_core::HeightGrid;
-use cota_io::{read_dem, ReadOptions};
+use cota_io::{read_dem, read_region, ReadOptions, RegionOptions};
 
 use crate::{crop_nw, data_dir};
 
@@ -173,23 +172,9 @@ fn read_mosaic_with(
     files: &[PathBuf],
     policy: SeamPolicy,
 ) -> Result<(HeightGrid, Option<SeamReport>, usize), String> {
-    let mut grids = Vec::with_capacity(files.len());
-    for f in files {
-        grids.push(
-            read_dem(f, &ReadOptions::DEFAULT)
-                .map_err(|e| e.to_string())?
-                .grid,
-        );
-    }
-    let several = grids.len() > 1;
-    let m = mosaic(grids, &MosaicOptions::DEFAULT.with_seam_policy(policy))
-        .map_err(|e| format!("mosaicking {} files: {e}", files.len()))?;
-    let mut grid = m.grid;
-    let voids = grid.void_count();
-    if voids > 0 {
-        fill_voids(&mut grid, &FillOptions::DEFAULT).map_err(|e| e.to_string())?;
-    }
-    Ok((grid, several.then_some(m.seams), voids))
+    let opts = RegionOptions::DEFAULT.with_mosaic(MosaicOptions::DEFAULT.with_seam_policy(policy));
+    let r = read_region(files, &opts).map_err(|e| format!("{:#}", anyhow::Error::from(e)))?;
+    Ok((r.grid, r.seams, r.voids))
 }
 
 /// The input files of the large grids, written (relabelled) into `scratch`
@@ -285,20 +270,11 @@ pub fn big_files(scratch: &Path, mut note: impl FnMut(&str)) -> Result<BigFiles,
 
 /// The mosaic of `files` under [`SeamPolicy::First`], voids kept.
 fn raw_mosaic(files: &[PathBuf]) -> Result<HeightGrid, String> {
-    let mut grids = Vec::new();
-    for f in files {
-        grids.push(
-            read_dem(f, &ReadOptions::DEFAULT)
-                .map_err(|e| e.to_string())?
-                .grid,
-        );
-    }
-    Ok(mosaic(
-        grids,
-        &MosaicOptions::DEFAULT.with_seam_policy(SeamPolicy::First),
-    )
-    .map_err(|e| e.to_string())?
-    .grid)
+    let opts = RegionOptions::DEFAULT
+        .with_mosaic(MosaicOptions::DEFAULT.with_seam_policy(SeamPolicy::First))
+        .with_fill(None);
+    let r = read_region(files, &opts).map_err(|e| format!("{:#}", anyhow::Error::from(e)))?;
+    Ok(r.grid)
 }
 
 /// The first 3601² tile (by file name) and every 1201² tile in `dir`.
@@ -409,7 +385,7 @@ mod test {
     /// (the tile's east column against its west column) reported.
     #[test]
     fn relabelled_layout_reads_back_as_a_mosaic() {
-        let fixture = crate::repo_root().join("fixtures").join("S29W072.hgt.zip");
+        let fixture = cota_fixtures::fixture(cota_fixtures::BUNDLED_TILE);
         let tile = read_dem(&fixture, &ReadOptions::DEFAULT).unwrap().grid;
         let dir = tempfile::tempdir().unwrap();
         let files =

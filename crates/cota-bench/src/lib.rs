@@ -17,7 +17,7 @@
 //! * [`martini_lowered`]: the largest martini threshold whose true error is
 //!   within a tolerance, found by bisection.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 pub mod big;
 
@@ -43,13 +43,10 @@ pub struct Case {
     pub native: Option<HeightGrid>,
 }
 
-/// The shared data directory: `$COTA_DATA_DIR`, else `shared/data` beside the
-/// repository (`<repo>/../shared/data`).
+/// The shared data directory: `$COTA_SHARED_DATA`, else `shared/data` beside
+/// the repository (`<repo>/../shared/data`); [`cota_fixtures::shared_data_dir`].
 pub fn data_dir() -> PathBuf {
-    match std::env::var_os("COTA_DATA_DIR") {
-        Some(d) => PathBuf::from(d),
-        None => tidy(repo_root().join("..").join("shared").join("data")),
-    }
+    cota_fixtures::shared_data_dir()
 }
 
 /// The positional arguments of a criterion benchmark binary (its filters),
@@ -121,14 +118,9 @@ pub fn median(v: &[f64]) -> f64 {
     }
 }
 
-/// The repository root (two levels above this crate's manifest).
+/// The repository root; [`cota_fixtures::workspace_root`].
 pub fn repo_root() -> PathBuf {
-    tidy(Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(".."))
-}
-
-/// `p` without `..` components when it exists, else `p` as it is.
-fn tidy(p: PathBuf) -> PathBuf {
-    std::fs::canonicalize(&p).unwrap_or(p)
+    cota_fixtures::workspace_root()
 }
 
 /// Loads every benchmark grid that can be found, in a fixed order (Fuji,
@@ -197,7 +189,7 @@ fn load_puget() -> Result<Case, String> {
 
 fn load_srtm() -> Result<Case, String> {
     let shared = data_dir().join("srtm").join("N00E010.hgt");
-    let bundled = repo_root().join("fixtures").join("S29W072.hgt.zip");
+    let bundled = cota_fixtures::fixture(cota_fixtures::BUNDLED_TILE);
     let path = if shared.exists() { shared } else { bundled };
     let dem = read_dem(&path, &ReadOptions::DEFAULT).map_err(|e| e.to_string())?;
     let mut grid = dem.grid;

@@ -156,6 +156,13 @@ pub struct MeshArgs {
     /// --strip, only reports the strip's references (strip_refs).
     #[arg(long, value_enum)]
     pub strip_method: Option<StripMethodArg>,
+    /// .glb only: quantized attributes (KHR_mesh_quantization): 16-bit
+    /// positions (columns and rows exact, heights on a power-of-two step),
+    /// 8-bit normals, 16-bit indices; about half the size. Heights move by at
+    /// most half the step: the report measures the mesh as written and its
+    /// bound is the requested one plus half the step (--check proves that).
+    #[arg(long)]
+    pub quantize: bool,
     #[command(flatten)]
     pub refine: RefineArgs,
 }

@@ -36,7 +36,7 @@ fn pixel_is(p: PixelIs) -> &'static str {
 }
 
 fn file_json(f: &FileInfo) -> Value {
-    let g = &f.grid_georef;
+    let g = &f.georef;
     json!({
         "path": f.path.display().to_string(),
         "format": f.format.to_string(),
@@ -96,7 +96,7 @@ fn to_json(input: &Input) -> Value {
 
 fn print_text(input: &Input) {
     for f in &input.files {
-        let g = &f.grid_georef;
+        let g = &f.georef;
         println!("{}", f.path.display());
         println!("  format      {} ({})", f.format, f.data_type);
         println!("  size        {} x {}", f.width, f.height);

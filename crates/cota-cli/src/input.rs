@@ -1,14 +1,14 @@
 //! Reading the inputs of a command: each file, the mosaic of several, the
 //! bundled sample when there is none.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::grid::mosaic::{mosaic, MosaicOptions, SeamPolicy, SeamReport};
+use cota_core::grid::mosaic::{MosaicOptions, SeamPolicy, SeamReport};
 use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
 use cota_core::HeightGrid;
-use cota_io::{read_dem, read_dem_bytes, DataType, Dem, Format, PngEncoding, ReadOptions};
+use cota_io::{read_dem_bytes, read_region_with_progress, PngEncoding, ReadOptions, RegionOptions};
 
 use crate::args::{Encoding, InputArgs, Seam, Voids};
 use crate::progress;
@@ -19,19 +19,7 @@ const SAMPLE: &[u8] = include_bytes!("../../../fixtures/S29W072.hgt.zip");
 const SAMPLE_NAME: &str = "fixtures/S29W072.hgt.zip";
 
 /// What one input file held, as read (before any mosaic or fill).
-#[derive(Debug, Clone)]
-pub struct FileInfo {
-    pub path: PathBuf,
-    pub format: Format,
-    pub data_type: DataType,
-    pub nodata: Option<f64>,
-    pub width: usize,
-    pub height: usize,
-    pub nodata_count: usize,
-    pub range: Option<(f32, f32)>,
-    pub grid_georef: cota_core::GeoRef,
-    pub cell_size_m: [f64; 2],
-}
+pub type FileInfo = cota_io::DemSummary;
 
 /// The grid to work on and how it was obtained.
 pub struct Input {
@@ -76,21 +64,6 @@ fn read_options(a: &InputArgs) -> ReadOptions {
         .with_band(a.band)
 }
 
-fn describe(dem: &Dem) -> FileInfo {
-    FileInfo {
-        path: dem.path.clone(),
-        format: dem.format,
-        data_type: dem.data_type,
-        nodata: dem.nodata,
-        width: dem.grid.width(),
-        height: dem.grid.height(),
-        nodata_count: dem.grid.void_count(),
-        range: dem.grid.valid_range(),
-        grid_georef: dem.grid.georef().clone(),
-        cell_size_m: dem.grid.cell_size_m(),
-    }
-}
-
 /// Reads every input (or the bundled sample) and mosaics them.
 pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
     let t0 = Instant::now();
@@ -101,32 +74,31 @@ pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
             a.cell_size_m
         );
     }
-    let mut dems = Vec::new();
-    if a.files.is_empty() {
-        dems.push(read_dem_bytes(SAMPLE, Path::new(SAMPLE_NAME), &opts)?);
-    } else {
-        let pb = progress::bar(a.files.len() as u64, "reading");
-        for f in &a.files {
-            dems.push(read_dem(f, &opts)?);
-            pb.inc(1);
-        }
-        pb.finish_and_clear();
-    }
-    let files: Vec<FileInfo> = dems.iter().map(describe).collect();
-    let names: Vec<String> = files.iter().map(|f| f.path.display().to_string()).collect();
-    let grids: Vec<HeightGrid> = dems.into_iter().map(|d| d.grid).collect();
-    let several = grids.len() > 1;
     let policy = match a.seam {
         Seam::Mean => SeamPolicy::Mean,
         Seam::First => SeamPolicy::First,
     };
-    let m = mosaic(grids, &MosaicOptions::DEFAULT.with_seam_policy(policy))
-        .with_context(|| format!("mosaicking {}", names.join(", ")))?;
+    // Voids stay NaN here: each command applies its own policy (`fill`).
+    let region_opts = RegionOptions::DEFAULT
+        .with_read(opts)
+        .with_mosaic(MosaicOptions::DEFAULT.with_seam_policy(policy))
+        .with_fill(None);
+    let region = if a.files.is_empty() {
+        let sample = read_dem_bytes(SAMPLE, Path::new(SAMPLE_NAME), &opts)?;
+        cota_io::read::join(vec![sample], &region_opts)?
+    } else {
+        let pb = progress::bar(a.files.len() as u64, "reading");
+        let r = read_region_with_progress(&a.files, &region_opts, &|done, _| {
+            pb.set_position(done as u64)
+        })?;
+        pb.finish_and_clear();
+        r
+    };
     Ok(Input {
-        grid: m.grid,
-        files,
-        seams: several.then_some(m.seams),
-        hole_samples: m.hole_samples,
+        grid: region.grid,
+        files: region.files,
+        seams: region.seams,
+        hole_samples: region.hole_samples,
         read_ms: t0.elapsed().as_secs_f64() * 1e3,
     })
 }

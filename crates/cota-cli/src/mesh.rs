@@ -11,10 +11,10 @@ use anyhow::Context;
 use cota_core::criteria::CriterionError;
 use cota_core::strip::{stripify_bitree_with, MeshStrip};
 use cota_core::{
-    check_mesh, measure, CriterionOptions, HeightGrid, HierarchyKind, MeshPlan, Meshed, Mesher,
-    Metrics, Mode,
+    check_mesh, measure, CriterionOptions, HeightGrid, HierarchyKind, Mesh, MeshPlan, Meshed,
+    Mesher, Metrics, Mode,
 };
-use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
+use cota_io::export::{write_mesh, Coords, ExportOptions, GlbQuantization, MeshFormat};
 use serde_json::json;
 
 use crate::args::{CoordsArg, CriterionArg, HierarchyArg, MeshArgs, StripMethodArg};
@@ -100,11 +100,58 @@ fn flag_error(a: &MeshArgs, e: CriterionError) -> anyhow::Error {
     }
 }
 
+/// `--quantize` needs a .glb output, a triangle list and real heights.
+fn check_quantize(a: &MeshArgs) -> anyhow::Result<()> {
+    if !a.quantize {
+        return Ok(());
+    }
+    if let Some(out) = &a.output {
+        if MeshFormat::from_path(out)? != MeshFormat::Glb {
+            anyhow::bail!(
+                "{}: --quantize writes a quantized glTF, expected a .glb output",
+                out.display()
+            );
+        }
+    }
+    if a.strip {
+        anyhow::bail!(
+            "--quantize: expected a triangle list, found --strip (a quantized GLB holds no strip)"
+        );
+    }
+    if a.refine.mode.mode() != Mode::Conforming {
+        anyhow::bail!(
+            "--quantize: expected --mode conforming (fictitious heights must stay on their diagonals)"
+        );
+    }
+    Ok(())
+}
+
+/// Runs `f` on `mesh` with the heights a quantized GLB writes (when `quant`
+/// is given), then puts the mesh's own heights back.
+fn with_written_heights<R>(
+    mesh: &mut Mesh,
+    quant: Option<&GlbQuantization>,
+    f: impl FnOnce(&Mesh) -> R,
+) -> R {
+    let Some(q) = quant else { return f(mesh) };
+    let mut heights = q.written_heights(mesh);
+    let swap = |mesh: &mut Mesh, heights: &mut Vec<f32>| {
+        for (v, h) in mesh.vertices.iter_mut().zip(heights.iter_mut()) {
+            std::mem::swap(&mut v.z_m, h);
+        }
+    };
+    swap(mesh, &mut heights);
+    let r = f(mesh);
+    swap(mesh, &mut heights);
+    r
+}
+
 /// Validates the flags before any long work.
 fn validate(a: &MeshArgs) -> anyhow::Result<()> {
     if let Some(out) = &a.output {
         check_output(out, a.base_m)?;
     }
+    check_quantize(a)?;
     if let Some(e) = a.max_error {
         if e.is_nan() || e < 0.0 {
             anyhow::bail!("--max-error: expected 0 m or more, found {e} m");
@@ -180,14 +227,61 @@ fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f6
     Ok((meshed, build_ms, criterion_ms + ms(t)))
 }
 
-/// The mesh's exact metrics, through the checker with `--check`.
-fn measure_mesh(a: &MeshArgs, grid: &HeightGrid, m: &Meshed) -> anyhow::Result<Metrics> {
-    Ok(if a.check {
-        check_mesh(grid, &m.mesh, &m.check)
-            .context("the invariant checker rejected the mesh (this is a bug in cota)")?
-            .metrics
-    } else {
-        measure(grid, &m.mesh)
+/// The export options the flags give.
+fn export_options(a: &MeshArgs) -> ExportOptions {
+    let coords = match a.coords {
+        CoordsArg::Local => Coords::LocalMetres,
+        CoordsArg::Grid => Coords::Grid,
+    };
+    ExportOptions::DEFAULT
+        .with_coords(coords)
+        .with_base_m(a.base_m)
+        .with_quantize(a.quantize)
+}
+
+/// With `--quantize`, the plan of the quantized GLB (planning the file
+/// counts as writing it: returns its time in ms too).
+fn quantization(
+    a: &MeshArgs,
+    grid: &HeightGrid,
+    m: &Meshed,
+) -> anyhow::Result<(Option<GlbQuantization>, f64)> {
+    let t = Instant::now();
+    let quant = match a.quantize {
+        true => Some(
+            GlbQuantization::new(&m.mesh, grid, &export_options(a))
+                .context("quantizing the mesh")?,
+        ),
+        false => None,
+    };
+    Ok((quant, ms(t)))
+}
+
+/// The mesh's exact metrics, through the checker with `--check`; with
+/// `--quantize`, of the mesh as written, against the bound plus half the
+/// height step.
+fn measure_mesh(
+    a: &MeshArgs,
+    grid: &HeightGrid,
+    m: &mut Meshed,
+    quant: Option<&GlbQuantization>,
+) -> anyhow::Result<Metrics> {
+    let half_step = quant.map(|q| q.z_step_m() / 2.0);
+    let check_opts = match half_step {
+        Some(h) => m
+            .check
+            .with_max_error_m(m.check.max_error_m.map(|b| b + h))
+            .with_height_tolerance_m(h),
+        None => m.check,
+    };
+    with_written_heights(&mut m.mesh, quant, |mesh| {
+        Ok(if a.check {
+            check_mesh(grid, mesh, &check_opts)
+                .context("the invariant checker rejected the mesh (this is a bug in cota)")?
+                .metrics
+        } else {
+            measure(grid, mesh)
+        })
     })
 }
 
@@ -220,21 +314,19 @@ fn write(
     grid: &HeightGrid,
     m: &Meshed,
     strip: Option<&MeshStrip<'_>>,
+    quant: Option<&GlbQuantization>,
 ) -> anyhow::Result<f64> {
     let Some(out) = &a.output else {
         return Ok(0.0);
     };
-    let coords = match a.coords {
-        CoordsArg::Local => Coords::LocalMetres,
-        CoordsArg::Grid => Coords::Grid,
-    };
-    let eo = ExportOptions::DEFAULT
-        .with_coords(coords)
-        .with_base_m(a.base_m);
+    let eo = export_options(a);
     let t = Instant::now();
-    match (strip, a.strip) {
-        (Some(s), true) => cota_io::export::write_atomically(out, |w| {
+    match (strip, a.strip, quant) {
+        (Some(s), true, _) => cota_io::export::write_atomically(out, |w| {
             cota_io::export::write_glb_strip(w, &s.mesh, &s.strip.indices, grid, &eo)
+        })?,
+        (_, _, Some(q)) => cota_io::export::write_atomically(out, |w| {
+            cota_io::export::write_glb_quantized(w, &m.mesh, grid, &eo, q)
         })?,
         _ => write_mesh(out, &m.mesh, grid, &eo)?,
     }
@@ -249,14 +341,19 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let t = Instant::now();
     let fill = crate::input::fill(&mut grid, a.voids)?;
     let fill_ms = ms(t);
-    let (m, build_ms, extract_ms) = mesh_grid(a, &grid)?;
+    let (mut m, build_ms, extract_ms) = mesh_grid(a, &grid)?;
+    let (quant, quantize_ms) = quantization(a, &grid, &m)?;
     let t = Instant::now();
-    let metrics = measure_mesh(a, &grid, &m)?;
+    let metrics = measure_mesh(a, &grid, &mut m, quant.as_ref())?;
     let measure_ms = ms(t);
     let t = Instant::now();
     let strip = strip(a, &grid, &m)?;
     let strip_ms = ms(t);
-    let write_ms = write(a, &grid, &m, strip.as_ref())?;
+    let write_ms = write(a, &grid, &m, strip.as_ref(), quant.as_ref())? + quantize_ms;
+    let written_bound = m
+        .bound_m
+        .zip(quant.as_ref())
+        .map(|(b, q)| b + q.z_step_m() / 2.0);
     let mesh = &m.mesh;
     let report = json!({
         "input": crate::input::name(&input.files),
@@ -295,6 +392,10 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "strip_flipped_cells": strip.as_ref().map(|s| s.flipped_cells),
         "strip_ms": strip.as_ref().map(|_| strip_ms),
         "output": a.output.as_ref().map(|p| p.display().to_string()),
+        "quantized": a.quantize,
+        "z_step_m": quant.as_ref().map(|q| q.z_step_m()),
+        "written_bound_m": written_bound,
+        "primitives": quant.as_ref().map(|q| q.primitives()),
     });
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -328,9 +429,14 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
         100.0 * f("triangles") / f("full_triangles").max(1.0),
         r["full_triangles"]
     );
-    let bound = match r["threshold_m"].as_f64() {
-        Some(b) => format!("bound {b} m"),
-        None => "no vertical bound".to_string(),
+    let bound = match (r["threshold_m"].as_f64(), r["z_step_m"].as_f64()) {
+        (Some(b), Some(s)) => format!(
+            "bound {b} + {} m = {} m as written",
+            s / 2.0,
+            f("written_bound_m")
+        ),
+        (Some(b), None) => format!("bound {b} m"),
+        (None, _) => "no vertical bound".to_string(),
     };
     println!(
         "error       max {:.3} m ({bound}), RMSE {:.3} m, mean {:.3} m",
@@ -379,6 +485,12 @@ fn print_strip_and_check(r: &serde_json::Value) {
             f("strip_refs_per_triangle"),
             r["strip_method"].as_str().unwrap_or(""),
             r["strip_degenerate"]
+        );
+    }
+    if let Some(s) = r["z_step_m"].as_f64() {
+        println!(
+            "quantized   KHR_mesh_quantization, height step {s} m, {} primitives; error and volume as written",
+            r["primitives"]
         );
     }
     if r["checked"].as_bool() == Some(true) {

@@ -22,21 +22,11 @@ pub fn stdout(o: &Output) -> String {
 
 /// The repository's fixtures folder.
 pub fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../fixtures")
-        .join(name)
+    cota_fixtures::fixture(name)
 }
 
-/// `../shared/data` (or `$COTA_SHARED_DATA`), when present.
+/// `../shared/data/REL` (or `$COTA_SHARED_DATA/REL`), when present; else
+/// `None` after printing "skipped: …".
 pub fn shared(rel: &str) -> Option<PathBuf> {
-    let root = std::env::var_os("COTA_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
-    let p = root.join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipped: shared data not found at {}", p.display());
-        None
-    }
+    cota_fixtures::shared(rel)
 }

@@ -123,3 +123,16 @@ fn catches_overlap_and_out_of_range() {
         Violation::IndexOutOfRange { .. }
     ));
 }
+
+#[test]
+fn height_tolerance_allows_moved_heights_up_to_it() {
+    let (g, mut m) = setup();
+    m.vertices[5].z_m += 0.25;
+    let strict = CheckOptions::conforming(2.5);
+    assert!(matches!(
+        first(&g, &m, strict),
+        Violation::WrongHeight { .. }
+    ));
+    assert!(check_mesh(&g, &m, &strict.with_height_tolerance_m(0.25)).is_ok());
+    assert!(check_mesh(&g, &m, &strict.with_height_tolerance_m(0.125)).is_err());
+}

@@ -2,7 +2,7 @@
 //! every mesh it drives passes the invariant checker in every mode.
 #![allow(clippy::unwrap_used, reason = "tests")]
 
-use std::path::PathBuf;
+mod common;
 
 use cota_core::criteria::curvature::{AccumulatedCurvature, CurvatureMap};
 use cota_core::criteria::light::IlluminationMask;
@@ -10,7 +10,6 @@ use cota_core::criteria::view::{Paper001, Paper003, ScreenSpaceError};
 use cota_core::criteria::{
     local_m, longest_edge_m, terrain_diagonal_m, Element, EuclideanDistance, RelativeSize,
 };
-use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::refine::{refine, Mode, RefineOptions, Refined};
 use cota_core::{check_mesh, CheckOptions, Criterion, GeoRef, HeightGrid, MaxVerticalError, Mesh};
 
@@ -22,11 +21,7 @@ const MODES: [Mode; 3] = [
 
 /// A mountainous 257×257 crop of the bundled SRTM tile (3″ cells, about 81 m).
 fn real_crop() -> HeightGrid {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/S29W072.hgt.zip");
-    let mut g = cota_io::read_dem(&p, &cota_io::ReadOptions::DEFAULT)
-        .unwrap()
-        .grid;
-    fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
+    let g = common::tile();
     let [dx, _] = g.cell_size_m();
     let (n, x0, y0) = (257, 900, 600);
     let v = (0..n * n).map(|i| g.get(x0 + i % n, y0 + i / n)).collect();

@@ -8,17 +8,7 @@ use proptest::prelude::*;
 
 fn grid(w: usize, h: usize, seed: u64, rough: f32) -> HeightGrid {
     // A smooth surface plus seeded noise, so errors vary across levels.
-    let mut s = seed | 1;
-    let v = (0..w * h)
-        .map(|i| {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            let (x, y) = ((i % w) as f32, (i / w) as f32);
-            let noise = (s % 1000) as f32 / 1000.0;
-            50.0 * (x * 0.21).sin() * (y * 0.13).cos() + rough * noise
-        })
-        .collect();
+    let v = cota_fixtures::hills_and_noise(w, h, seed, rough);
     HeightGrid::new(w, h, v, GeoRef::unreferenced(10.0)).unwrap()
 }
 

@@ -2,9 +2,8 @@
 //! data, the dependency rules on hand-made grids, and the transmission saving.
 #![allow(clippy::unwrap_used, reason = "tests")]
 
-use std::path::PathBuf;
+mod common;
 
-use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::hierarchy::Hierarchy;
 use cota_core::mesh::check::Violation;
 use cota_core::refine::Marks;
@@ -21,12 +20,7 @@ const MODES: [Mode; 3] = [
 ];
 
 fn real() -> HeightGrid {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/S29W072.hgt.zip");
-    let mut g = cota_io::read_dem(&p, &cota_io::ReadOptions::DEFAULT)
-        .unwrap()
-        .grid;
-    fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
-    g
+    common::tile()
 }
 
 fn check_opts(mode: Mode, e: f64) -> CheckOptions {
@@ -280,13 +274,8 @@ proptest::proptest! {
         w in 2usize..48, h in 2usize..48, seed in proptest::prelude::any::<u64>(),
         rough in 0f32..40.0, e in 0f64..15.0,
     ) {
-        let mut s = seed | 1;
-        let g = grid(w, h, |x, y| {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            25.0 * (x as f32 * 0.3).sin() * (y as f32 * 0.2).cos() + rough * (s % 1000) as f32 / 1000.0
-        });
+        let heights = cota_fixtures::hills_and_noise(w, h, seed, rough);
+        let g = grid(w, h, |x, y| heights[y * w + x]);
         for m in MODES {
             run(&g, e, m);
         }

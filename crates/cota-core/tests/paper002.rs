@@ -3,21 +3,16 @@
 //! and paper 004's distortion D(M).
 #![allow(clippy::unwrap_used, reason = "tests")]
 
-use std::path::PathBuf;
+mod common;
 
 use cota_core::criteria::curvature::CurvatureMap;
 use cota_core::criteria::light::{received_light, IlluminationMask};
-use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::mesh::metrics::{distortion_m2, weighted_volume_m3};
 use cota_core::refine::{refine, RefineOptions};
 use cota_core::{measure, Bitree, ExtractOptions, GeoRef, HeightGrid, Mesh};
 
 fn real_crop() -> HeightGrid {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/S29W072.hgt.zip");
-    let mut g = cota_io::read_dem(&p, &cota_io::ReadOptions::DEFAULT)
-        .unwrap()
-        .grid;
-    fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
+    let g = common::tile();
     let [dx, _] = g.cell_size_m();
     let (n, x0, y0) = (257, 900, 600);
     let v = (0..n * n).map(|i| g.get(x0 + i % n, y0 + i / n)).collect();

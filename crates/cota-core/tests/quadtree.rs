@@ -2,45 +2,13 @@
 //! restriction on hand-made cases, and monotonicity in the tolerance.
 #![allow(clippy::unwrap_used, reason = "tests")]
 
-use std::path::PathBuf;
+mod common;
 
 use cota_core::quadtree::{QuadExtraction, QuadTree};
 use cota_core::{check_mesh, CheckOptions, GeoRef, HeightGrid};
 
-fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../fixtures")
-        .join(name)
-}
-
-/// `$COTA_SHARED_DATA/rel` or `<workspace>/../shared/data/rel`, when present.
-fn shared(rel: &str) -> Option<PathBuf> {
-    let root = std::env::var_os("COTA_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data"));
-    let p = root.join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipped: shared data not found at {}", p.display());
-        None
-    }
-}
-
-fn read(path: &std::path::Path) -> HeightGrid {
-    let mut g = cota_io::read_dem(path, &cota_io::ReadOptions::DEFAULT)
-        .unwrap()
-        .grid;
-    if g.void_count() > 0 {
-        use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, VoidPolicy};
-        let opts = FillOptions::DEFAULT.with_policy(VoidPolicy::Fill(FillMethod::Harmonic));
-        fill_voids(&mut g, &opts).unwrap();
-    }
-    g
-}
-
 fn crop(g: &HeightGrid, c0: usize, r0: usize, w: usize, h: usize) -> HeightGrid {
-    let v = (0..w * h).map(|i| g.get(c0 + i % w, r0 + i / w)).collect();
+    let v = cota_fixtures::crop(g.heights(), g.width(), c0, r0, w, h);
     HeightGrid::new(w, h, v, GeoRef::unreferenced(90.0)).unwrap()
 }
 
@@ -87,7 +55,7 @@ fn check(g: &HeightGrid, x: &QuadExtraction, e: f64) {
 
 #[test]
 fn fixture_tile_is_conforming_within_bound_and_restricted() {
-    let g = read(&fixture("S29W072.hgt.zip"));
+    let g = common::tile();
     let qt = QuadTree::build(&g).unwrap();
     let mut last = usize::MAX;
     for e in [0.0, 1.0, 5.0, 20.0, 100.0] {
@@ -100,7 +68,7 @@ fn fixture_tile_is_conforming_within_bound_and_restricted() {
 
 #[test]
 fn crops_of_odd_and_even_sizes_are_conforming() {
-    let g = read(&fixture("S29W072.hgt.zip"));
+    let g = common::tile();
     for (c, r, w, h) in [
         (912, 752, 65, 65),
         (700, 900, 100, 37),
@@ -118,8 +86,10 @@ fn crops_of_odd_and_even_sizes_are_conforming() {
 #[test]
 fn shared_tiles_are_conforming() {
     for rel in ["srtm/N50E011.hgt.zip", "asc/boulder_srtmgl3_240x144.asc"] {
-        let Some(p) = shared(rel) else { continue };
-        let g = read(&p);
+        let Some(p) = cota_fixtures::shared(rel) else {
+            continue;
+        };
+        let g = common::filled(cota_fixtures::read(&p).unwrap());
         let qt = QuadTree::build(&g).unwrap();
         for e in [0.5, 10.0] {
             check(&g, &qt.extract_max_error_m(e).unwrap(), e);
@@ -129,7 +99,7 @@ fn shared_tiles_are_conforming() {
 
 #[test]
 fn tighter_tolerance_gives_more_triangles_on_a_65_crop() {
-    let g = read(&fixture("S29W072.hgt.zip"));
+    let g = common::tile();
     let sub = crop(&g, 912, 752, 65, 65);
     let qt = QuadTree::build(&sub).unwrap();
     let n: Vec<usize> = [0.0, 5.0, 20.0, 80.0]
@@ -187,7 +157,7 @@ fn corner_refinement_forces_neighbours_on_9x9() {
 fn centre_when_needed_is_conforming_and_never_larger() {
     use cota_core::quadtree::QuadOptions;
     use cota_core::MaxVerticalError;
-    let g = read(&fixture("S29W072.hgt.zip"));
+    let g = common::tile();
     let sub = crop(&g, 824, 792, 65, 65);
     let qt = QuadTree::build(&sub).unwrap();
     let opts = QuadOptions::DEFAULT.with_centre_when_needed(true);
@@ -206,7 +176,7 @@ fn centre_when_needed_is_conforming_and_never_larger() {
 #[test]
 fn point_counts_add_up_for_both_hierarchies() {
     use cota_core::{Bitree, ExtractOptions};
-    let g = read(&fixture("S29W072.hgt.zip"));
+    let g = common::tile();
     let sub = crop(&g, 912, 752, 65, 65);
     let bt = Bitree::build(&sub).unwrap();
     let qt = QuadTree::build(&sub).unwrap();
@@ -230,17 +200,7 @@ mod random {
     use proptest::prelude::*;
 
     fn grid(w: usize, h: usize, seed: u64, rough: f32) -> HeightGrid {
-        let mut s = seed | 1;
-        let v = (0..w * h)
-            .map(|i| {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                let (x, y) = ((i % w) as f32, (i / w) as f32);
-                let noise = (s % 1000) as f32 / 1000.0;
-                50.0 * (x * 0.21).sin() * (y * 0.13).cos() + rough * noise
-            })
-            .collect();
+        let v = cota_fixtures::hills_and_noise(w, h, seed, rough);
         HeightGrid::new(w, h, v, GeoRef::unreferenced(10.0)).unwrap()
     }
 

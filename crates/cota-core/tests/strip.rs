@@ -8,9 +8,8 @@
 //! crate-private.)
 #![allow(clippy::unwrap_used, reason = "tests")]
 
-use std::path::PathBuf;
+mod common;
 
-use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::refine::{refine, Mode, RefineOptions};
 use cota_core::strip::{stripify_bitree, stripify_bitree_with, MeshStrip, Strip, StripMethod};
 use cota_core::{
@@ -18,12 +17,7 @@ use cota_core::{
 };
 
 fn real() -> HeightGrid {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/S29W072.hgt.zip");
-    let mut g = cota_io::read_dem(&p, &cota_io::ReadOptions::DEFAULT)
-        .unwrap()
-        .grid;
-    fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
-    g
+    common::tile()
 }
 
 /// The strip has exactly the mesh's triangles, same orientation, each once.
@@ -161,15 +155,7 @@ fn fictitious_real_data() {
 
 /// A rough `w × h` grid: E = 0 keeps (nearly) every unit triangle.
 fn rough(w: usize, h: usize) -> HeightGrid {
-    let heights: Vec<f32> = (0..w * h)
-        .map(|i| {
-            let mut x = i as u64 + 0x9E37_79B9_7F4A_7C15;
-            x ^= x >> 31;
-            x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            x ^= x >> 29;
-            (x % 100_000) as f32 * 0.01
-        })
-        .collect();
+    let heights = cota_fixtures::rough_terrain(w, h, 1);
     HeightGrid::new(w, h, heights, GeoRef::unreferenced(30.0)).unwrap()
 }
 

@@ -25,7 +25,7 @@ const BIG: usize = 3601;
 
 /// The 1201² big-endian samples of the bundled fixture.
 fn fixture_samples() -> Vec<u8> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/S29W072.hgt.zip");
+    let path = cota_fixtures::fixture(cota_fixtures::BUNDLED_TILE);
     let file = std::fs::File::open(&path).expect("fixtures/S29W072.hgt.zip");
     let mut zip = zip::ZipArchive::new(file).unwrap();
     let mut data = Vec::new();

@@ -79,3 +79,39 @@ pub(crate) fn malformed(expected: impl fmt::Display, found: impl fmt::Display) -
         found: found.to_string(),
     }
 }
+
+/// Maps a dimension check failure to the reader's error.
+pub(crate) fn too_large(e: cota_core::GridError) -> ReadErrorKind {
+    match e {
+        cota_core::GridError::TooLarge { width, height, max } => {
+            ReadErrorKind::TooLarge { width, height, max }
+        }
+        other => ReadErrorKind::Grid(other),
+    }
+}
+
+/// A failure of [`read_region`](crate::read_region): one file, the join, or
+/// the void fill.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RegionError {
+    /// No file was given.
+    #[error("expected at least one DEM file, found none")]
+    NoFiles,
+    /// A file could not be read (the first failing one, in input order).
+    #[error(transparent)]
+    Read(#[from] ReadError),
+    /// The files could not be joined into one grid. (The message names the
+    /// files; the mosaic's own error is the [`source`](std::error::Error::source).)
+    #[error("mosaicking {files}")]
+    Mosaic {
+        /// The files, joined with ", ".
+        files: String,
+        /// Why.
+        source: cota_core::grid::mosaic::MosaicError,
+    },
+    /// The voids could not be filled (or the policy refuses them); the fill's
+    /// own error is the [`source`](std::error::Error::source).
+    #[error("void policy")]
+    Fill(#[source] cota_core::grid::voids::VoidError),
+}

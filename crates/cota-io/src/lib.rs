@@ -5,21 +5,21 @@
 //!   `tiff` crate), PNG terrain encodings (terrain-RGB, Terrarium, 16-bit gray)
 //!   and ESRI ASCII grids. The format is detected from the content, the file name
 //!   only breaking ties.
+//! * [`read_region`]: several files read in parallel, joined into one grid
+//!   (`cota_core::grid::mosaic`) and their voids filled (`cota_core::grid::voids`).
 //! * Mesh writers (OBJ, PLY, STL, GLB), each written atomically.
 //!
 //! Every error names the file and says what was expected and what was found.
 #![warn(missing_docs)]
 
+pub mod dem;
 pub mod error;
-pub mod read;
-
-mod asc;
-mod geotiff;
-mod png;
-mod srtm;
-
 pub mod export;
+pub mod read;
 pub mod stream_file;
 
-pub use error::{ReadError, ReadErrorKind};
-pub use read::{read_dem, read_dem_bytes, DataType, Dem, Format, PngEncoding, ReadOptions};
+pub use dem::{DataType, Dem, DemSummary, Format, PngEncoding, ReadOptions};
+pub use error::{ReadError, ReadErrorKind, RegionError};
+pub use read::{
+    read_dem, read_dem_bytes, read_region, read_region_with_progress, Region, RegionOptions,
+};

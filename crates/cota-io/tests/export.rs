@@ -1039,18 +1039,13 @@ fn options_defaults() {
 // Real data
 
 fn fixture() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/S29W072.hgt.zip")
+    cota_fixtures::fixture(cota_fixtures::BUNDLED_TILE)
 }
 
 /// A `size`×`size` crop of `grid` at (`c0`, `r0`) with its georeference; voids
 /// are filled with the crop's lowest height.
 fn crop(grid: &HeightGrid, c0: usize, r0: usize, size: usize) -> HeightGrid {
-    let mut h = Vec::with_capacity(size * size);
-    for r in r0..r0 + size {
-        for c in c0..c0 + size {
-            h.push(grid.get(c, r));
-        }
-    }
+    let mut h = cota_fixtures::crop(grid.heights(), grid.width(), c0, r0, size, size);
     let lo = h
         .iter()
         .copied()

@@ -18,7 +18,7 @@ use cota_io::{read_dem, ReadOptions};
 /// The bundled SRTM tile, voids filled and rounded to whole metres (SRTM's
 /// own lattice), so the default 1 m quantum is lossless.
 fn s29() -> HeightGrid {
-    let path = workspace_root().join("fixtures/S29W072.hgt.zip");
+    let path = cota_fixtures::fixture(cota_fixtures::BUNDLED_TILE);
     let mut g = read_dem(&path, &ReadOptions::DEFAULT).unwrap().grid;
     fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
     for h in g.heights_mut() {

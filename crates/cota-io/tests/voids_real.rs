@@ -4,6 +4,8 @@
 //! 4180). After a harmonic fill no NaN remains, every filled sample lies within
 //! the range of its void's border (maximum principle), and the default tolerance
 //! is met against a much tighter solve. Times are printed, not asserted.
+//! (These tests stay in cota-io: two of their grids are GeoTIFFs, which only
+//! cota-io reads; `cota-fixtures` reads SRTM and ASCII grids only.)
 
 #![allow(clippy::unwrap_used, clippy::panic, reason = "tests fail loudly")]
 

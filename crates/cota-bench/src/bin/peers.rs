@@ -358,7 +358,7 @@ fn main() {
     let args = parse_args();
     let cases = load_cases(|msg| eprintln!("{msg}"));
     if cases.is_empty() {
-        eprintln!("no benchmark grid found; set COTA_DATA_DIR to the shared data directory");
+        eprintln!("no benchmark grid found; set COTA_SHARED_DATA to the shared data directory");
         std::process::exit(1);
     }
     println!("# cota vs martini vs delatin at equal true error\n");

@@ -792,18 +792,7 @@ mod tests {
 
     /// Smooth hills plus seeded noise, so that errors vary across levels.
     fn terrain(w: usize, h: usize, seed: u64) -> HeightGrid {
-        let mut s = seed | 1;
-        let v = (0..w * h)
-            .map(|i| {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                let (x, y) = ((i % w) as f32, (i / w) as f32);
-                80.0 * (x * 0.031).sin() * (y * 0.047).cos()
-                    + 20.0 * (x * 0.19 + y * 0.07).sin()
-                    + (s % 1000) as f32 / 200.0
-            })
-            .collect();
+        let v = cota_fixtures::hills_and_noise(w, h, seed, 5.0);
         HeightGrid::new(w, h, v, GeoRef::unreferenced(10.0)).unwrap()
     }
 

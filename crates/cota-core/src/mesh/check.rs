@@ -46,6 +46,10 @@ pub struct CheckOptions {
     /// hierarchy diagonal, both ends being mesh vertices (their mesh heights
     /// are used). Default: false.
     pub allow_fictitious: bool,
+    /// Largest difference allowed between a vertex's height and its sample's,
+    /// metres: 0 requires the sample's height bit for bit; a quantized output
+    /// (heights on a step `s`) needs `s/2`. Default: 0.
+    pub height_tolerance_m: f64,
 }
 
 impl CheckOptions {
@@ -54,6 +58,7 @@ impl CheckOptions {
         max_error_m: None,
         conforming: true,
         allow_fictitious: false,
+        height_tolerance_m: 0.0,
     };
 
     /// Conforming, true heights, and `|Δz| ≤ max_error_m` everywhere.
@@ -62,6 +67,7 @@ impl CheckOptions {
             max_error_m: Some(max_error_m),
             conforming: true,
             allow_fictitious: false,
+            height_tolerance_m: 0.0,
         }
     }
 
@@ -74,6 +80,12 @@ impl CheckOptions {
     /// Sets [`CheckOptions::conforming`].
     pub const fn with_conforming(mut self, yes: bool) -> Self {
         self.conforming = yes;
+        self
+    }
+
+    /// Sets [`CheckOptions::height_tolerance_m`].
+    pub const fn with_height_tolerance_m(mut self, tolerance_m: f64) -> Self {
+        self.height_tolerance_m = tolerance_m;
         self
     }
 
@@ -353,7 +365,8 @@ fn check_vertices(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &m
         }
         owner[i] = k as u32;
         let truth = grid.heights()[i];
-        if v.z_m.to_bits() != truth.to_bits() && !opts.allow_fictitious {
+        let within = (f64::from(v.z_m) - f64::from(truth)).abs() <= opts.height_tolerance_m;
+        if v.z_m.to_bits() != truth.to_bits() && !opts.allow_fictitious && !within {
             found.push(Violation::WrongHeight {
                 vertex: k,
                 col: v.col,

@@ -49,7 +49,7 @@ const BUFFER_BYTES: usize = 1 << 20;
 /// ```
 pub fn write_atomically<F>(path: &Path, encode: F) -> Result<(), WriteError>
 where
-    F: FnOnce(&mut dyn Write) -> Result<(), ExportError>,
+    F: FnOnce(&mut (dyn Write + Send)) -> Result<(), ExportError>,
 {
     if path.is_dir() {
         return Err(WriteError::io(path, is_a_directory()));

@@ -51,6 +51,15 @@ impl Frame {
         }
     }
 
+    /// The frame's horizontal axes as affine maps of the sample position:
+    /// `x = a[0]·col + a[1]`, `y = b[0]·row + b[1]` (z is the height itself).
+    pub(crate) fn axes(&self) -> ([f64; 2], [f64; 2]) {
+        match self.coords {
+            Coords::LocalMetres => ([self.dx, 0.0], [-self.dy, self.last_row * self.dy]),
+            Coords::Grid => ([1.0, 0.0], [1.0, 0.0]),
+        }
+    }
+
     /// Output position of a mesh vertex.
     #[inline]
     pub(crate) fn vertex(&self, v: &MeshVertex) -> [f64; 3] {

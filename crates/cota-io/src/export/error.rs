@@ -70,6 +70,14 @@ pub enum ExportError {
         /// Strip triangles (with orientation) not in the mesh.
         foreign: usize,
     },
+    /// Two options that cannot go together.
+    #[error("expected {expected}, found {found}")]
+    Incompatible {
+        /// What would work.
+        expected: &'static str,
+        /// What was asked.
+        found: &'static str,
+    },
 }
 
 /// A failure to write a mesh file. Displays on one line and names the file.

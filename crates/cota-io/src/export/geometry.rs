@@ -11,9 +11,8 @@
 //!   of the stretched shape in grid units). A vertex that no triangle uses, or
 //!   whose faces cancel out, gets (0, 0, 1).
 
-use std::io::Write;
-
 use cota_core::Mesh;
+use rayon::prelude::*;
 
 use super::coords::Frame;
 use super::error::ExportError;
@@ -28,26 +27,48 @@ pub(crate) fn check_mesh(mesh: &Mesh) -> Result<(), ExportError> {
     if mesh.triangles.is_empty() {
         return Err(ExportError::EmptyMesh);
     }
+    // The common case first, in parallel and vectorisable: the largest index
+    // and whether every height is finite. Only a failing mesh is searched for
+    // its first offender.
     let count = mesh.vertices.len();
-    for (triangle, t) in mesh.triangles.iter().enumerate() {
-        if let Some(&index) = t.iter().find(|&&i| i as usize >= count) {
-            return Err(ExportError::VertexOutOfRange {
-                triangle,
-                index,
-                count,
-            });
-        }
+    let largest = mesh
+        .triangles
+        .par_chunks(CHECK_CHUNK)
+        .map(|c| c.as_flattened().iter().copied().max().unwrap_or(0))
+        .max()
+        .unwrap_or(0);
+    if largest as usize >= count {
+        let (triangle, index) = mesh
+            .triangles
+            .iter()
+            .enumerate()
+            .find_map(|(k, t)| t.iter().find(|&&i| i as usize >= count).map(|&i| (k, i)))
+            .unwrap_or((0, largest));
+        return Err(ExportError::VertexOutOfRange {
+            triangle,
+            index,
+            count,
+        });
     }
-    if let Some((vertex, v)) = mesh
+    let finite = mesh
         .vertices
-        .iter()
-        .enumerate()
-        .find(|(_, v)| !v.z_m.is_finite())
-    {
-        return Err(ExportError::NonFiniteHeight { vertex, z_m: v.z_m });
+        .par_chunks(CHECK_CHUNK)
+        .all(|c| c.iter().fold(true, |ok, v| ok & v.z_m.is_finite()));
+    if !finite {
+        if let Some((vertex, v)) = mesh
+            .vertices
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.z_m.is_finite())
+        {
+            return Err(ExportError::NonFiniteHeight { vertex, z_m: v.z_m });
+        }
     }
     Ok(())
 }
+
+/// Records per parallel task of [`check_mesh`].
+const CHECK_CHUNK: usize = 1 << 16;
 
 /// `(b − a) × (c − a)`: normal of the counter-clockwise triangle `a b c`,
 /// of length twice its area.
@@ -95,32 +116,65 @@ pub(crate) fn triangle_points(mesh: &Mesh, frame: &Frame, t: [u32; 3]) -> [[f64;
 /// Area-weighted unit vertex normals of `mesh` in `frame` (see the module doc).
 /// Call [`check_mesh`] first: indices must be in range.
 pub(crate) fn vertex_normals(mesh: &Mesh, frame: &Frame) -> Vec<[f32; 3]> {
-    let mut sum = vec![[0.0f64; 3]; mesh.vertices.len()];
-    for &t in &mesh.triangles {
-        let t = frame.orient(t);
-        let n = face_normal(triangle_points(mesh, frame, t));
-        for i in t {
-            let s = &mut sum[i as usize];
-            s[0] += n[0];
-            s[1] += n[1];
-            s[2] += n[2];
-        }
-    }
-    sum.into_iter()
-        .map(|s| normalize(s).map_or([0.0, 0.0, 1.0], to_f32))
-        .collect()
+    let mut out = vec![[0.0f32; 3]; mesh.vertices.len()];
+    for_each_normal_sum(mesh, frame, &mut out, |s| {
+        normalize(s).map_or([0.0, 0.0, 1.0], to_f32)
+    });
+    out
 }
 
-/// Little-endian f32s.
+/// Sets `out[v] = finish(sum)` for every vertex `v`, where `sum` is the sum of
+/// the face normals of the triangles that use `v` (once per corner), added in
+/// triangle order. `out` has one entry per vertex.
+///
+/// In parallel and bit-identical to the sequential loop: the vertices are cut
+/// into one contiguous range per thread, and each thread walks every
+/// triangle in order, adding the face normals of those with a corner in its
+/// range. So each vertex sees the same additions in the same order (f64
+/// addition does not commute bit for bit), at the cost of each thread reading
+/// the whole index list.
+pub(crate) fn for_each_normal_sum<T, F>(mesh: &Mesh, frame: &Frame, out: &mut [T], finish: F)
+where
+    T: Send,
+    F: Fn([f64; 3]) -> T + Sync,
+{
+    let parts = rayon::current_num_threads().clamp(1, 64);
+    let per_part = out.len().div_ceil(parts).max(MIN_VERTICES_PER_PART);
+    out.par_chunks_mut(per_part)
+        .enumerate()
+        .for_each(|(k, out)| {
+            let v0 = k * per_part;
+            let range = v0 as u64..(v0 + out.len()) as u64;
+            let mut sum = vec![[0.0f64; 3]; out.len()];
+            for &t in &mesh.triangles {
+                if !t.iter().any(|&i| range.contains(&u64::from(i))) {
+                    continue;
+                }
+                let t = frame.orient(t);
+                let n = face_normal(triangle_points(mesh, frame, t));
+                for i in t {
+                    if range.contains(&u64::from(i)) {
+                        let s = &mut sum[i as usize - v0];
+                        s[0] += n[0];
+                        s[1] += n[1];
+                        s[2] += n[2];
+                    }
+                }
+            }
+            for (o, s) in out.iter_mut().zip(sum) {
+                *o = finish(s);
+            }
+        });
+}
+
+/// Fewest vertices worth a thread of their own in [`for_each_normal_sum`]
+/// (each part reads every triangle).
+const MIN_VERTICES_PER_PART: usize = 1 << 15;
+
+/// Appends little-endian f32s to `buf`.
 #[inline]
-pub(crate) fn write_f32s<W: Write>(w: &mut W, v: &[f32]) -> Result<(), ExportError> {
-    let mut buf = [0u8; 12];
-    for chunk in v.chunks(3) {
-        let n = 4 * chunk.len();
-        for (k, x) in chunk.iter().enumerate() {
-            buf[4 * k..4 * k + 4].copy_from_slice(&x.to_le_bytes());
-        }
-        w.write_all(&buf[..n])?;
+pub(crate) fn push_f32s(buf: &mut Vec<u8>, v: &[f32]) {
+    for x in v {
+        buf.extend_from_slice(&x.to_le_bytes());
     }
-    Ok(())
 }

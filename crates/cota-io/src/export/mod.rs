@@ -58,6 +58,13 @@
 //!
 //! Every writer first checks the mesh: at least one triangle, indices in
 //! range, finite heights.
+//!
+//! **Parallel encoding**: each writer runs on rayon's pool; records (lines,
+//! vertices, triangles, facets) are encoded in chunks on every thread and
+//! written in order, the next batch encoded while one is written (`par`), and
+//! vertex normals are summed in parallel in the same order as a sequential
+//! loop. The bytes are those of a sequential writer, whatever the thread
+//! count. So the writers take `W: Write + Send`.
 
 mod atomic;
 mod coords;
@@ -66,7 +73,9 @@ mod geometry;
 mod glb;
 mod obj;
 mod options;
+mod par;
 mod ply;
+mod quantize;
 mod solid;
 mod stl;
 
@@ -78,10 +87,11 @@ use cota_core::{HeightGrid, Mesh};
 
 pub use atomic::write_atomically;
 pub use error::{ExportError, WriteError};
-pub use glb::{write_glb, write_glb_strip};
+pub use glb::{write_glb, write_glb_quantized, write_glb_strip};
 pub use obj::write_obj;
 pub use options::{Coords, ExportOptions, IndexWidth};
 pub use ply::write_ply;
+pub use quantize::GlbQuantization;
 pub use stl::write_stl;
 
 /// A mesh file format.
@@ -176,7 +186,7 @@ pub fn write_mesh_as(
 ///
 /// # Errors
 /// As the per-format writers.
-pub fn write_mesh_to<W: Write>(
+pub fn write_mesh_to<W: Write + Send>(
     w: W,
     format: MeshFormat,
     mesh: &Mesh,

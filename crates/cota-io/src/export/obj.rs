@@ -13,8 +13,8 @@
 //! nothing is lost beyond the f32 heights themselves. In grid coordinates x
 //! and y are whole numbers. Normals are written as f32.
 //!
-//! Numbers are formatted with `std`'s shortest round-trip float formatting
-//! straight into the buffered writer: no per-vertex allocation.
+//! Numbers are formatted with `std`'s shortest round-trip float formatting,
+//! chunks of lines in parallel (each into its own buffer), written in order.
 
 use std::io::Write;
 
@@ -24,6 +24,7 @@ use super::coords::{Frame, GeoInfo};
 use super::error::ExportError;
 use super::geometry::{check_mesh, vertex_normals};
 use super::options::ExportOptions;
+use super::par::{on_pool, write_chunks};
 
 /// Horizontal positions are rounded to this many steps per metre (0.1 mm).
 const XY_STEPS_PER_UNIT: f64 = 1e4;
@@ -33,7 +34,17 @@ const XY_STEPS_PER_UNIT: f64 = 1e4;
 ///
 /// # Errors
 /// [`ExportError::Io`] from `w`; the mesh checks of [`ExportError`].
-pub fn write_obj<W: Write>(
+pub fn write_obj<W: Write + Send>(
+    w: W,
+    mesh: &Mesh,
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+) -> Result<(), ExportError> {
+    on_pool(|| encode_obj(w, mesh, grid, opts))
+}
+
+/// The body of [`write_obj`], on the pool.
+fn encode_obj<W: Write + Send>(
     mut w: W,
     mesh: &Mesh,
     grid: &HeightGrid,
@@ -72,43 +83,58 @@ fn round_xy(x: f64) -> f64 {
 }
 
 /// `v x y z` lines.
-fn write_vertices<W: Write>(w: &mut W, mesh: &Mesh, frame: &Frame) -> Result<(), ExportError> {
-    for v in &mesh.vertices {
-        let [x, y, _] = frame.vertex(v);
-        // Adding 0.0 turns a -0.0 into 0.0.
-        writeln!(
-            w,
-            "v {} {} {}",
-            round_xy(x) + 0.0,
-            round_xy(y) + 0.0,
-            v.z_m + 0.0
-        )?;
-    }
-    Ok(())
+fn write_vertices<W: Write + Send>(
+    w: &mut W,
+    mesh: &Mesh,
+    frame: &Frame,
+) -> Result<(), ExportError> {
+    write_chunks(w, &mesh.vertices, 32, |_, chunk, buf| {
+        for v in chunk {
+            let [x, y, _] = frame.vertex(v);
+            // Adding 0.0 turns a -0.0 into 0.0.
+            writeln!(
+                buf,
+                "v {} {} {}",
+                round_xy(x) + 0.0,
+                round_xy(y) + 0.0,
+                v.z_m + 0.0
+            )?;
+        }
+        Ok(())
+    })
 }
 
 /// `vn nx ny nz` lines.
-fn write_normals<W: Write>(w: &mut W, mesh: &Mesh, frame: &Frame) -> Result<(), ExportError> {
-    for n in vertex_normals(mesh, frame) {
-        writeln!(w, "vn {} {} {}", n[0], n[1], n[2])?;
-    }
-    Ok(())
+fn write_normals<W: Write + Send>(
+    w: &mut W,
+    mesh: &Mesh,
+    frame: &Frame,
+) -> Result<(), ExportError> {
+    let normals = vertex_normals(mesh, frame);
+    write_chunks(w, &normals, 40, |_, chunk, buf| {
+        for n in chunk {
+            writeln!(buf, "vn {} {} {}", n[0], n[1], n[2])?;
+        }
+        Ok(())
+    })
 }
 
 /// `f` lines, 1-based, in the frame's winding.
-fn write_faces<W: Write>(
+fn write_faces<W: Write + Send>(
     w: &mut W,
     mesh: &Mesh,
     frame: &Frame,
     normals: bool,
 ) -> Result<(), ExportError> {
-    for &t in &mesh.triangles {
-        let [a, b, c] = frame.orient(t).map(|i| u64::from(i) + 1);
-        if normals {
-            writeln!(w, "f {a}//{a} {b}//{b} {c}//{c}")?;
-        } else {
-            writeln!(w, "f {a} {b} {c}")?;
+    write_chunks(w, &mesh.triangles, 24, |_, chunk, buf| {
+        for &t in chunk {
+            let [a, b, c] = frame.orient(t).map(|i| u64::from(i) + 1);
+            if normals {
+                writeln!(buf, "f {a}//{a} {b}//{b} {c}//{c}")?;
+            } else {
+                writeln!(buf, "f {a} {b} {c}")?;
+            }
         }
-    }
-    Ok(())
+        Ok(())
+    })
 }

@@ -76,6 +76,15 @@ pub struct ExportOptions {
     /// OBJ and PLY: also write per-vertex normals (OBJ `vn`, PLY `nx ny nz`).
     /// GLB always has normals and STL always facet normals. Default: `false`.
     pub normals: bool,
+    /// GLB only: write quantized attributes (`KHR_mesh_quantization`): 16-bit
+    /// integer positions (columns and rows exact, heights on a power-of-two
+    /// step), 8-bit normals and 16-bit indices, in primitives of at most
+    /// 65 535 vertices; about half the size of the float layout. Heights move
+    /// by at most half the step, which
+    /// [`GlbQuantization::z_step_m`](super::GlbQuantization::z_step_m)
+    /// reports. Ignored by the other formats; [`ExportOptions::index_width`]
+    /// does not apply. Default: `false`.
+    pub quantize: bool,
 }
 
 impl ExportOptions {
@@ -85,6 +94,7 @@ impl ExportOptions {
         base_m: None,
         index_width: IndexWidth::Auto,
         normals: false,
+        quantize: false,
     };
 
     /// Sets [`ExportOptions::coords`].
@@ -108,6 +118,12 @@ impl ExportOptions {
     /// Sets [`ExportOptions::normals`].
     pub const fn with_normals(mut self, normals: bool) -> Self {
         self.normals = normals;
+        self
+    }
+
+    /// Sets [`ExportOptions::quantize`].
+    pub const fn with_quantize(mut self, quantize: bool) -> Self {
+        self.quantize = quantize;
         self
     }
 }

@@ -30,8 +30,9 @@ use cota_core::{HeightGrid, Mesh};
 
 use super::coords::{Frame, GeoInfo};
 use super::error::ExportError;
-use super::geometry::{check_mesh, to_f32, vertex_normals, write_f32s};
+use super::geometry::{check_mesh, push_f32s, to_f32, vertex_normals};
 use super::options::ExportOptions;
+use super::par::{on_pool, write_chunks};
 
 /// Writes `mesh` as binary little-endian PLY to `w` (wrap files in a
 /// `BufWriter`, as [`write_mesh`](super::write_mesh) does).
@@ -39,7 +40,17 @@ use super::options::ExportOptions;
 /// # Errors
 /// [`ExportError::Io`] from `w`; the mesh checks of [`ExportError`];
 /// [`ExportError::TooLarge`] beyond 2^31−1 vertices (PLY `int` indices).
-pub fn write_ply<W: Write>(
+pub fn write_ply<W: Write + Send>(
+    w: W,
+    mesh: &Mesh,
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+) -> Result<(), ExportError> {
+    on_pool(|| encode_ply(w, mesh, grid, opts))
+}
+
+/// The body of [`write_ply`], on the pool.
+fn encode_ply<W: Write + Send>(
     mut w: W,
     mesh: &Mesh,
     grid: &HeightGrid,
@@ -96,31 +107,33 @@ fn write_header<W: Write>(
 }
 
 /// Vertex records: x y z [nx ny nz] as little-endian f32.
-fn write_vertices<W: Write>(
+fn write_vertices<W: Write + Send>(
     w: &mut W,
     mesh: &Mesh,
     frame: &Frame,
     normals: &[[f32; 3]],
 ) -> Result<(), ExportError> {
-    for (i, v) in mesh.vertices.iter().enumerate() {
-        write_f32s(w, &to_f32(frame.vertex(v)))?;
-        if let Some(n) = normals.get(i) {
-            write_f32s(w, n)?;
+    write_chunks(w, &mesh.vertices, 24, |first, chunk, buf| {
+        for (k, v) in chunk.iter().enumerate() {
+            push_f32s(buf, &to_f32(frame.vertex(v)));
+            if let Some(n) = normals.get(first + k) {
+                push_f32s(buf, n);
+            }
         }
-    }
-    Ok(())
+        Ok(())
+    })
 }
 
 /// Face records: count byte 3 and three little-endian i32 indices.
-fn write_faces<W: Write>(w: &mut W, mesh: &Mesh, frame: &Frame) -> Result<(), ExportError> {
-    let mut rec = [0u8; 13];
-    rec[0] = 3;
-    for &t in &mesh.triangles {
-        for (k, i) in frame.orient(t).into_iter().enumerate() {
-            // Fits: check_int_indices bounds every index below i32::MAX.
-            rec[1 + 4 * k..5 + 4 * k].copy_from_slice(&i.to_le_bytes());
+fn write_faces<W: Write + Send>(w: &mut W, mesh: &Mesh, frame: &Frame) -> Result<(), ExportError> {
+    write_chunks(w, &mesh.triangles, 13, |_, chunk, buf| {
+        for &t in chunk {
+            buf.push(3);
+            for i in frame.orient(t) {
+                // Fits: check_int_indices bounds every index below i32::MAX.
+                buf.extend_from_slice(&i.to_le_bytes());
+            }
         }
-        w.write_all(&rec)?;
-    }
-    Ok(())
+        Ok(())
+    })
 }

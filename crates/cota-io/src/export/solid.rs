@@ -23,6 +23,7 @@
 //! surface, which keeps shared vertices bit-identical.
 
 use cota_core::Mesh;
+use rayon::slice::ParallelSliceMut;
 
 use super::error::ExportError;
 
@@ -121,7 +122,7 @@ fn boundary_edges(mesh: &Mesh) -> Result<Vec<[u32; 2]>, ExportError> {
             keys.push(edge_key(a, b));
         }
     }
-    keys.sort_unstable();
+    keys.par_sort_unstable();
     let mut boundary = Vec::new();
     for run in keys.chunk_by(|x, y| x >> 1 == y >> 1) {
         match run {

@@ -22,8 +22,9 @@ use cota_core::{HeightGrid, Mesh};
 
 use super::coords::{Frame, GeoInfo};
 use super::error::ExportError;
-use super::geometry::{check_mesh, to_f32, triangle_points, unit_face_normal_f32};
+use super::geometry::{check_mesh, push_f32s, to_f32, triangle_points, unit_face_normal_f32};
 use super::options::ExportOptions;
+use super::par::{on_pool, write_chunks};
 use super::solid::{closing_triangles, GridPoint};
 
 /// Writes `mesh` as binary STL to `w` (wrap files in a `BufWriter`, as
@@ -33,7 +34,17 @@ use super::solid::{closing_triangles, GridPoint};
 /// [`ExportError::Io`] from `w`; the mesh checks of [`ExportError`];
 /// [`ExportError::BaseNotBelow`] or [`ExportError::NotClosable`] with
 /// [`ExportOptions::base_m`]; [`ExportError::TooLarge`] beyond 2^32−1 facets.
-pub fn write_stl<W: Write>(
+pub fn write_stl<W: Write + Send>(
+    w: W,
+    mesh: &Mesh,
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+) -> Result<(), ExportError> {
+    on_pool(|| encode_stl(w, mesh, grid, opts))
+}
+
+/// The body of [`write_stl`], on the pool.
+fn encode_stl<W: Write + Send>(
     mut w: W,
     mesh: &Mesh,
     grid: &HeightGrid,
@@ -48,13 +59,19 @@ pub fn write_stl<W: Write>(
     let frame = Frame::new(grid, opts.coords);
     w.write_all(&GeoInfo::new(grid, opts.coords).stl_header())?;
     w.write_all(&count.to_le_bytes())?;
-    for &t in &mesh.triangles {
-        write_facet(&mut w, triangle_points(mesh, &frame, frame.orient(t)))?;
-    }
-    for t in closing {
-        let p = t.map(|g: GridPoint| frame.point(g[0], g[1], g[2]));
-        write_facet(&mut w, frame.orient(p))?;
-    }
+    write_chunks(&mut w, &mesh.triangles, FACET_BYTES, |_, chunk, buf| {
+        for &t in chunk {
+            push_facet(buf, triangle_points(mesh, &frame, frame.orient(t)));
+        }
+        Ok(())
+    })?;
+    write_chunks(&mut w, &closing, FACET_BYTES, |_, chunk, buf| {
+        for t in chunk {
+            let p = t.map(|g: GridPoint| frame.point(g[0], g[1], g[2]));
+            push_facet(buf, frame.orient(p));
+        }
+        Ok(())
+    })?;
     w.flush()?;
     Ok(())
 }
@@ -68,14 +85,15 @@ fn facet_count(n: usize) -> Result<u32, ExportError> {
     })
 }
 
-/// One 50-byte facet record.
-fn write_facet<W: Write>(w: &mut W, p: [[f64; 3]; 3]) -> Result<(), ExportError> {
-    let mut rec = [0u8; 50];
+/// Bytes of a facet record.
+const FACET_BYTES: usize = 50;
+
+/// Appends one 50-byte facet record: the unit normal, the three vertices and
+/// a zero attribute byte count.
+fn push_facet(buf: &mut Vec<u8>, p: [[f64; 3]; 3]) {
     let n = unit_face_normal_f32(p);
-    let vectors = [n, to_f32(p[0]), to_f32(p[1]), to_f32(p[2])];
-    for (k, x) in vectors.iter().flatten().enumerate() {
-        rec[4 * k..4 * k + 4].copy_from_slice(&x.to_le_bytes());
+    for v in [n, to_f32(p[0]), to_f32(p[1]), to_f32(p[2])] {
+        push_f32s(buf, &v);
     }
-    w.write_all(&rec)?;
-    Ok(())
+    buf.extend_from_slice(&[0, 0]);
 }

@@ -1,5 +1,6 @@
 //! Helpers shared by the cota-io integration tests: where the shared real
-//! DEMs and the bundled fixtures are, and small builders of test files.
+//! DEMs and the bundled fixtures are (from `cota-fixtures`), and small
+//! builders of test files.
 //!
 //! The shared data directory is `$COTA_SHARED_DATA` when set, else
 //! `<workspace root>/../shared/data`. Tests that need it call
@@ -10,27 +11,19 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-/// The cargo workspace root (two levels above this crate).
+/// The cargo workspace root.
 pub fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+    cota_fixtures::workspace_root()
 }
 
 /// The shared data directory, or `None` (after printing why) when absent.
 pub fn shared_data() -> Option<PathBuf> {
-    let dir = std::env::var_os("COTA_SHARED_DATA")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| workspace_root().join("../shared/data"));
-    if dir.is_dir() {
-        Some(dir)
-    } else {
-        eprintln!("skipped: shared data not found at {}", dir.display());
-        None
-    }
+    cota_fixtures::shared_data()
 }
 
 /// A file of the bundled fixtures directory.
 pub fn fixture(name: &str) -> PathBuf {
-    workspace_root().join("fixtures").join(name)
+    cota_fixtures::fixture(name)
 }
 
 /// Writes `bytes` to `dir/name` and returns the path.

@@ -83,10 +83,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         }
     }
     if files.is_empty() {
-        files.push(PathBuf::from(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../fixtures/S29W072.hgt.zip"
-        )));
+        files.push(cota_fixtures::fixture(cota_fixtures::BUNDLED_TILE));
     }
     let mut rows = Vec::new();
     if !json_out {

@@ -31,9 +31,8 @@ use std::path::Path;
 use cota_core::grid::check_dimensions;
 use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
 
-use crate::error::{malformed, ReadErrorKind};
-use crate::read::{DataType, Dem, Format, ReadOptions};
-use crate::srtm::too_large;
+use crate::dem::{DataType, Dem, Format, ReadOptions};
+use crate::error::{malformed, too_large, ReadErrorKind};
 
 /// Decodes an ESRI ASCII grid.
 pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
@@ -481,8 +480,8 @@ mod test {
         .unwrap();
         assert_eq!(d.grid.heights(), &[5.0]);
         assert_eq!(
-            crate::read::sniff(b"\xef\xbb\xbfNCOLS 1"),
-            crate::read::Sniffed::Ascii
+            super::super::sniff::sniff(b"\xef\xbb\xbfNCOLS 1"),
+            super::super::sniff::Sniffed::Ascii
         );
     }
 

@@ -9,30 +9,15 @@
 
 mod common;
 
-use std::path::Path;
 use std::time::Instant;
 
-use common::shared_data;
 use cota_core::grid::mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy};
 use cota_core::grid::voids::{fill_voids, FillOptions};
 use cota_core::{GeoRef, GridError, HeightGrid};
-use cota_io::{read_dem, ReadOptions};
-
-fn read(path: &Path) -> HeightGrid {
-    read_dem(path, &ReadOptions::DEFAULT)
-        .unwrap_or_else(|e| panic!("{e}"))
-        .grid
-}
 
 /// Reads the named SRTM tiles, or `None` when the shared data is absent.
 fn tiles(names: &[&str]) -> Option<Vec<HeightGrid>> {
-    let data = shared_data()?;
-    Some(
-        names
-            .iter()
-            .map(|n| read(&data.join("srtm").join(n)))
-            .collect(),
-    )
+    names.iter().map(|n| common::shared_srtm(n)).collect()
 }
 
 fn same(a: f32, b: f32) -> bool {

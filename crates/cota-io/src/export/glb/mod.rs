@@ -1,9 +1,7 @@
-//! Binary glTF 2.0 (GLB) writer; the JSON is built with the `gltf-json` crate.
-//!
-//! Container (glTF 2.0 spec, "GLB File Format Specification"): a 12-byte
-//! header (magic `glTF`, version 2, total length), a JSON chunk (type `JSON`,
-//! padded with spaces to a multiple of 4 bytes) and a BIN chunk (type `BIN\0`,
-//! padded with zeros to a multiple of 4), all little-endian.
+//! Binary glTF 2.0 (GLB) writer; the JSON is built with the `gltf-json` crate,
+//! the container is written by `container` (header, JSON chunk, BIN chunk).
+//! With [`ExportOptions::quantize`] the layout is `quantized`'s instead
+//! (`KHR_mesh_quantization`); what follows is the default, float layout.
 //!
 //! Content: one scene, one node, one mesh with one primitive, mode TRIANGLES
 //! (the default, so not spelled out), one material (grey, non-metallic,
@@ -35,31 +33,26 @@ use std::io::Write;
 
 use cota_core::{HeightGrid, Mesh};
 use gltf_json as json;
-use json::accessor::{ComponentType, GenericComponentType, Type};
+use json::accessor::{ComponentType, Type};
 use json::buffer::Target;
-use json::material::{PbrBaseColorFactor, PbrMetallicRoughness, StrengthFactor};
 use json::mesh::{Mode, Primitive, Semantic};
-use json::scene::UnitQuaternion;
-use json::validation::{Checked, USize64};
-use json::{Accessor, Index};
+use json::validation::Checked;
+use json::Index;
+use rayon::prelude::*;
 
+use self::container::{
+    accessor, asset, buffer, terrain_material, view, write_container, z_up_to_y_up, WithBounds,
+};
 use super::coords::{Frame, GeoInfo};
 use super::error::ExportError;
-use super::geometry::{check_mesh, to_f32, vertex_normals, write_f32s};
+use super::geometry::{check_mesh, push_f32s, to_f32, vertex_normals};
 use super::options::{ExportOptions, IndexWidth};
+use super::par::{on_pool, write_chunks};
+use super::quantize::GlbQuantization;
 
-/// `glTF` as a little-endian u32.
-const MAGIC: u32 = 0x4654_6C67;
-/// Container version.
-const VERSION: u32 = 2;
-/// Chunk type `JSON`.
-const CHUNK_JSON: u32 = 0x4E4F_534A;
-/// Chunk type `BIN\0`.
-const CHUNK_BIN: u32 = 0x004E_4942;
-/// Bytes of the file header and of a chunk header.
-const HEADER_BYTES: u64 = 12;
-/// Bytes of a chunk header (length and type).
-const CHUNK_HEADER_BYTES: u64 = 8;
+mod container;
+mod quantized;
+
 /// Largest vertex count with u16 indices (65 535 is the primitive restart value).
 const MAX_U16_VERTICES: usize = 65_535;
 /// Largest vertex count with u32 indices (u32::MAX is the restart value).
@@ -72,13 +65,45 @@ const MAX_U32_VERTICES: usize = u32::MAX as usize;
 /// [`ExportError::Io`] from `w`; the mesh checks of [`ExportError`];
 /// [`ExportError::TooLarge`] when the indices do not fit the chosen
 /// [`IndexWidth`] or the file would exceed 4 GiB; [`ExportError::Json`].
-pub fn write_glb<W: Write>(
+pub fn write_glb<W: Write + Send>(
     w: W,
     mesh: &Mesh,
     grid: &HeightGrid,
     opts: &ExportOptions,
 ) -> Result<(), ExportError> {
+    on_pool(|| encode_glb(w, mesh, grid, opts))
+}
+
+/// The body of [`write_glb`], on the pool.
+fn encode_glb<W: Write + Send>(
+    mut w: W,
+    mesh: &Mesh,
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+) -> Result<(), ExportError> {
+    if opts.quantize {
+        check_mesh(mesh)?;
+        let q = GlbQuantization::plan(mesh, &Frame::new(grid, opts.coords))?;
+        return quantized::write_quantized(&mut w, mesh, grid, opts, &q);
+    }
     write_glb_primitive(w, mesh, None, grid, opts)
+}
+
+/// Writes `mesh` as the quantized GLB `q` plans (made by
+/// [`GlbQuantization::new`] for this mesh, grid and options): what
+/// [`write_glb`] writes with [`ExportOptions::quantize`], without planning
+/// again.
+///
+/// # Errors
+/// As [`write_glb`].
+pub fn write_glb_quantized<W: Write + Send>(
+    mut w: W,
+    mesh: &Mesh,
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+    q: &GlbQuantization,
+) -> Result<(), ExportError> {
+    on_pool(|| quantized::write_quantized(&mut w, mesh, grid, opts, q))
 }
 
 /// Writes `mesh` as a GLB whose primitive is one TRIANGLE_STRIP (mode 5) with
@@ -97,13 +122,30 @@ pub fn write_glb<W: Write>(
 /// of range (`triangle` is then the strip position minus 2);
 /// [`ExportError::StripMismatch`] when the strip's triangles are not the
 /// mesh's.
-pub fn write_glb_strip<W: Write>(
+pub fn write_glb_strip<W: Write + Send>(
     w: W,
     mesh: &Mesh,
     strip: &[u32],
     grid: &HeightGrid,
     opts: &ExportOptions,
 ) -> Result<(), ExportError> {
+    on_pool(|| encode_glb_strip(w, mesh, strip, grid, opts))
+}
+
+/// The body of [`write_glb_strip`], on the pool.
+fn encode_glb_strip<W: Write + Send>(
+    w: W,
+    mesh: &Mesh,
+    strip: &[u32],
+    grid: &HeightGrid,
+    opts: &ExportOptions,
+) -> Result<(), ExportError> {
+    if opts.quantize {
+        return Err(ExportError::Incompatible {
+            expected: "a triangle list in a quantized GLB",
+            found: "a triangle strip",
+        });
+    }
     write_glb_primitive(w, mesh, Some(strip), grid, opts)
 }
 
@@ -119,7 +161,7 @@ fn check_strip_triangles(mesh: &Mesh, strip: &[u32]) -> Result<(), ExportError> 
 }
 
 /// [`write_glb`] (`strip = None`) or [`write_glb_strip`].
-fn write_glb_primitive<W: Write>(
+fn write_glb_primitive<W: Write + Send>(
     mut w: W,
     mesh: &Mesh,
     strip: Option<&[u32]>,
@@ -130,7 +172,7 @@ fn write_glb_primitive<W: Write>(
     let frame = Frame::new(grid, opts.coords);
     let positions: Vec<[f32; 3]> = mesh
         .vertices
-        .iter()
+        .par_iter()
         .map(|v| to_f32(frame.vertex(v)))
         .collect();
     let normals = vertex_normals(mesh, &frame);
@@ -169,32 +211,17 @@ fn write_glb_primitive<W: Write>(
         index_type(mesh.vertices.len(), opts.index_width)?,
     );
     let root = build_root(&positions, &layout, mode, &GeoInfo::new(grid, opts.coords))?;
-    let json = json::serialize::to_vec(&root).map_err(|e| ExportError::Json(e.to_string()))?;
-    let json_padded = pad4(json.len() as u64);
-    let bin_padded = pad4(layout.buffer_bytes);
-    let total = HEADER_BYTES + 2 * CHUNK_HEADER_BYTES + json_padded + bin_padded;
-    let total = u32::try_from(total).map_err(|_| ExportError::TooLarge {
-        what: "bytes in a GLB",
-        count: total,
-        max: u64::from(u32::MAX),
-    })?;
-    write_u32s(&mut w, &[MAGIC, VERSION, total])?;
-    write_chunk_header(&mut w, json_padded, CHUNK_JSON)?;
-    w.write_all(&json)?;
-    write_padding(&mut w, json.len() as u64, b' ')?;
-    write_chunk_header(&mut w, bin_padded, CHUNK_BIN)?;
-    write_bin(
-        &mut w,
-        mesh,
-        strip.as_deref(),
-        &frame,
-        &positions,
-        &normals,
-        layout.index,
-    )?;
-    write_padding(&mut w, layout.buffer_bytes, 0)?;
-    w.flush()?;
-    Ok(())
+    write_container(&mut w, &root, layout.buffer_bytes, |w| {
+        write_bin(
+            w,
+            mesh,
+            strip.as_deref(),
+            &frame,
+            &positions,
+            &normals,
+            layout.index,
+        )
+    })
 }
 
 /// The index component type for `vertices` vertices.
@@ -259,33 +286,13 @@ fn build_root(
     info: &GeoInfo,
 ) -> Result<json::Root, ExportError> {
     let (min, max) = bounds(positions);
-    let extras = json::extras::RawValue::from_string(info.json().to_string())
-        .map_err(|e| ExportError::Json(e.to_string()))?;
-    let view = |offset: u64, bytes: u64, target: Target| json::buffer::View {
-        buffer: Index::new(0),
-        byte_length: USize64(bytes),
-        byte_offset: Some(USize64(offset)),
-        byte_stride: None,
-        target: Some(Checked::Valid(target)),
-        extensions: None,
-        extras: None,
-    };
+    let view = |offset: u64, bytes: u64, target: Target| view(offset, bytes, None, target);
     let mut attributes = BTreeMap::new();
     attributes.insert(Checked::Valid(Semantic::Positions), Index::new(0));
     attributes.insert(Checked::Valid(Semantic::Normals), Index::new(1));
-    let half_turn = std::f32::consts::FRAC_1_SQRT_2;
     Ok(json::Root {
-        asset: json::Asset {
-            generator: Some("cota".to_string()),
-            extras: Some(extras),
-            ..json::Asset::default()
-        },
-        buffers: vec![json::Buffer {
-            byte_length: USize64(layout.buffer_bytes),
-            uri: None,
-            extensions: None,
-            extras: None,
-        }],
+        asset: asset(info)?,
+        buffers: vec![buffer(layout.buffer_bytes)],
         buffer_views: vec![
             view(0, layout.vec3_bytes, Target::ArrayBuffer),
             view(layout.vec3_bytes, layout.vec3_bytes, Target::ArrayBuffer),
@@ -296,7 +303,8 @@ fn build_root(
             ),
         ],
         accessors: vec![
-            accessor(0, layout.vertices, ComponentType::F32, Type::Vec3).with_bounds(&min, &max),
+            accessor(0, layout.vertices, ComponentType::F32, Type::Vec3)
+                .with_bounds(serde_json::json!(min), serde_json::json!(max)),
             accessor(1, layout.vertices, ComponentType::F32, Type::Vec3),
             accessor(2, layout.indices, layout.index, Type::Scalar),
         ],
@@ -317,7 +325,7 @@ fn build_root(
         }],
         nodes: vec![json::Node {
             mesh: Some(Index::new(0)),
-            rotation: Some(UnitQuaternion([-half_turn, 0.0, 0.0, half_turn])),
+            rotation: Some(z_up_to_y_up()),
             ..json::Node::default()
         }],
         scenes: vec![json::Scene {
@@ -330,90 +338,26 @@ fn build_root(
     })
 }
 
-/// An accessor over the whole of buffer view `view`.
-fn accessor(view: u32, count: u64, component: ComponentType, ty: Type) -> Accessor {
-    Accessor {
-        buffer_view: Some(Index::new(view)),
-        byte_offset: None,
-        count: USize64(count),
-        component_type: Checked::Valid(GenericComponentType(component)),
-        extensions: None,
-        extras: None,
-        type_: Checked::Valid(ty),
-        min: None,
-        max: None,
-        normalized: false,
-        sparse: None,
-    }
-}
-
-/// Sets an accessor's `min` and `max`.
-trait WithBounds {
-    /// The accessor with `min` and `max` set.
-    fn with_bounds(self, min: &[f32; 3], max: &[f32; 3]) -> Self;
-}
-
-impl WithBounds for Accessor {
-    fn with_bounds(mut self, min: &[f32; 3], max: &[f32; 3]) -> Self {
-        self.min = Some(serde_json::json!(min));
-        self.max = Some(serde_json::json!(max));
-        self
-    }
-}
-
-/// Component-wise minimum and maximum (the mesh has at least one vertex).
+/// Component-wise minimum and maximum (the mesh has at least one vertex; no
+/// value is NaN, so the order of the reduction does not matter).
 fn bounds(positions: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
-    let init = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    positions.iter().fold(init, |(mut lo, mut hi), p| {
+    let init = || ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    let widen = |(mut lo, mut hi): ([f32; 3], [f32; 3]), p: &[f32; 3]| {
         for k in 0..3 {
             lo[k] = lo[k].min(p[k]);
             hi[k] = hi[k].max(p[k]);
         }
         (lo, hi)
-    })
+    };
+    positions
+        .par_iter()
+        .fold(init, widen)
+        .reduce(init, |a, b| widen(widen(a, &b.0), &b.1))
 }
 
-/// Light grey, non-metallic, fully rough: reads as terrain under any light
-/// (glTF's default material is fully metallic, which renders dark).
-fn terrain_material() -> json::Material {
-    json::Material {
-        pbr_metallic_roughness: PbrMetallicRoughness {
-            base_color_factor: PbrBaseColorFactor([0.8, 0.8, 0.8, 1.0]),
-            metallic_factor: StrengthFactor(0.0),
-            roughness_factor: StrengthFactor(1.0),
-            ..PbrMetallicRoughness::default()
-        },
-        ..json::Material::default()
-    }
-}
-
-/// `n` rounded up to a multiple of 4.
-fn pad4(n: u64) -> u64 {
-    n.div_ceil(4) * 4
-}
-
-/// Little-endian u32s.
-fn write_u32s<W: Write>(w: &mut W, v: &[u32]) -> Result<(), ExportError> {
-    for x in v {
-        w.write_all(&x.to_le_bytes())?;
-    }
-    Ok(())
-}
-
-/// A chunk header: padded length and type. The length fits: the total was checked.
-fn write_chunk_header<W: Write>(w: &mut W, length: u64, ty: u32) -> Result<(), ExportError> {
-    write_u32s(w, &[length as u32, ty])
-}
-
-/// The bytes that pad `len` to a multiple of 4.
-fn write_padding<W: Write>(w: &mut W, len: u64, byte: u8) -> Result<(), ExportError> {
-    let n = (pad4(len) - len) as usize;
-    w.write_all(&[byte; 3][..n])?;
-    Ok(())
-}
-
-/// The BIN chunk's content: positions, normals, indices.
-fn write_bin<W: Write>(
+/// The BIN chunk's content: positions, normals, indices (each section
+/// encoded in parallel chunks, written in order).
+fn write_bin<W: Write + Send>(
     w: &mut W,
     mesh: &Mesh,
     strip: Option<&[u32]>,
@@ -422,34 +366,28 @@ fn write_bin<W: Write>(
     normals: &[[f32; 3]],
     index: ComponentType,
 ) -> Result<(), ExportError> {
-    for p in positions {
-        write_f32s(w, p)?;
+    for section in [positions, normals] {
+        write_chunks(w, section, 12, |_, chunk, buf| {
+            push_f32s(buf, chunk.as_flattened());
+            Ok(())
+        })?;
     }
-    for n in normals {
-        write_f32s(w, n)?;
-    }
-    if let Some(s) = strip {
-        for &i in s {
-            if index == ComponentType::U16 {
-                // Fits: index_type allowed u16 only for at most 65 535 vertices.
-                w.write_all(&(i as u16).to_le_bytes())?;
-            } else {
-                w.write_all(&i.to_le_bytes())?;
-            }
-        }
+    // Fits: index_type allowed u16 only for at most 65 535 vertices.
+    let push_index = |buf: &mut Vec<u8>, i: u32| match index {
+        ComponentType::U16 => buf.extend_from_slice(&(i as u16).to_le_bytes()),
+        _ => buf.extend_from_slice(&i.to_le_bytes()),
+    };
+    match strip {
         // The chunk's padding follows (write_glb_primitive).
-        return Ok(());
+        Some(s) => write_chunks(w, s, 4, |_, chunk, buf| {
+            chunk.iter().for_each(|&i| push_index(buf, i));
+            Ok(())
+        }),
+        None => write_chunks(w, &mesh.triangles, 12, |_, chunk, buf| {
+            for &t in chunk {
+                frame.orient(t).into_iter().for_each(|i| push_index(buf, i));
+            }
+            Ok(())
+        }),
     }
-    for &t in &mesh.triangles {
-        let t = frame.orient(t);
-        if index == ComponentType::U16 {
-            // Fits: index_type allowed u16 only for at most 65 535 vertices.
-            let b = t.map(|i| (i as u16).to_le_bytes());
-            w.write_all(&[b[0][0], b[0][1], b[1][0], b[1][1], b[2][0], b[2][1]])?;
-        } else {
-            let b = t.map(u32::to_le_bytes);
-            w.write_all(b.as_flattened())?;
-        }
-    }
-    Ok(())
 }

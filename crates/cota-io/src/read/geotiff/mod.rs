@@ -40,8 +40,8 @@ use tiff::TiffError;
 
 use self::geokeys::GeoTags;
 use self::nodata::Sample;
+use crate::dem::{DataType, Dem, Format, ReadOptions};
 use crate::error::{malformed, ReadErrorKind};
-use crate::read::{DataType, Dem, Format, ReadOptions};
 
 /// The decoder over the file's bytes.
 type Dec<'a> = Decoder<Cursor<&'a [u8]>>;

@@ -13,8 +13,8 @@
 //!
 //! "nan" declares NaN samples to be voids; any NaN in float data is a void anyway.
 
+use crate::dem::DataType;
 use crate::error::{malformed, ReadErrorKind};
-use crate::read::DataType;
 
 /// Relative distance to ±f32::MAX within which a declared nodata is taken to
 /// mean exactly ±f32::MAX (covers FLT_MAX printed with 6 or more digits).

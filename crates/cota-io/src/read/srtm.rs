@@ -30,11 +30,12 @@ use std::io::{Cursor, Read};
 use std::path::Path;
 
 use cota_core::grid::check_dimensions;
-use cota_core::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
+use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
 use zip::ZipArchive;
 
-use crate::error::{malformed, ReadErrorKind};
-use crate::read::{sniff, DataType, Dem, Format, ReadOptions, Sniffed};
+use super::sniff::{sniff, Sniffed};
+use crate::dem::{DataType, Dem, Format, ReadOptions};
+use crate::error::{malformed, too_large, ReadErrorKind};
 
 /// The SRTM void value.
 const VOID: i16 = i16::MIN;
@@ -139,16 +140,6 @@ fn size_error(len: u64, what: &str) -> ReadErrorKind {
         ),
         format!("{len} bytes{what}"),
     )
-}
-
-/// Maps a dimension check failure to the reader's error.
-pub(crate) fn too_large(e: GridError) -> ReadErrorKind {
-    match e {
-        GridError::TooLarge { width, height, max } => {
-            ReadErrorKind::TooLarge { width, height, max }
-        }
-        other => ReadErrorKind::Grid(other),
-    }
 }
 
 /// The south-west corner (latitude, longitude) in whole degrees from a name

@@ -32,9 +32,8 @@ use cota_core::grid::{check_dimensions, MAX_SAMPLES};
 use cota_core::{GeoRef, HeightGrid};
 use png::{BitDepth, ColorType, Transformations};
 
-use crate::error::{malformed, ReadErrorKind};
-use crate::read::{DataType, Dem, Format, PngEncoding, ReadOptions};
-use crate::srtm::too_large;
+use crate::dem::{DataType, Dem, Format, PngEncoding, ReadOptions};
+use crate::error::{malformed, too_large, ReadErrorKind};
 
 /// Largest expansion ratio of DEFLATE.
 const MAX_DEFLATE_RATIO: u64 = 1032;

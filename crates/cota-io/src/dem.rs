@@ -1,0 +1,223 @@
+//! What a DEM reader returns and is told: [`Dem`] (the grid and what the file
+//! said about itself), [`Format`], [`DataType`], [`ReadOptions`] and
+//! [`PngEncoding`]. Plain types: every reader in [`crate::read`] imports them,
+//! and this module imports none of the readers.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use cota_core::{GeoRef, HeightGrid};
+
+/// How to turn PNG pixels into heights.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PngEncoding {
+    /// Mapbox terrain-RGB: h = -10000 + (R·65536 + G·256 + B)·0.1 m.
+    TerrainRgb,
+    /// Mapzen/AWS Terrarium: h = R·256 + G + B/256 − 32768 m.
+    Terrarium,
+    /// 16-bit (or 8-bit) grayscale: h = value · scale + offset (see [`ReadOptions`]).
+    Gray16,
+}
+
+impl fmt::Display for PngEncoding {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            PngEncoding::TerrainRgb => "terrain-rgb",
+            PngEncoding::Terrarium => "terrarium",
+            PngEncoding::Gray16 => "gray16",
+        })
+    }
+}
+
+/// Options for [`read_dem`](crate::read_dem).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct ReadOptions {
+    /// PNG encoding. `None` picks by the image: RGB/RGBA images are read as
+    /// terrain-RGB, grayscale images as gray16. Default: `None`. With any
+    /// encoding, a pixel whose alpha (or `tRNS` transparency) is 0 is a void.
+    pub png_encoding: Option<PngEncoding>,
+    /// Metres per gray level for [`PngEncoding::Gray16`]. Default: 1.0.
+    pub gray_scale_m: f64,
+    /// Metres added after scaling for [`PngEncoding::Gray16`]. Default: 0.0.
+    pub gray_offset_m: f64,
+    /// Cell size in metres for formats that carry no georeference (PNG).
+    /// Default: 1.0.
+    pub cell_size_m: f64,
+    /// 1-based band to read from a multi-band raster. `None` reads single-band
+    /// files and refuses multi-band ones as ambiguous. Default: `None`.
+    pub band: Option<u16>,
+}
+
+impl ReadOptions {
+    /// The defaults, as documented on each field.
+    pub const DEFAULT: ReadOptions = ReadOptions {
+        png_encoding: None,
+        gray_scale_m: 1.0,
+        gray_offset_m: 0.0,
+        cell_size_m: 1.0,
+        band: None,
+    };
+
+    /// Sets [`ReadOptions::png_encoding`].
+    pub const fn with_png_encoding(mut self, e: Option<PngEncoding>) -> Self {
+        self.png_encoding = e;
+        self
+    }
+
+    /// Sets [`ReadOptions::gray_scale_m`] and [`ReadOptions::gray_offset_m`].
+    pub const fn with_gray(mut self, scale_m: f64, offset_m: f64) -> Self {
+        self.gray_scale_m = scale_m;
+        self.gray_offset_m = offset_m;
+        self
+    }
+
+    /// Sets [`ReadOptions::band`].
+    pub const fn with_band(mut self, band: Option<u16>) -> Self {
+        self.band = band;
+        self
+    }
+
+    /// Sets [`ReadOptions::cell_size_m`].
+    pub const fn with_cell_size_m(mut self, cell_size_m: f64) -> Self {
+        self.cell_size_m = cell_size_m;
+        self
+    }
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The file formats cota reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// SRTM `.hgt`: raw big-endian i16, n×n.
+    SrtmHgt,
+    /// SRTM `.hgt` inside a ZIP archive.
+    SrtmHgtZip,
+    /// GeoTIFF (or plain TIFF).
+    GeoTiff,
+    /// PNG with a height encoding.
+    Png(PngEncoding),
+    /// ESRI ASCII grid (`.asc`).
+    EsriAscii,
+}
+
+impl fmt::Display for Format {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Format::SrtmHgt => f.write_str("SRTM .hgt"),
+            Format::SrtmHgtZip => f.write_str("SRTM .hgt.zip"),
+            Format::GeoTiff => f.write_str("GeoTIFF"),
+            Format::Png(e) => write!(f, "PNG ({e})"),
+            Format::EsriAscii => f.write_str("ESRI ASCII grid"),
+        }
+    }
+}
+
+/// The sample type stored in the file, before conversion to f32 metres.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DataType {
+    /// 8-bit signed.
+    I8,
+    /// 8-bit unsigned.
+    U8,
+    /// 16-bit signed.
+    I16,
+    /// 16-bit unsigned.
+    U16,
+    /// 32-bit signed.
+    I32,
+    /// 32-bit unsigned.
+    U32,
+    /// 32-bit float.
+    F32,
+    /// 64-bit float.
+    F64,
+    /// 8-bit RGB(A) pixels decoded by a PNG encoding.
+    Rgb8,
+    /// Decimal text of unknown type. The ESRI ASCII reader reports
+    /// [`DataType::I32`] when every value is an integer, else [`DataType::F32`].
+    Text,
+}
+
+impl fmt::Display for DataType {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            DataType::I8 => "Int8",
+            DataType::U8 => "UInt8",
+            DataType::I16 => "Int16",
+            DataType::U16 => "UInt16",
+            DataType::I32 => "Int32",
+            DataType::U32 => "UInt32",
+            DataType::F32 => "Float32",
+            DataType::F64 => "Float64",
+            DataType::Rgb8 => "RGB8",
+            DataType::Text => "text",
+        })
+    }
+}
+
+/// A DEM as read from one file: the grid (voids as NaN, not yet filled) and
+/// what the file said about itself.
+#[derive(Debug, Clone)]
+pub struct Dem {
+    /// The heights and georeference. Voids are NaN.
+    pub grid: HeightGrid,
+    /// The detected format.
+    pub format: Format,
+    /// The sample type in the file.
+    pub data_type: DataType,
+    /// The nodata value the file declared, if any.
+    pub nodata: Option<f64>,
+    /// The file read.
+    pub path: PathBuf,
+}
+
+impl Dem {
+    /// What the file held, as read: everything but the heights.
+    pub fn summary(&self) -> DemSummary {
+        let g = &self.grid;
+        DemSummary {
+            path: self.path.clone(),
+            format: self.format,
+            data_type: self.data_type,
+            nodata: self.nodata,
+            width: g.width(),
+            height: g.height(),
+            nodata_count: g.void_count(),
+            range: g.valid_range(),
+            georef: g.georef().clone(),
+            cell_size_m: g.cell_size_m(),
+        }
+    }
+}
+
+/// One file as read, without its heights ([`Dem::summary`]): what
+/// [`read_region`](crate::read_region) reports of each file it joined.
+#[derive(Debug, Clone)]
+pub struct DemSummary {
+    /// The file read.
+    pub path: PathBuf,
+    /// The detected format.
+    pub format: Format,
+    /// The sample type in the file.
+    pub data_type: DataType,
+    /// The nodata value the file declared, if any.
+    pub nodata: Option<f64>,
+    /// Width in samples.
+    pub width: usize,
+    /// Height in samples.
+    pub height: usize,
+    /// Void samples (nodata or NaN) in the file.
+    pub nodata_count: usize,
+    /// Lowest and highest valid heights, metres; `None` when every sample is a void.
+    pub range: Option<(f32, f32)>,
+    /// The file's georeference.
+    pub georef: GeoRef,
+    /// Cell size in metres `[dx, dy]` ([`HeightGrid::cell_size_m`]).
+    pub cell_size_m: [f64; 2],
+}

@@ -1,0 +1,195 @@
+//! Reading DEM files: one file into a [`Dem`] ([`read_dem`], [`read_dem_bytes`]:
+//! format detection and dispatch), or several into one grid ([`read_region`]:
+//! read in parallel, mosaicked, voids filled).
+//!
+//! Detection (`sniff`) looks at the content first (magic bytes of
+//! ZIP, TIFF, PNG, gzip; the keywords of an ESRI ASCII header; the exact byte
+//! size of an SRTM tile) and uses the file name only where content cannot
+//! decide (a raw `.hgt` has no header, so its size and name are all there is).
+//! A gzipped file is decompressed (once) and its content detected again.
+//!
+//! Layout: this module dispatches to the readers (`srtm`, `asc`, `png`,
+//! `geotiff`), which import only [`crate::dem`], [`crate::error`] and
+//! `sniff`; `region` joins what was read. No reader imports this module.
+
+mod asc;
+mod geotiff;
+mod png;
+mod region;
+mod sniff;
+mod srtm;
+
+use std::path::Path;
+
+use rayon::prelude::*;
+
+pub use region::{join, Region, RegionOptions};
+
+use self::sniff::{describe_bytes, name_hint, sniff, Sniffed};
+use crate::dem::{Dem, ReadOptions};
+use crate::error::{ReadError, ReadErrorKind, RegionError};
+
+/// Reads one DEM file.
+///
+/// # Errors
+/// A [`ReadError`] naming `path` and saying what was expected and found.
+pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Dem, ReadError> {
+    let wrap = |kind| ReadError::new(path, kind);
+    let bytes = std::fs::read(path).map_err(|e| wrap(ReadErrorKind::Io(e)))?;
+    if bytes.is_empty() {
+        return Err(wrap(ReadErrorKind::Empty));
+    }
+    decode_bytes(&bytes, path, opts).map_err(wrap)
+}
+
+/// Applies [`cota_core::GeoRef::guess_geographic`] to a freshly read DEM.
+fn with_guessed_crs(mut dem: Dem) -> Dem {
+    let g = &dem.grid;
+    if let Some(crs) = g.georef().guess_geographic(g.width(), g.height()) {
+        let mut georef = g.georef().clone();
+        georef.crs = crs;
+        dem.grid.set_georef(georef);
+    }
+    dem
+}
+
+/// Decodes DEM content already in memory; `path` supplies the name (SRTM
+/// position, extension) and is used in no other way. This is what the fuzzers call.
+///
+/// # Errors
+/// A [`ReadError`] naming `path`.
+pub fn read_dem_bytes(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadError> {
+    if bytes.is_empty() {
+        return Err(ReadError::new(path, ReadErrorKind::Empty));
+    }
+    decode_bytes(bytes, path, opts).map_err(|k| ReadError::new(path, k))
+}
+
+/// Decodes DEM content; `path` supplies the name (SRTM position, extension).
+pub(crate) fn decode_bytes(
+    bytes: &[u8],
+    path: &Path,
+    opts: &ReadOptions,
+) -> Result<Dem, ReadErrorKind> {
+    let dem = match sniff(bytes) {
+        // gzip (`N00E010.hgt.gz` as served by the AWS/Mapzen "skadi" tiles, or
+        // any other gzipped DEM): decompress and read what is inside.
+        Sniffed::Gzip => gunzip_and_decode(bytes, path, opts),
+        // A ZIP is read as a zipped SRTM tile (the only zipped format cota knows).
+        Sniffed::Zip => srtm::decode(bytes, path, opts),
+        Sniffed::Tiff => geotiff::decode(bytes, path, opts),
+        Sniffed::Png => png::decode(bytes, path, opts),
+        Sniffed::Ascii => asc::decode(bytes, path, opts),
+        // A raw .hgt has no magic: the SRTM reader decides by size and name.
+        Sniffed::Unknown if srtm::looks_like_hgt(bytes, path) => srtm::decode(bytes, path, opts),
+        Sniffed::Unknown => Err(ReadErrorKind::UnknownFormat {
+            found: format!("{}{}", describe_bytes(bytes), name_hint(path)),
+        }),
+    }?;
+    Ok(with_guessed_crs(dem))
+}
+
+/// Largest expansion of DEFLATE, used to refuse gzip bombs early.
+const MAX_GZIP_RATIO: u64 = 1032;
+
+/// Decompresses a gzip file (one level) and decodes its content under the
+/// name without `.gz`. The output is capped at what the sample limit allows
+/// (8 bytes per sample at most) and at DEFLATE's largest ratio.
+fn gunzip_and_decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
+    use std::io::Read;
+    let cap = (cota_core::grid::MAX_SAMPLES * 8).min(bytes.len() as u64 * MAX_GZIP_RATIO);
+    let mut inner = Vec::new();
+    flate2::read::GzDecoder::new(bytes)
+        .take(cap + 1)
+        .read_to_end(&mut inner)
+        .map_err(|e| {
+            crate::error::malformed("a complete gzip stream", format!("a broken one ({e})"))
+        })?;
+    if inner.len() as u64 > cap {
+        return Err(crate::error::malformed(
+            format!("a gzip stream of at most {cap} bytes once decompressed"),
+            "more (a gzip bomb or a grid beyond the sample limit)",
+        ));
+    }
+    if inner.is_empty() {
+        return Err(crate::error::malformed(
+            "a DEM inside the gzip stream",
+            "nothing",
+        ));
+    }
+    if sniff(&inner) == Sniffed::Gzip {
+        return Err(ReadErrorKind::Unsupported {
+            what: "gzip nesting".into(),
+            detail: "a gzip stream inside a gzip stream; decompress the outer one first".into(),
+        });
+    }
+    let name = match path.extension() {
+        Some(e) if e.eq_ignore_ascii_case("gz") => path.with_extension(""),
+        _ => path.to_path_buf(),
+    };
+    let mut dem = decode_bytes(&inner, &name, opts)?;
+    dem.path = path.to_path_buf();
+    Ok(dem)
+}
+
+/// Reads `paths` (in parallel), joins them into one grid by their
+/// georeference and fills its voids, as `opts` says. One path gives that
+/// file's grid (no copy); the files may be in any format [`read_dem`] reads.
+///
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use cota_io::{read_region, RegionOptions};
+/// let tile = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/S29W072.hgt.zip");
+/// let region = read_region(&[tile], &RegionOptions::DEFAULT)?;
+/// assert_eq!((region.grid.width(), region.grid.height()), (1201, 1201));
+/// assert_eq!(region.grid.void_count(), 0);
+/// assert_eq!(region.fill.map(|f| f.filled), Some(region.voids));
+/// # Ok(())
+/// # }
+/// ```
+///
+/// # Errors
+/// [`RegionError::Read`] for the first file (in input order) that cannot be
+/// read, else as [`join`].
+///
+/// # Memory
+/// The files are read on rayon's pool, each by one thread, and every tile is
+/// held until the mosaic places it; the mosaic then drops each tile as it is
+/// copied. So the peak is about the output grid plus, per reading thread, the
+/// one file it is decoding (its bytes and the decoder's scratch, at most
+/// about one tile), where a sequential read needed the output plus about one
+/// tile.
+pub fn read_region<P: AsRef<Path> + Sync>(
+    paths: &[P],
+    opts: &RegionOptions,
+) -> Result<Region, RegionError> {
+    read_region_with_progress(paths, opts, &|_, _| {})
+}
+
+/// [`read_region`], calling `progress(files_read, files)` as each file is
+/// read (from the reading threads, in any order).
+///
+/// # Errors
+/// As [`read_region`].
+pub fn read_region_with_progress<P: AsRef<Path> + Sync>(
+    paths: &[P],
+    opts: &RegionOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Region, RegionError> {
+    if paths.is_empty() {
+        return Err(RegionError::NoFiles);
+    }
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let read: Vec<Result<Dem, ReadError>> = paths
+        .par_iter()
+        .with_max_len(1)
+        .map(|p| {
+            let dem = read_dem(p.as_ref(), &opts.read);
+            let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(n, paths.len());
+            dem
+        })
+        .collect();
+    let dems = read.into_iter().collect::<Result<Vec<Dem>, ReadError>>()?;
+    join(dems, opts)
+}
