@@ -7,6 +7,8 @@
 //! * [`HeightGrid`]: a W×H grid of heights in metres with per-sample validity
 //!   (voids are NaN) and its georeference ([`GeoRef`]).
 //! * [`Mesh`]: an indexed triangle mesh whose vertices sit on grid samples.
+//! * [`tin::build`]: an irregular triangulation (TIN) with the same
+//!   guaranteed error and fewer triangles.
 //!
 //! Nothing in this crate opens a file; readers and writers live in `cota-io`.
 #![warn(missing_docs)]
@@ -35,6 +37,7 @@ pub mod stream_marks;
 pub mod strip;
 pub mod strip_cells;
 pub mod strip_quadtree;
+pub mod tin;
 pub mod view;
 pub mod voids;
 
@@ -50,6 +53,7 @@ pub use metrics::{measure, Metrics};
 pub use mosaic::{mosaic, Mosaic, MosaicError, MosaicOptions, SeamPolicy, SeamReport};
 pub use points::PointCounts;
 pub use quadtree::{QuadExtraction, QuadTree};
+pub use tin::TinOptions;
 pub use voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidError, VoidPolicy};
 
 /// Runs `f` on a rayon worker thread. A parallel section entered from outside

@@ -1,0 +1,460 @@
+//! Exact-checked decimation: remove vertices while the true error stays
+//! within the bound at every sample.
+//!
+//! Vertex decimation (Schroeder, Zarge & Lorensen 1992, "Decimation of
+//! triangle meshes"; for terrain, the drop heuristic of Lee 1991, "Comparison
+//! of existing methods for building triangular irregular network models of
+//! terrain from grid digital elevation models"): a vertex `v` is removed and
+//! the hole left by its star is re-triangulated, here by a *fan* from one of
+//! its link vertices (a half-edge collapse of `v` onto that vertex). The
+//! removal is kept only when every sample of the star is within the bound in
+//! the new triangles: each fan triangle is scanned exactly and closed
+//! ([`super::span`]), so samples on the new edges are checked on both sides;
+//! the link's edges do not change, so neither do the samples on them.
+//!
+//! **Which fan.** All fans whose triangles are strictly counter-clockwise are
+//! valid (they then tile the star's polygon). Each is first judged at one
+//! sample only, `v` itself, in `O(1)` from the star's cross products; the
+//! fans within the bound there are scanned in order of that error, and the
+//! first that passes is taken.
+//!
+//! **Which vertex.** Sweeps over the vertices in order, each removable vertex
+//! taken as soon as it is found, re-visiting only vertices whose star changed
+//! (the removed vertex's link), until a sweep removes nothing. Measured
+//! against a priority queue (smallest resulting error first, Lee's order), the
+//! sweep left 1–2 % fewer triangles and ran 3× faster (Fuji 513² at 1, 5 and
+//! 20 m).
+//!
+//! A vertex on the border of the triangulated region (the grid's border, or a
+//! block's) is removed only when its two border neighbours are collinear with
+//! it and the border edge between them is the grid's own, by a fan from one of
+//! them, so the region never changes; locked vertices are never removed.
+
+use super::span::Heights;
+use super::topo::{Topo, Tri, NONE};
+
+/// `i mod d` for `i < 2d`, without a division.
+#[inline]
+fn wrap(i: usize, d: usize) -> usize {
+    if i >= d {
+        i - d
+    } else {
+        i
+    }
+}
+
+/// The corner after corner `k`.
+const NEXT: [usize; 3] = [1, 2, 0];
+/// The corner before corner `k`.
+const PREV: [usize; 3] = [2, 0, 1];
+
+/// The corner of triangle corners `tv` holding `v`.
+#[inline]
+fn corner_of(tv: [u32; 3], v: u32) -> usize {
+    if tv[0] == v {
+        0
+    } else if tv[1] == v {
+        1
+    } else {
+        2
+    }
+}
+
+/// The star of one vertex, gathered for assessing and removing it.
+#[derive(Debug, Default)]
+pub(crate) struct Local {
+    v: u32,
+    closed: bool,
+    /// Triangles: `tris[i] = (v, link[i], link[i + 1])`.
+    pub(crate) tris: Vec<u32>,
+    /// Link vertices, counter-clockwise.
+    pub(crate) link: Vec<u32>,
+    /// Link positions relative to `v`.
+    rel: Vec<[i64; 2]>,
+    /// Link heights.
+    z: Vec<f32>,
+    /// Cross products `X(rel[p], rel[q])`, `d × d` row-major.
+    cross: Vec<i64>,
+    /// Candidate fans: (error at `v`, apex index, index of the fan triangle
+    /// holding `v`).
+    cands: Vec<(f64, usize, usize)>,
+}
+
+impl Local {
+    #[inline]
+    fn x(&self, p: usize, q: usize) -> i64 {
+        self.cross[p * self.link.len() + q]
+    }
+
+    /// Twice the signed area of link triangle `(p, q, r)`.
+    #[inline]
+    fn orient(&self, p: usize, q: usize, r: usize) -> i64 {
+        self.x(p, q) + self.x(q, r) + self.x(r, p)
+    }
+
+    /// The fan from link index `j`: the first link index `i` of its triangles
+    /// `(j, i, i + 1)` and how many there are.
+    #[inline]
+    fn fan_range(&self, j: usize) -> (usize, usize) {
+        let d = self.link.len();
+        if self.closed {
+            (wrap(j + 1, d), d - 2)
+        } else if j == 0 {
+            (1, d - 2)
+        } else {
+            (0, d - 2)
+        }
+    }
+}
+
+/// Fills `l` with the star of live vertex `v`. Returns false for a vertex on
+/// the region's border that cannot be removed (its border neighbours are not
+/// collinear with it, or it is not on the grid's border).
+pub(crate) fn gather(topo: &Topo, v: u32, l: &mut Local, size: [i32; 2]) -> bool {
+    l.tris.clear();
+    l.link.clear();
+    l.v = v;
+    let t0 = topo.verts[v as usize].t;
+    // Counter-clockwise from t0; if the border stops the walk, clockwise
+    // from t0 for the triangles before it.
+    let mut t = t0;
+    let mut closed = false;
+    loop {
+        let tr = &topo.tris[t as usize];
+        let k = corner_of(tr.v, v);
+        l.tris.push(t);
+        l.link.push(tr.v[NEXT[k]]);
+        let next = tr.n[PREV[k]];
+        if next == NONE {
+            l.link.push(tr.v[PREV[k]]);
+            break;
+        }
+        if next == t0 {
+            closed = true;
+            break;
+        }
+        t = next;
+    }
+    if !closed {
+        let mut t = t0;
+        loop {
+            let tr = &topo.tris[t as usize];
+            let prev = tr.n[corner_of(tr.v, v)];
+            if prev == NONE {
+                break;
+            }
+            let pt = &topo.tris[prev as usize];
+            let k = corner_of(pt.v, v);
+            l.tris.insert(0, prev);
+            l.link.insert(0, pt.v[NEXT[k]]);
+            t = prev;
+        }
+    }
+    l.closed = closed;
+    let pv = topo.pos(v);
+    if !closed {
+        let (a, b) = (
+            topo.pos(l.link[0]),
+            topo.pos(*l.link.last().unwrap_or(&v)),
+        );
+        // Only along the grid's own border, straight through v.
+        let on_line = |c: usize, val: i32| a[c] == val && b[c] == val && pv[c] == val;
+        let straight = on_line(0, 0)
+            || on_line(0, size[0] - 1)
+            || on_line(1, 0)
+            || on_line(1, size[1] - 1);
+        if !straight || l.link.len() < 3 {
+            return false;
+        }
+    }
+    l.rel.clear();
+    l.z.clear();
+    for &w in &l.link {
+        let vert = &topo.verts[w as usize];
+        l.rel.push([(vert.p[0] - pv[0]) as i64, (vert.p[1] - pv[1]) as i64]);
+        l.z.push(vert.z);
+    }
+    let d = l.link.len();
+    l.cross.clear();
+    l.cross.resize(d * d, 0);
+    for p in 0..d {
+        for q in p + 1..d {
+            let (a, b) = (l.rel[p], l.rel[q]);
+            let x = a[1] * b[0] - a[0] * b[1];
+            l.cross[p * d + q] = x;
+            l.cross[q * d + p] = -x;
+        }
+    }
+    true
+}
+
+/// Whether every triangle of the fan from link index `j` is strictly
+/// counter-clockwise.
+pub(crate) fn fan_valid(l: &Local, j: usize) -> bool {
+    let d = l.link.len();
+    let (start, n) = l.fan_range(j);
+    (0..n).all(|s| {
+        let i = wrap(start + s, d);
+        l.orient(j, i, wrap(i + 1, d)) > 0
+    })
+}
+
+/// The valid fans of `l` with their error at `v` within `bound`, best first.
+/// Each fan's triangle holding `v` (the one where the ray from the apex
+/// through `v` leaves the star) gives the error at `v` by barycentric
+/// weights, which are cross products of the star. Around a closed star that
+/// triangle turns with the apex, so one walk around the link finds it for
+/// every apex (`O(d)`). The fan's other triangles are checked for
+/// orientation only when the error at `v` is within the bound, and not at all
+/// when the link polygon is strictly convex (every fan is then valid).
+fn candidates(topo: &Topo, l: &mut Local, bound: f64) {
+    l.cands.clear();
+    let d = l.link.len();
+    let zv = topo.z(l.v) as f64;
+    let mut convex = None;
+    let holds = |l: &Local, j: usize, i: usize| l.x(j, i) >= 0 && l.x(wrap(i + 1, d), j) >= 0;
+    let mut i = 0;
+    let apexes = if l.closed { d } else { 2 };
+    for jj in 0..apexes {
+        let j = if l.closed || jj == 0 { jj } else { d - 1 };
+        let (start, n) = l.fan_range(j);
+        if !l.closed || jj == 0 {
+            // Search the whole fan.
+            match (0..n).map(|s| wrap(start + s, d)).find(|&i| holds(l, j, i)) {
+                Some(h) => i = h,
+                None => continue,
+            }
+        } else {
+            // Carry on from the previous apex's triangle.
+            let mut steps = 0;
+            while !holds(l, j, i) && steps < d {
+                i = wrap(i + 1, d);
+                steps += 1;
+            }
+            if steps == d {
+                continue;
+            }
+        }
+        let i1 = wrap(i + 1, d);
+        let area = l.orient(j, i, i1);
+        if area <= 0 {
+            continue;
+        }
+        // The error at v times the (positive) area: no division unless kept.
+        let at_v_area = l.x(i, i1) as f64 * l.z[j] as f64
+            + l.x(i1, j) as f64 * l.z[i] as f64
+            + l.x(j, i) as f64 * l.z[i1] as f64;
+        let err_area = (at_v_area - zv * area as f64).abs();
+        if err_area > bound * area as f64 {
+            continue;
+        }
+        let convex = *convex.get_or_insert_with(|| {
+            (0..d).all(|i| l.orient(wrap(i + d - 1, d), i, wrap(i + 1, d)) > 0)
+        });
+        if convex || fan_valid(l, j) {
+            let s = wrap(i + d - start, d);
+            l.cands.push((err_area / area as f64, j, s));
+        }
+    }
+    l.cands.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
+}
+
+/// Whether the fan from link index `j` is within `bound` at every sample of
+/// its triangles (the one holding `v`, index `hold` in the fan, first).
+fn fan_fits(topo: &Topo, hs: &Heights, l: &Local, j: usize, hold: usize, bound: f64) -> bool {
+    let d = l.link.len();
+    let pv = topo.pos(l.v);
+    let (start, n) = l.fan_range(j);
+    let tri = |s: usize| {
+        let i = wrap(start + s, d);
+        let t = [j, i, wrap(i + 1, d)];
+        let r = t.map(|k| l.rel[k]);
+        (
+            r.map(|q| [pv[0] + q[0] as i32, pv[1] + q[1] as i32]),
+            t.map(|k| l.z[k]),
+        )
+    };
+    let (p, z) = tri(hold);
+    if hs.tri_error(p, z, bound) > bound {
+        return false;
+    }
+    (0..n)
+        .filter(|&s| s != hold)
+        .all(|s| {
+            let (p, z) = tri(s);
+            hs.tri_error(p, z, bound) <= bound
+        })
+}
+
+/// The link index of the apex of the first fan of `v` that keeps every
+/// sample within `bound`, if any; `l` then holds `v`'s star.
+pub(crate) fn assess(
+    topo: &Topo,
+    hs: &Heights,
+    v: u32,
+    bound: f64,
+    l: &mut Local,
+    size: [i32; 2],
+) -> Option<usize> {
+    if !gather(topo, v, l, size) {
+        return None;
+    }
+    candidates(topo, l, bound);
+    (0..l.cands.len()).find_map(|c| {
+        let (_, j, hold) = l.cands[c];
+        fan_fits(topo, hs, l, j, hold, bound).then_some(j)
+    })
+}
+
+/// Removes `l.v` by the fan from link index `j` (valid, see [`assess`]),
+/// reusing the star's triangle slots: fan triangle `(j, i, i + 1)` takes the
+/// slot of star triangle `i`, whose outer neighbour is unchanged.
+pub(crate) fn collapse(topo: &mut Topo, l: &Local, j: usize) {
+    let d = l.link.len();
+    let (start, n) = l.fan_range(j);
+    let apex = l.link[j];
+    let slot = |s: usize| l.tris[wrap(start + s, d)];
+    // Outer neighbours of the link edges next to the apex (their star
+    // triangles are freed), or the border.
+    let outer = |topo: &Topo, i: usize| {
+        let tr = &topo.tris[l.tris[i] as usize];
+        tr.n[(corner_of(tr.v, l.v) + 1) % 3]
+    };
+    let before = if l.closed || j == 0 { outer(topo, j) } else { NONE };
+    let after = if l.closed {
+        outer(topo, wrap(j + d - 1, d))
+    } else if j == 0 {
+        NONE
+    } else {
+        outer(topo, d - 2)
+    };
+    for s in 0..n {
+        let i = wrap(start + s, d);
+        let t = slot(s);
+        let o = outer(topo, i);
+        let prev = if s == 0 { NONE } else { slot(s - 1) };
+        let next = if s + 1 == n { NONE } else { slot(s + 1) };
+        let (b, c) = (l.link[i], l.link[wrap(i + 1, d)]);
+        topo.tris[t as usize] = Tri {
+            v: [apex, b, c],
+            n: [prev, o, next],
+        };
+        topo.verts[b as usize].t = t;
+        topo.verts[c as usize].t = t;
+    }
+    topo.set_nbr(slot(0), 0, before);
+    topo.set_nbr(slot(n - 1), 2, after);
+    topo.verts[apex as usize].t = slot(0);
+    // Free the star's triangles at the apex: the one or two not in the fan.
+    if l.closed {
+        topo.release(l.tris[j]);
+        topo.release(l.tris[wrap(j + d - 1, d)]);
+    } else if j == 0 {
+        topo.release(l.tris[0]);
+    } else {
+        topo.release(l.tris[d - 2]);
+    }
+    topo.verts[l.v as usize].t = NONE;
+}
+
+/// Decimates `topo` within `bound` metres: sweeps over the vertices in
+/// order, visiting first those marked in `dirty` (all when it is empty),
+/// then, in up to `sweeps` sweeps in all (0: until a sweep removes nothing),
+/// those whose star changed; never a `locked` one. `size` is the grid's
+/// width and height. Returns the number of vertices removed.
+pub(crate) fn decimate(
+    topo: &mut Topo,
+    hs: &Heights,
+    bound: f64,
+    locked: &[bool],
+    dirty: &mut Vec<bool>,
+    size: [i32; 2],
+    sweeps: u32,
+) -> usize {
+    let n = topo.verts.len();
+    if dirty.len() != n {
+        dirty.clear();
+        dirty.resize(n, true);
+    }
+    let mut l = Local::default();
+    let mut removed = 0;
+    let mut sweep = 0;
+    loop {
+        let mut any = false;
+        for v in 0..n as u32 {
+            if !dirty[v as usize] || locked[v as usize] || !topo.alive(v) {
+                continue;
+            }
+            dirty[v as usize] = false;
+            if let Some(j) = assess(topo, hs, v, bound, &mut l, size) {
+                collapse(topo, &l, j);
+                for &w in &l.link {
+                    dirty[w as usize] = true;
+                }
+                removed += 1;
+                any = true;
+            }
+        }
+        sweep += 1;
+        if !any || sweep == sweeps {
+            break;
+        }
+    }
+    removed
+}
+
+#[cfg(test)]
+mod perf_probe {
+    use super::*;
+    use crate::grid::{GeoRef, HeightGrid};
+
+    fn cpu_ms() -> f64 {
+        let mut t = 0u64;
+        for e in std::fs::read_dir("/proc/self/task").unwrap() {
+            let p = e.unwrap().path().join("schedstat");
+            if let Ok(s) = std::fs::read_to_string(p) {
+                t += s.split_whitespace().next().unwrap().parse::<u64>().unwrap();
+            }
+        }
+        t as f64 / 1e6
+    }
+
+    #[test]
+    #[ignore]
+    fn probe() {
+        let p = std::path::PathBuf::from("/work/shared/data/png/fuji.png");
+        let opts = cota_io::ReadOptions::DEFAULT.with_png_encoding(Some(cota_io::PngEncoding::TerrainRgb));
+        let g = cota_io::read_dem(&p, &opts).unwrap().grid;
+        let g = HeightGrid::new(g.width(), g.height(), g.heights().to_vec(), GeoRef::unreferenced(1.0)).unwrap();
+        let e: f64 = std::env::var("E").map(|s| s.parse().unwrap()).unwrap_or(5.0);
+        let tree = crate::Bitree::build(&g).unwrap();
+        let seed = tree.extract(&crate::ExtractOptions::max_error_m(e)).unwrap().mesh;
+        let hs = Heights { h: g.heights(), w: g.width() };
+        let size = [g.width() as i32, g.height() as i32];
+        let topo0 = Topo::from_mesh(&seed);
+        let n = topo0.verts.len();
+        let mut l = Local::default();
+        for _ in 0..3 {
+            let c = cpu_ms();
+            let mut k = 0;
+            for v in 0..n as u32 { if gather(&topo0, v, &mut l, size) { k += l.link.len(); } }
+            let t_g = cpu_ms() - c;
+            let c = cpu_ms();
+            for v in 0..n as u32 { if gather(&topo0, v, &mut l, size) { candidates(&topo0, &mut l, e); k += l.cands.len(); } }
+            let t_c = cpu_ms() - c;
+            let c = cpu_ms();
+            let mut ok = 0;
+            for v in 0..n as u32 { if assess(&topo0, &hs, v, e, &mut l, size).is_some() { ok += 1; } }
+            let t_a = cpu_ms() - c;
+            let mut topo = topo0.clone();
+            let c = cpu_ms();
+            let mut dirty = Vec::new();
+            let r = decimate(&mut topo, &hs, e, &vec![false; n], &mut dirty, size, 0);
+            let t_d = cpu_ms() - c;
+            let c = cpu_ms();
+            let t2 = Topo::from_mesh(&seed);
+            let t_f = cpu_ms() - c;
+            eprintln!("n {n}: gather {t_g:.1} +cand {t_c:.1} assess {t_a:.1} ({ok} ok) decimate {t_d:.1} ({r}) from_mesh {t_f:.1} [{k} {}]", t2.verts.len());
+        }
+    }
+}
