@@ -13,6 +13,7 @@ mod mesh;
 mod progress;
 mod refine;
 mod stream;
+mod tin;
 
 fn main() -> ExitCode {
     quiet_broken_pipe();

@@ -13,7 +13,7 @@ use cota_core::{check_mesh, measure, Bitree, CheckOptions, ExtractOptions, Mesh,
 use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use serde_json::json;
 
-use crate::args::{CoordsArg, HierarchyArg, MeshArgs, QuadVariant, StripMethodArg};
+use crate::args::{CoordsArg, HierarchyArg, MeshArgs, MeshKindArg, QuadVariant, StripMethodArg};
 use crate::input::load;
 use crate::progress;
 use crate::refine;
@@ -62,6 +62,14 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         anyhow::bail!("--max-triangles: expected at least 2 triangles, found 0");
     }
     crate::refine::validate(&a.refine, a.max_triangles)?;
+    let tin = a.mesh == MeshKindArg::Tin;
+    if tin {
+        crate::tin::validate(a)?;
+    } else if a.lock_border {
+        anyhow::bail!(
+            "--lock-border: expected --mesh tin (the bitree's border follows its triangles)"
+        );
+    }
     if a.strip {
         if a.hierarchy == HierarchyArg::Quadtree {
             anyhow::bail!(
@@ -96,7 +104,11 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let fill: FillReport = crate::input::fill(&mut grid, a.voids)?;
     let fill_ms = ms(t);
 
-    let (mesh, threshold_m, build_ms, extract_ms, check_opts, generic) = if quadtree {
+    let (mesh, threshold_m, build_ms, extract_ms, check_opts, generic) = if tin {
+        let t = crate::tin::run(&grid, a)?;
+        let bound = Some(t.threshold_m);
+        (t.mesh, bound, t.build_ms, t.extract_ms, t.check, None)
+    } else if quadtree {
         let t = Instant::now();
         let qt = QuadTree::build(&grid)?;
         let build_ms = ms(t);
@@ -221,6 +233,8 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "nodata_count": nodata,
         "threshold_m": threshold_m,
         "hierarchy": if quadtree { "quadtree" } else { "bitree" },
+        "mesh": if tin { "tin" } else { "bitree" },
+        "lock_border": a.lock_border,
         "mode": refine::mode(&a.refine).name(),
         "criterion": criterion,
         "refine_rounds": generic.as_ref().map(|o| o.rounds),
@@ -293,8 +307,13 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::mosaic::SeamRepor
         f("rmse_m"),
         f("mean_abs_error_m")
     );
+    let tin = match (r["mesh"].as_str(), r["lock_border"].as_bool()) {
+        (Some("tin"), Some(true)) => "tin (locked border), ",
+        (Some("tin"), _) => "tin, ",
+        _ => "",
+    };
     println!(
-        "refinement  {}, {}",
+        "refinement  {tin}{}, {}",
         r["mode"].as_str().unwrap_or(""),
         r["criterion"].as_str().unwrap_or("")
     );

@@ -8,7 +8,9 @@ use std::collections::BTreeSet;
 use std::path::PathBuf;
 
 use cota_core::tin::{self, TinOptions};
-use cota_core::{check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, Mesh, MeshError};
+use cota_core::{
+    check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, Mesh, MeshError,
+};
 use proptest::prelude::*;
 
 fn grid(w: usize, h: usize, seed: u64, rough: f32) -> HeightGrid {
@@ -62,9 +64,14 @@ proptest! {
     fn every_tin_passes_the_checker_at_its_bound(
         w in 2usize..60, h in 2usize..60, seed in any::<u64>(),
         rough in 0f32..30.0, e in 0f64..20.0, lock in any::<bool>(), bands in 0usize..5,
+        sweeps in 0u32..3, flips in any::<bool>(),
     ) {
         let g = grid(w, h, seed, rough);
-        let opts = TinOptions::max_error_m(e).with_lock_border(lock).with_bands(bands);
+        let opts = TinOptions::max_error_m(e)
+            .with_lock_border(lock)
+            .with_bands(bands)
+            .with_sweeps(sweeps)
+            .with_flips(flips);
         let t = tin::build(&g, &opts).unwrap();
         let r = check_mesh(&g, &t.mesh, &CheckOptions::tin(e));
         prop_assert!(r.is_ok(), "{w}x{h} e={e} lock={lock}: {:?}", r.err());

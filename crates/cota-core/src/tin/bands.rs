@@ -21,7 +21,7 @@
 
 use rayon::prelude::*;
 
-use super::decimate::decimate;
+use super::decimate::{decimate, Params};
 use super::span::Heights;
 use super::topo::{Topo, NONE};
 use crate::mesh::{Mesh, MeshVertex};
@@ -54,10 +54,8 @@ pub(crate) fn row_major(mesh: Mesh, width: usize) -> Mesh {
 struct Ctx<'a> {
     vertices: &'a [MeshVertex],
     hs: &'a Heights<'a>,
-    bound: f64,
+    params: Params,
     locked: &'a [bool],
-    size: [i32; 2],
-    sweeps: u32,
 }
 
 impl Ctx<'_> {
@@ -118,11 +116,9 @@ impl Ctx<'_> {
         decimate(
             &mut topo,
             self.hs,
-            self.bound,
+            &self.params,
             &self.locked[lo..hi],
             &mut marks,
-            self.size,
-            self.sweeps,
         );
         topo.tris
             .iter()
@@ -147,26 +143,23 @@ fn band_rows(vertices: &[MeshVertex], k: usize, last_row: u32) -> Vec<u32> {
     rows
 }
 
-/// Decimates `mesh` (vertices row-major) within `bound` in about `k` bands in
-/// parallel, then in windows across their borders; `locked[v]` vertices
+/// Decimates `mesh` (vertices row-major) as `params` say, in about `k` bands
+/// in parallel, then in windows across their borders; `locked[v]` vertices
 /// stay. Returns the decimated mesh (vertices renumbered, row-major).
 pub(crate) fn decimate_in_bands(
     mesh: &Mesh,
     hs: &Heights,
-    bound: f64,
+    params: &Params,
     locked: &[bool],
-    size: [i32; 2],
-    (k, sweeps): (usize, u32),
+    k: usize,
 ) -> Mesh {
     let ctx = Ctx {
         vertices: &mesh.vertices,
         hs,
-        bound,
+        params: *params,
         locked,
-        size,
-        sweeps,
     };
-    let rows = band_rows(&mesh.vertices, k.max(1), size[1] as u32 - 1);
+    let rows = band_rows(&mesh.vertices, k.max(1), params.size[1] as u32 - 1);
     let bands: Vec<(u32, u32)> = rows.windows(2).map(|w| (w[0], w[1])).collect();
     let mut tris = ctx.regions(mesh.triangles.clone(), &bands, None);
     if bands.len() > 1 {

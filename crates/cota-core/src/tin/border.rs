@@ -25,15 +25,21 @@
 //! simplified. Decimation then keeps every border vertex.
 
 use super::decimate::{fan_valid, gather, Local};
+use super::exact;
 use super::span::Heights;
 use super::topo::{orient, Topo, NONE};
 use crate::grid::HeightGrid;
 use crate::mesh::Mesh;
 
-/// Marks in `keep` (length `len`, the side's samples in order) the samples
-/// the vertical Douglas–Peucker simplification at `e` keeps; the two ends are
-/// always kept.
-pub(crate) fn simplify_side(len: usize, h: impl Fn(usize) -> f64, e: f64) -> Vec<bool> {
+/// The samples (of `len`, heights `h(i)` in order along the side) the
+/// vertical Douglas–Peucker simplification at `e` keeps; the two ends are
+/// always kept. Errors within `margin` of `e` are decided exactly.
+pub(crate) fn simplify_side(
+    len: usize,
+    h: impl Fn(usize) -> f32,
+    e: f64,
+    margin: f64,
+) -> Vec<bool> {
     let mut keep = vec![false; len];
     keep[0] = true;
     keep[len - 1] = true;
@@ -43,18 +49,35 @@ pub(crate) fn simplify_side(len: usize, h: impl Fn(usize) -> f64, e: f64) -> Vec
             continue;
         }
         let (ha, hb) = (h(a), h(b));
-        let slope = (hb - ha) / (b - a) as f64;
+        let slope = (hb as f64 - ha as f64) / (b - a) as f64;
         let mut worst = (0f64, a);
         for i in a + 1..b {
-            let d = (ha + slope * (i - a) as f64 - h(i)).abs();
+            let d = (ha as f64 + slope * (i - a) as f64 - h(i) as f64).abs();
             if d > worst.0 {
                 worst = (d, i);
             }
         }
-        if worst.0 > e && worst.1 > a {
-            keep[worst.1] = true;
-            stack.push((a, worst.1));
-            stack.push((worst.1, b));
+        // Split at the farthest sample when it is beyond `e`. Near the
+        // bound, every sample in the margin is decided exactly (a tie at `e`
+        // is within), and the split goes to the farthest beyond.
+        let split = if worst.0 <= e - margin {
+            None
+        } else if worst.0 > e + margin {
+            Some(worst.1)
+        } else {
+            let chord = |i: usize| (ha as f64 + slope * (i - a) as f64 - h(i) as f64).abs();
+            let len = (b - a) as i64;
+            (a + 1..b)
+                .filter(|&i| {
+                    chord(i) > e - margin
+                        && !exact::chord_within(len, (i - a) as i64, ha, hb, h(i), e)
+                })
+                .max_by(|&i, &j| chord(i).total_cmp(&chord(j)).then(j.cmp(&i)))
+        };
+        if let Some(at) = split {
+            keep[at] = true;
+            stack.push((a, at));
+            stack.push((at, b));
         }
     }
     keep
@@ -76,14 +99,15 @@ impl Border {
     /// The border of `grid` simplified at `e` metres.
     pub(crate) fn new(grid: &HeightGrid, e: f64) -> Border {
         let (w, h) = (grid.width(), grid.height());
-        let z = |x: usize, y: usize| grid.heights()[y * w + x] as f64;
+        let z = |x: usize, y: usize| grid.heights()[y * w + x];
+        let m = Heights::of(grid).margin;
         Border {
             w: w as i32,
             h: h as i32,
-            top: simplify_side(w, |x| z(x, 0), e),
-            bottom: simplify_side(w, |x| z(x, h - 1), e),
-            left: simplify_side(h, |y| z(0, y), e),
-            right: simplify_side(h, |y| z(w - 1, y), e),
+            top: simplify_side(w, |x| z(x, 0), e, m),
+            bottom: simplify_side(w, |x| z(x, h - 1), e, m),
+            left: simplify_side(h, |y| z(0, y), e, m),
+            right: simplify_side(h, |y| z(w - 1, y), e, m),
         }
     }
 
@@ -196,10 +220,7 @@ fn insert_kept(topo: &mut Topo, grid: &HeightGrid, border: &Border, touched: &mu
 /// exactly `border`'s kept samples, and repairs it back within `e`.
 pub(crate) fn reborder(seed: &Mesh, grid: &HeightGrid, border: &Border, e: f64) -> Mesh {
     let mut topo = Topo::from_mesh(seed);
-    let hs = Heights {
-        h: grid.heights(),
-        w: grid.width(),
-    };
+    let hs = Heights::of(grid);
     let size = [grid.width() as i32, grid.height() as i32];
     let mut touched = Vec::new();
     // 1. Insert the kept samples the seed lacks.
@@ -234,7 +255,14 @@ pub(crate) fn reborder(seed: &Mesh, grid: &HeightGrid, border: &Border, e: f64) 
 /// Inserts, into each triangle of `work` (and the triangles this makes) whose
 /// largest error at a sample off the grid's border exceeds `e`, a vertex at
 /// that sample.
-pub(crate) fn repair(topo: &mut Topo, hs: &Heights, border: &Border, e: f64, mut work: Vec<u32>, skip_border: bool) {
+pub(crate) fn repair(
+    topo: &mut Topo,
+    hs: &Heights,
+    border: &Border,
+    e: f64,
+    mut work: Vec<u32>,
+    skip_border: bool,
+) {
     let mut made = Vec::new();
     while let Some(t) = work.pop() {
         let tr = topo.tris[t as usize];
@@ -243,10 +271,11 @@ pub(crate) fn repair(topo: &mut Topo, hs: &Heights, border: &Border, e: f64, mut
         }
         let p = tr.v.map(|v| topo.pos(v));
         let z = tr.v.map(|v| topo.z(v));
-        let (err, q) = hs.tri_error_at(p, z, |s| !skip_border || !border.on_border(s));
-        if err <= e {
+        let count = |s: [i32; 2]| !skip_border || !border.on_border(s);
+        if hs.fits_where(p, z, e, count) {
             continue;
         }
+        let (_, q) = hs.tri_error_at(p, z, count);
         let nv = topo.add_vertex(q, hs.h[q[1] as usize * hs.w + q[0] as usize]);
         made.clear();
         match (0..3).find(|&k| orient(p[k], p[(k + 1) % 3], q) == 0) {
@@ -273,9 +302,12 @@ mod test {
             .collect();
         let g = HeightGrid::new(w, h, v, GeoRef::unreferenced(1.0)).unwrap();
         let tree = crate::Bitree::build(&g).unwrap();
-        let seed = tree.extract(&crate::ExtractOptions::max_error_m(8.0)).unwrap().mesh;
+        let seed = tree
+            .extract(&crate::ExtractOptions::max_error_m(8.0))
+            .unwrap()
+            .mesh;
         let mut topo = Topo::from_mesh(&seed);
-        let hs = Heights { h: g.heights(), w };
+        let hs = Heights::of(&g);
         let all: Vec<u32> = (0..topo.tris.len() as u32).collect();
         let b = Border::new(&g, 1.0);
         repair(&mut topo, &hs, &b, 4.0, all, false);

@@ -153,16 +153,11 @@ pub(crate) fn gather(topo: &Topo, v: u32, l: &mut Local, size: [i32; 2]) -> bool
     l.closed = closed;
     let pv = topo.pos(v);
     if !closed {
-        let (a, b) = (
-            topo.pos(l.link[0]),
-            topo.pos(*l.link.last().unwrap_or(&v)),
-        );
+        let (a, b) = (topo.pos(l.link[0]), topo.pos(*l.link.last().unwrap_or(&v)));
         // Only along the grid's own border, straight through v.
         let on_line = |c: usize, val: i32| a[c] == val && b[c] == val && pv[c] == val;
-        let straight = on_line(0, 0)
-            || on_line(0, size[0] - 1)
-            || on_line(1, 0)
-            || on_line(1, size[1] - 1);
+        let straight =
+            on_line(0, 0) || on_line(0, size[0] - 1) || on_line(1, 0) || on_line(1, size[1] - 1);
         if !straight || l.link.len() < 3 {
             return false;
         }
@@ -171,7 +166,8 @@ pub(crate) fn gather(topo: &Topo, v: u32, l: &mut Local, size: [i32; 2]) -> bool
     l.z.clear();
     for &w in &l.link {
         let vert = &topo.verts[w as usize];
-        l.rel.push([(vert.p[0] - pv[0]) as i64, (vert.p[1] - pv[1]) as i64]);
+        l.rel
+            .push([(vert.p[0] - pv[0]) as i64, (vert.p[1] - pv[1]) as i64]);
         l.z.push(vert.z);
     }
     let d = l.link.len();
@@ -275,15 +271,13 @@ fn fan_fits(topo: &Topo, hs: &Heights, l: &Local, j: usize, hold: usize, bound: 
         )
     };
     let (p, z) = tri(hold);
-    if hs.tri_error(p, z, bound) > bound {
+    if !hs.fits(p, z, bound) {
         return false;
     }
-    (0..n)
-        .filter(|&s| s != hold)
-        .all(|s| {
-            let (p, z) = tri(s);
-            hs.tri_error(p, z, bound) <= bound
-        })
+    (0..n).filter(|&s| s != hold).all(|s| {
+        let (p, z) = tri(s);
+        hs.fits(p, z, bound)
+    })
 }
 
 /// The link index of the apex of the first fan of `v` that keeps every
@@ -320,7 +314,11 @@ pub(crate) fn collapse(topo: &mut Topo, l: &Local, j: usize) {
         let tr = &topo.tris[l.tris[i] as usize];
         tr.n[(corner_of(tr.v, l.v) + 1) % 3]
     };
-    let before = if l.closed || j == 0 { outer(topo, j) } else { NONE };
+    let before = if l.closed || j == 0 {
+        outer(topo, j)
+    } else {
+        NONE
+    };
     let after = if l.closed {
         outer(topo, wrap(j + d - 1, d))
     } else if j == 0 {
@@ -357,36 +355,63 @@ pub(crate) fn collapse(topo: &mut Topo, l: &Local, j: usize) {
     topo.verts[l.v as usize].t = NONE;
 }
 
-/// Decimates `topo` within `bound` metres: sweeps over the vertices in
-/// order, visiting first those marked in `dirty` (all when it is empty),
-/// then, in up to `sweeps` sweeps in all (0: until a sweep removes nothing),
-/// those whose star changed; never a `locked` one. `size` is the grid's
-/// width and height. Returns the number of vertices removed.
+/// How [`decimate`] works.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Params {
+    /// The bound, metres.
+    pub(crate) bound: f64,
+    /// The grid's width and height.
+    pub(crate) size: [i32; 2],
+    /// Sweeps over the vertices (0: until one removes nothing).
+    pub(crate) sweeps: u32,
+    /// Flip pass after the sweeps, then one more sweep.
+    pub(crate) flips: bool,
+}
+
+/// Decimates `topo`: sweeps over the vertices in order, visiting first those
+/// marked in `dirty` (all when it is empty), then, in up to `p.sweeps`
+/// sweeps in all, those whose star changed; never a `locked` one. With
+/// `p.flips`, a flip pass ([`flip_pass`]) follows and one more sweep visits
+/// the flipped edges' vertices. Returns the number of vertices removed.
 pub(crate) fn decimate(
     topo: &mut Topo,
     hs: &Heights,
-    bound: f64,
+    p: &Params,
     locked: &[bool],
     dirty: &mut Vec<bool>,
-    size: [i32; 2],
-    sweeps: u32,
 ) -> usize {
-    let n = topo.verts.len();
-    if dirty.len() != n {
+    let removed = sweeps(topo, hs, p, p.sweeps, locked, dirty);
+    if !p.flips || flip_pass(topo, hs, p.bound, dirty) == 0 {
+        return removed;
+    }
+    removed + sweeps(topo, hs, p, 1, locked, dirty)
+}
+
+/// Up to `n` sweeps (0: until one removes nothing) from the `dirty` marks.
+fn sweeps(
+    topo: &mut Topo,
+    hs: &Heights,
+    p: &Params,
+    n: u32,
+    locked: &[bool],
+    dirty: &mut Vec<bool>,
+) -> usize {
+    let nv = topo.verts.len();
+    if dirty.len() != nv {
         dirty.clear();
-        dirty.resize(n, true);
+        dirty.resize(nv, true);
     }
     let mut l = Local::default();
     let mut removed = 0;
     let mut sweep = 0;
     loop {
         let mut any = false;
-        for v in 0..n as u32 {
+        for v in 0..nv as u32 {
             if !dirty[v as usize] || locked[v as usize] || !topo.alive(v) {
                 continue;
             }
             dirty[v as usize] = false;
-            if let Some(j) = assess(topo, hs, v, bound, &mut l, size) {
+            if let Some(j) = assess(topo, hs, v, p.bound, &mut l, p.size) {
                 collapse(topo, &l, j);
                 for &w in &l.link {
                     dirty[w as usize] = true;
@@ -396,65 +421,56 @@ pub(crate) fn decimate(
             }
         }
         sweep += 1;
-        if !any || sweep == sweeps {
-            break;
+        if !any || sweep == n {
+            return removed;
         }
     }
-    removed
 }
 
-#[cfg(test)]
-mod perf_probe {
-    use super::*;
-    use crate::grid::{GeoRef, HeightGrid};
-
-    fn cpu_ms() -> f64 {
-        let mut t = 0u64;
-        for e in std::fs::read_dir("/proc/self/task").unwrap() {
-            let p = e.unwrap().path().join("schedstat");
-            if let Ok(s) = std::fs::read_to_string(p) {
-                t += s.split_whitespace().next().unwrap().parse::<u64>().unwrap();
+/// One pass of data-dependent flips (Dyn, Levin & Rippa 1990, "Data
+/// dependent triangulations for piecewise linear interpolation") with the
+/// largest exact error as the cost: each interior edge in turn is flipped
+/// when its quadrilateral is strictly convex and the flip lowers the larger
+/// error of its two triangles (scanned exactly, the new ones at most `bound`).
+/// Marks the four vertices of each flip in `dirty` (cleared first); returns
+/// the number of flips.
+pub(crate) fn flip_pass(topo: &mut Topo, hs: &Heights, bound: f64, dirty: &mut Vec<bool>) -> usize {
+    use super::topo::orient;
+    dirty.clear();
+    dirty.resize(topo.verts.len(), false);
+    let err = |topo: &Topo, v: [u32; 3], limit: f64| {
+        hs.tri_error(v.map(|x| topo.pos(x)), v.map(|x| topo.z(x)), limit)
+    };
+    let mut flips = 0;
+    for t in 0..topo.tris.len() as u32 {
+        for k in 0..3 {
+            let tr = topo.tris[t as usize];
+            if tr.v[0] == NONE {
+                break;
+            }
+            let u = tr.n[k];
+            if u == NONE || u < t {
+                continue;
+            }
+            let (a, b, c) = (tr.v[k], tr.v[NEXT[k]], tr.v[PREV[k]]);
+            let ut = topo.tris[u as usize];
+            let jb = corner_of(ut.v, b);
+            let d = ut.v[PREV[jb]];
+            let (pa, pb, pc, pd) = (topo.pos(a), topo.pos(b), topo.pos(c), topo.pos(d));
+            if orient(pc, pa, pd) <= 0 || orient(pd, pb, pc) <= 0 {
+                continue;
+            }
+            let old = err(topo, tr.v, f64::INFINITY).max(err(topo, ut.v, f64::INFINITY));
+            let new = err(topo, [c, a, d], old).max(err(topo, [d, b, c], old));
+            let fits = |v: [u32; 3]| hs.fits(v.map(|x| topo.pos(x)), v.map(|x| topo.z(x)), bound);
+            if new < old && fits([c, a, d]) && fits([d, b, c]) {
+                topo.flip(t, k);
+                for x in [a, b, c, d] {
+                    dirty[x as usize] = true;
+                }
+                flips += 1;
             }
         }
-        t as f64 / 1e6
     }
-
-    #[test]
-    #[ignore]
-    fn probe() {
-        let p = std::path::PathBuf::from("/work/shared/data/png/fuji.png");
-        let opts = cota_io::ReadOptions::DEFAULT.with_png_encoding(Some(cota_io::PngEncoding::TerrainRgb));
-        let g = cota_io::read_dem(&p, &opts).unwrap().grid;
-        let g = HeightGrid::new(g.width(), g.height(), g.heights().to_vec(), GeoRef::unreferenced(1.0)).unwrap();
-        let e: f64 = std::env::var("E").map(|s| s.parse().unwrap()).unwrap_or(5.0);
-        let tree = crate::Bitree::build(&g).unwrap();
-        let seed = tree.extract(&crate::ExtractOptions::max_error_m(e)).unwrap().mesh;
-        let hs = Heights { h: g.heights(), w: g.width() };
-        let size = [g.width() as i32, g.height() as i32];
-        let topo0 = Topo::from_mesh(&seed);
-        let n = topo0.verts.len();
-        let mut l = Local::default();
-        for _ in 0..3 {
-            let c = cpu_ms();
-            let mut k = 0;
-            for v in 0..n as u32 { if gather(&topo0, v, &mut l, size) { k += l.link.len(); } }
-            let t_g = cpu_ms() - c;
-            let c = cpu_ms();
-            for v in 0..n as u32 { if gather(&topo0, v, &mut l, size) { candidates(&topo0, &mut l, e); k += l.cands.len(); } }
-            let t_c = cpu_ms() - c;
-            let c = cpu_ms();
-            let mut ok = 0;
-            for v in 0..n as u32 { if assess(&topo0, &hs, v, e, &mut l, size).is_some() { ok += 1; } }
-            let t_a = cpu_ms() - c;
-            let mut topo = topo0.clone();
-            let c = cpu_ms();
-            let mut dirty = Vec::new();
-            let r = decimate(&mut topo, &hs, e, &vec![false; n], &mut dirty, size, 0);
-            let t_d = cpu_ms() - c;
-            let c = cpu_ms();
-            let t2 = Topo::from_mesh(&seed);
-            let t_f = cpu_ms() - c;
-            eprintln!("n {n}: gather {t_g:.1} +cand {t_c:.1} assess {t_a:.1} ({ok} ok) decimate {t_d:.1} ({r}) from_mesh {t_f:.1} [{k} {}]", t2.verts.len());
-        }
-    }
+    flips
 }

@@ -31,19 +31,37 @@
 //! ([`span`]: exact integer spans, closed triangles, so samples on shared
 //! edges are checked on both sides), so the bound holds by construction;
 //! [`crate::check_mesh`] with [`crate::CheckOptions::tin`] proves it again.
+//! The optional flip pass ([`TinOptions::flips`]) is the data-dependent
+//! triangulation of Dyn, Levin & Rippa (1990, "Data dependent
+//! triangulations for piecewise linear interpolation") with the largest exact
+//! error as the cost.
 //!
-//! ## What was measured (Fuji 513², Puget Sound 1025², SRTM; `bench/README.md`)
-//! Decimating the bitree mesh leaves 0.55–0.9× the triangles of greedy
-//! Delaunay insertion at the same true error (fewer at larger bounds), so
-//! the other routes of issue 21 were not needed for the count: a removal
-//! already chooses among all the fans of a star, which covers the diagonal
-//! flips of data-dependent triangulation (Dyn, Levin & Rippa 1990,
-//! "Data dependent triangulations for piecewise linear interpolation")
-//! inside each star, and greedy insertion from a coarse seed would rescan
-//! big triangles the bitree has already refined exactly. Sweeping the
-//! vertices in order and taking the first fan that fits beat a priority
-//! queue (smallest resulting error first) by 1–2 % in triangles and 3× in
-//! time.
+//! ## The routes tried, measured
+//! Issue 21 lists three routes: exact-checked decimation of the bitree mesh,
+//! data-dependent diagonal flips, greedy insertion seeded from a coarse
+//! bitree mesh. Decimation alone already leaves 0.55–0.9× the triangles of
+//! greedy Delaunay insertion (Delatin) at the same true error on the
+//! benchmark grids (`bench/README.md`), so the others were measured against
+//! it. Fuji 513², one thread, triangles and CPU milliseconds at 5 m / 20 m
+//! (a loaded machine: ratios within one column are what count):
+//!
+//! | variant | 5 m | 20 m |
+//! |---|---:|---:|
+//! | 1 sweep, first fitting fan (**default**) | 82,225 / 69 | 12,597 / 22 |
+//! | 2 sweeps | 75,942 / 87 | 11,481 / 24 |
+//! | sweeps until none removes anything | 75,480 / 97 | 11,403 / 29 |
+//! | 1 sweep, then flips ([`TinOptions::flips`]) and a sweep of their vertices | 77,145 / 114 | 11,585 / 29 |
+//! | sweeps until none, then flips and a sweep | 74,152 / 167 | 11,199 / 48 |
+//! | priority queue, smallest resulting error first, best fan | 77,270 / ≈ 3.5× | 11,535 / ≈ 3× |
+//! | seed at 1.5 E repaired by greedy insertion, then 1 sweep | 84,756 / more | 13,514 / more |
+//!
+//! The first sweep does most of the work (at 5 m it removes 54,314 of the
+//! 57,713 vertices the sweeps until none remove, in two thirds of their
+//! assessments), so the default is one sweep; [`TinOptions::sweeps`] and
+//! [`TinOptions::flips`] buy the last few percent. Greedy insertion needs a
+//! full scan of each new triangle, and seeding it from a coarser bitree mesh
+//! left more triangles after decimation than seeding decimation with the
+//! bitree mesh at `E` itself, which is already exact.
 //!
 //! ## Budget
 //! With [`TinOptions::max_triangles`], the bound is found by bisection: the
@@ -55,6 +73,7 @@
 pub(crate) mod bands;
 pub(crate) mod border;
 pub(crate) mod decimate;
+pub(crate) mod exact;
 pub(crate) mod span;
 pub(crate) mod topo;
 
@@ -89,6 +108,12 @@ pub struct TinOptions {
     /// a few percent more vertices for about a third more time each (see the
     /// module docs). Default: 1.
     pub sweeps: u32,
+    /// After the sweeps, flip every interior edge whose flip lowers the
+    /// larger exact error of its two triangles (data-dependent
+    /// triangulation), then sweep once more over the flipped edges' vertices:
+    /// a few percent fewer triangles for about half as much time again (see
+    /// the module docs). Default: false.
+    pub flips: bool,
 }
 
 impl TinOptions {
@@ -99,6 +124,7 @@ impl TinOptions {
         lock_border: false,
         bands: 0,
         sweeps: 1,
+        flips: false,
     };
 
     /// A TIN within `e` metres.
@@ -129,6 +155,12 @@ impl TinOptions {
         self
     }
 
+    /// Sets [`TinOptions::flips`].
+    pub const fn with_flips(mut self, yes: bool) -> Self {
+        self.flips = yes;
+        self
+    }
+
     /// Sets [`TinOptions::bands`].
     pub const fn with_bands(mut self, bands: usize) -> Self {
         self.bands = bands;
@@ -152,14 +184,7 @@ impl Default for TinOptions {
 /// The bitree's build, plus time proportional to the seed mesh (each
 /// removal scans its star once per fan tried), on all cores.
 pub fn build(grid: &HeightGrid, opts: &TinOptions) -> Result<Extraction, MeshError> {
-    crate::on_pool(|| {
-        let t = std::time::Instant::now();
-        let tree = Bitree::build(grid)?;
-        if std::env::var("TIMES").is_ok() {
-            eprintln!("build {:.1}", t.elapsed().as_secs_f64() * 1e3);
-        }
-        build_from(&tree, opts)
-    })
+    crate::on_pool(|| build_from(&Bitree::build(grid)?, opts))
 }
 
 /// Builds a TIN from a prepared bitree (see the module docs). The result's
@@ -200,18 +225,7 @@ pub fn build_from(tree: &Bitree<'_>, opts: &TinOptions) -> Result<Extraction, Me
 /// The TIN at bound `e`.
 fn tin_at(tree: &Bitree<'_>, e: f64, opts: &TinOptions) -> Result<Mesh, MeshError> {
     let grid = tree.grid();
-    let t0 = std::time::Instant::now();
-    let f: f64 = std::env::var("SEEDF").map(|s| s.parse().unwrap_or(1.0)).unwrap_or(1.0);
-    let mut seed = tree.extract(&ExtractOptions::max_error_m(e * f))?.mesh;
-    if f > 1.0 {
-        let mut topo = topo::Topo::from_mesh(&seed);
-        let hs = span::Heights { h: grid.heights(), w: grid.width() };
-        let all: Vec<u32> = (0..topo.tris.len() as u32).collect();
-        let b = border::Border::new(grid, 1e9);
-        border::repair(&mut topo, &hs, &b, e, all, false);
-        seed = topo.to_mesh();
-    }
-    let t1 = t0.elapsed().as_secs_f64() * 1e3;
+    let seed = tree.extract(&ExtractOptions::max_error_m(e))?.mesh;
     let size = [grid.width() as i32, grid.height() as i32];
     let seed = if opts.lock_border {
         let b = border::Border::new(grid, e);
@@ -220,32 +234,32 @@ fn tin_at(tree: &Bitree<'_>, e: f64, opts: &TinOptions) -> Result<Mesh, MeshErro
         seed
     };
     let seed = bands::row_major(seed, grid.width());
+    let on_border = |v: &crate::mesh::MeshVertex| {
+        v.col == 0 || v.row == 0 || v.col as i32 == size[0] - 1 || v.row as i32 == size[1] - 1
+    };
     let locked: Vec<bool> = seed
         .vertices
         .iter()
-        .map(|v| {
-            opts.lock_border
-                && (v.col == 0
-                    || v.row == 0
-                    || v.col as i32 == size[0] - 1
-                    || v.row as i32 == size[1] - 1)
-        })
+        .map(|v| opts.lock_border && on_border(v))
         .collect();
     let k = match opts.bands {
         0 => (2 * rayon::current_num_threads()).min(seed.vertices.len() / 4096),
         k => k,
     };
-    let hs = span::Heights {
-        h: grid.heights(),
-        w: grid.width(),
+    let hs = span::Heights::of(grid);
+    let params = decimate::Params {
+        bound: e,
+        size,
+        sweeps: opts.sweeps,
+        flips: opts.flips,
     };
-    let t2 = t0.elapsed().as_secs_f64() * 1e3;
-    let m = bands::decimate_in_bands(&seed, &hs, e, &locked, size, (k.max(1), opts.sweeps));
-    let t3 = t0.elapsed().as_secs_f64() * 1e3;
-    if std::env::var("TIMES").is_ok() {
-        eprintln!("extract {t1:.1} prep {:.1} dec {:.1}", t2 - t1, t3 - t2);
-    }
-    Ok(m)
+    Ok(bands::decimate_in_bands(
+        &seed,
+        &hs,
+        &params,
+        &locked,
+        k.max(1),
+    ))
 }
 
 /// Budget mode: bisection on the bound (see the module docs).

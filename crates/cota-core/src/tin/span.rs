@@ -169,9 +169,24 @@ pub(crate) struct Heights<'a> {
     pub(crate) h: &'a [f32],
     /// Row length.
     pub(crate) w: usize,
+    /// Errors within this of a bound are decided exactly
+    /// ([`super::exact`]): far more than `f64` evaluation can be off by.
+    pub(crate) margin: f64,
 }
 
-impl Heights<'_> {
+impl<'a> Heights<'a> {
+    /// The heights of `grid`, with a margin of `10⁻⁹·max(1, |h|max)` metres.
+    pub(crate) fn of(grid: &'a crate::grid::HeightGrid) -> Heights<'a> {
+        let scale = grid
+            .valid_range()
+            .map_or(1.0, |(lo, hi)| (lo.abs().max(hi.abs()) as f64).max(1.0));
+        Heights {
+            h: grid.heights(),
+            w: grid.width(),
+            margin: 1e-9 * scale,
+        }
+    }
+
     /// The largest `|plane − h|` over the samples of row `y`, columns
     /// `x0..=x1`: four independent lanes (the compiler turns them into SIMD
     /// lanes), then the tail.
@@ -220,6 +235,42 @@ impl Heights<'_> {
         m
     }
 
+    /// Whether every sample in or on triangle `p` (heights `z`) is within
+    /// `e` of its plane: decided in `f64` outside [`Heights::margin`] of
+    /// `e`, and sample by sample in integers ([`super::exact`]) inside it.
+    pub(crate) fn fits(&self, p: [[i32; 2]; 3], z: [f32; 3], e: f64) -> bool {
+        let m = self.tri_error(p, z, e + self.margin);
+        if m <= e - self.margin {
+            return true;
+        }
+        m <= e + self.margin && self.fits_where(p, z, e, |_| true)
+    }
+
+    /// [`Heights::fits`] over the samples `s` for which `count(s)`, one by
+    /// one (the slow path).
+    pub(crate) fn fits_where(
+        &self,
+        p: [[i32; 2]; 3],
+        z: [f32; 3],
+        e: f64,
+        count: impl Fn([i32; 2]) -> bool,
+    ) -> bool {
+        let Some(pl) = Plane::new(p, z) else {
+            return false;
+        };
+        spans(p, |y, x0, x1| {
+            let base = pl.z0 + pl.gy * (y as f64 - pl.y0);
+            let start = y as usize * self.w;
+            (x0..=x1).all(|x| {
+                let (h, s) = (self.h[start + x as usize], [x as i32, y as i32]);
+                let d = ((base + pl.gx * (x as f64 - pl.x0)) - h as f64).abs();
+                d <= e - self.margin
+                    || !count(s)
+                    || (d <= e + self.margin && super::exact::plane_within(p, z, s, h, e))
+            })
+        })
+    }
+
     /// The largest `|plane − h|` over the samples `s` of triangle `p` for
     /// which `count(s)`, and a sample where it is reached (the first in row
     /// order among equals); `(−1, p[0])` when none counts.
@@ -237,8 +288,8 @@ impl Heights<'_> {
             let base = pl.z0 + pl.gy * (y as f64 - pl.y0);
             let start = y as usize * self.w;
             for x in x0..=x1 {
-                let d = ((base + pl.gx * (x as f64 - pl.x0)) - self.h[start + x as usize] as f64)
-                    .abs();
+                let d =
+                    ((base + pl.gx * (x as f64 - pl.x0)) - self.h[start + x as usize] as f64).abs();
                 if d > best.0 && count([x as i32, y as i32]) {
                     best = (d, [x as i32, y as i32]);
                 }
@@ -274,7 +325,9 @@ mod test {
     fn spans_match_the_raster_module_on_many_triangles() {
         let mut seed = 12345u64;
         let mut rnd = |n: u64| {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((seed >> 33) % n) as i32
         };
         for _ in 0..20000 {
@@ -296,19 +349,49 @@ mod test {
     fn error_of_a_plane_is_zero_and_of_a_bump_is_its_height() {
         let w = 9;
         let mut h: Vec<f32> = (0..w * w).map(|i| (i % w) as f32 * 2.0).collect();
-        let hs = Heights { h: &h, w };
+        let hs = Heights {
+            h: &h,
+            w,
+            margin: 1e-9,
+        };
         let p = [[0, 0], [8, 0], [0, 8]];
         let z = p.map(|q| h[q[1] as usize * w + q[0] as usize]);
         assert_eq!(hs.tri_error(p, z, f64::INFINITY), 0.0);
         h[2 * w + 3] += 5.0;
-        let hs = Heights { h: &h, w };
+        let hs = Heights {
+            h: &h,
+            w,
+            margin: 1e-9,
+        };
         assert_eq!(hs.tri_error(p, z, f64::INFINITY), 5.0);
         assert_eq!(hs.tri_error_at(p, z, |_| true), (5.0, [3, 2]));
         assert_eq!(hs.tri_error_at(p, z, |s| s != [3, 2]).0, 0.0);
         // Outside the triangle: not seen.
         h[2 * w + 3] -= 5.0;
         h[7 * w + 7] += 9.0;
-        let hs = Heights { h: &h, w };
+        let hs = Heights {
+            h: &h,
+            w,
+            margin: 1e-9,
+        };
         assert_eq!(hs.tri_error(p, z, f64::INFINITY), 0.0);
+    }
+
+    #[test]
+    fn ties_fit_exactly() {
+        // A bump of exactly 5 on a plane: within 5, not within 5 − 1e-12.
+        let w = 9;
+        let mut h: Vec<f32> = (0..w * w).map(|i| (i % w) as f32 * 3.0).collect();
+        h[2 * w + 3] += 5.0;
+        let hs = Heights {
+            h: &h,
+            w,
+            margin: 1e-9,
+        };
+        let p = [[0, 0], [8, 0], [0, 8]];
+        let z = p.map(|q| (q[0] * 3) as f32);
+        assert!(hs.fits(p, z, 5.0));
+        assert!(!hs.fits(p, z, 5.0 - 1e-12));
+        assert!(!hs.fits(p, z, 4.0));
     }
 }

@@ -226,6 +226,35 @@ impl Topo {
         }
     }
 
+    /// Flips edge `k` of triangle `t` (shared with a neighbour): `(a, b, c)`
+    /// and `(b, a, d)` become `(c, a, d)` and `(d, b, c)` in the same two
+    /// slots. The caller checks that both are counter-clockwise.
+    pub(crate) fn flip(&mut self, t: u32, k: usize) {
+        let Tri { v: tv, n: tn } = self.tris[t as usize];
+        let u = tn[k];
+        let (a, b, c) = (tv[k], tv[(k + 1) % 3], tv[(k + 2) % 3]);
+        let j = self.corner(u, b);
+        let Tri { v: uv, n: un } = self.tris[u as usize];
+        let d = uv[(j + 2) % 3];
+        let (t_bc, t_ca) = (tn[(k + 1) % 3], tn[(k + 2) % 3]);
+        let (u_ad, u_db) = (un[(j + 1) % 3], un[(j + 2) % 3]);
+        self.tris[t as usize] = Tri {
+            v: [c, a, d],
+            n: [NONE, NONE, u],
+        };
+        self.tris[u as usize] = Tri {
+            v: [d, b, c],
+            n: [NONE, NONE, t],
+        };
+        self.set_nbr(t, 0, t_ca);
+        self.set_nbr(t, 1, u_ad);
+        self.set_nbr(u, 0, u_db);
+        self.set_nbr(u, 1, t_bc);
+        for (x, s) in [(a, t), (c, t), (d, u), (b, u)] {
+            self.verts[x as usize].t = s;
+        }
+    }
+
     /// Adds a vertex at `p` with height `z` (not yet in any triangle) and
     /// returns its id.
     pub(crate) fn add_vertex(&mut self, p: [i32; 2], z: f32) -> u32 {
@@ -375,7 +404,9 @@ impl Topo {
                             return true;
                         }
                         let pq = self.pos(q);
-                        !(orient(pa, pb, pq) >= 0 && orient(pb, pc, pq) >= 0 && orient(pc, pa, pq) >= 0)
+                        !(orient(pa, pb, pq) >= 0
+                            && orient(pb, pc, pq) >= 0
+                            && orient(pc, pa, pq) >= 0)
                     })
             });
             let Some(i) = ear else {
