@@ -203,7 +203,7 @@ pub(crate) fn fan_valid(l: &Local, j: usize) -> bool {
 /// every apex (`O(d)`). The fan's other triangles are checked for
 /// orientation only when the error at `v` is within the bound, and not at all
 /// when the link polygon is strictly convex (every fan is then valid).
-fn candidates(topo: &Topo, l: &mut Local, bound: f64) {
+fn candidates(topo: &Topo, l: &mut Local, bound: f64, margin: f64) {
     l.cands.clear();
     let d = l.link.len();
     let zv = topo.z(l.v) as f64;
@@ -241,7 +241,7 @@ fn candidates(topo: &Topo, l: &mut Local, bound: f64) {
             + l.x(i1, j) as f64 * l.z[i] as f64
             + l.x(j, i) as f64 * l.z[i1] as f64;
         let err_area = (at_v_area - zv * area as f64).abs();
-        if err_area > bound * area as f64 {
+        if err_area > (bound + margin) * area as f64 {
             continue;
         }
         let convex = *convex.get_or_insert_with(|| {
@@ -293,11 +293,53 @@ pub(crate) fn assess(
     if !gather(topo, v, l, size) {
         return None;
     }
-    candidates(topo, l, bound);
+    candidates(topo, l, bound, hs.margin);
+    if l.closed && lone_inner_sample(l) {
+        // The only sample the removal changes is v itself: its error under
+        // each fan is known (exactly, near the bound).
+        let pv = topo.pos(v);
+        let zv = topo.z(v);
+        return (0..l.cands.len()).find_map(|c| {
+            let (err, j, hold) = l.cands[c];
+            let exact = || {
+                let d = l.link.len();
+                let (start, _) = l.fan_range(j);
+                let i = wrap(start + hold, d);
+                let t = [j, i, wrap(i + 1, d)];
+                let p = t.map(|k| [pv[0] + l.rel[k][0] as i32, pv[1] + l.rel[k][1] as i32]);
+                super::exact::plane_within(p, t.map(|k| l.z[k]), pv, zv, bound)
+            };
+            (err <= bound - hs.margin || exact()).then_some(j)
+        });
+    }
     (0..l.cands.len()).find_map(|c| {
         let (_, j, hold) = l.cands[c];
         fan_fits(topo, hs, l, j, hold, bound).then_some(j)
     })
+}
+
+/// Whether `v` is the only sample strictly inside its (closed) star: by
+/// Pick's theorem, `2·inside = 2·area − boundary + 2`, with the boundary
+/// samples counted on the link edges by `gcd(|dx|, |dy|)`. Then a removal
+/// changes the surface at `v` only (the link's edges and vertices stay).
+fn lone_inner_sample(l: &Local) -> bool {
+    let d = l.link.len();
+    let mut area2 = 0;
+    let mut boundary = 0;
+    for i in 0..d {
+        let i1 = wrap(i + 1, d);
+        area2 += l.x(i, i1);
+        let (a, b) = (l.rel[i], l.rel[i1]);
+        boundary += gcd((b[0] - a[0]).unsigned_abs(), (b[1] - a[1]).unsigned_abs()) as i64;
+    }
+    area2 - boundary + 2 == 2
+}
+
+fn gcd(mut a: u64, mut b: u64) -> u64 {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
 }
 
 /// Removes `l.v` by the fan from link index `j` (valid, see [`assess`]),
