@@ -324,18 +324,30 @@ pub(crate) fn assess(
 /// changes the surface at `v` only (the link's edges and vertices stay).
 fn lone_inner_sample(l: &Local) -> bool {
     let d = l.link.len();
-    let mut area2 = 0;
-    let mut boundary = 0;
+    let (mut area2, mut most) = (0, 0);
     for i in 0..d {
         let i1 = wrap(i + 1, d);
         area2 += l.x(i, i1);
         let (a, b) = (l.rel[i], l.rel[i1]);
-        boundary += gcd((b[0] - a[0]).unsigned_abs(), (b[1] - a[1]).unsigned_abs()) as i64;
+        most += (b[0] - a[0]).abs().max((b[1] - a[1]).abs());
     }
-    area2 - boundary + 2 == 2
+    // The boundary count is at most the sum of the edges' longer sides.
+    if area2 > most {
+        return false;
+    }
+    let boundary: i64 = (0..d)
+        .map(|i| {
+            let (a, b) = (l.rel[i], l.rel[wrap(i + 1, d)]);
+            gcd((b[0] - a[0]).unsigned_abs(), (b[1] - a[1]).unsigned_abs()) as i64
+        })
+        .sum();
+    area2 == boundary
 }
 
 fn gcd(mut a: u64, mut b: u64) -> u64 {
+    if a == 0 || a == b {
+        return b.max(a);
+    }
     while b != 0 {
         (a, b) = (b, a % b);
     }

@@ -9,7 +9,8 @@
 //! invented by rounding; the left end of a row is the ceiling of the left
 //! edge's column, the right end the floor of the right edge's. This matches
 //! [`crate::raster::for_each_span`] (tested), without its three divisions a
-//! row. The plane is [`crate::raster::Plane`]'s, the checker's.
+//! row. The plane is [`crate::raster::Plane`]'s, the checker's, with one
+//! division instead of two (errors near the bound are decided exactly anyway).
 
 /// One edge walked row by row: its column is `q + r / dy` exactly.
 #[derive(Clone, Copy)]
@@ -143,21 +144,27 @@ impl Plane {
     /// degenerate.
     #[inline]
     pub(crate) fn new(p: [[i32; 2]; 3], z: [f32; 3]) -> Option<Plane> {
-        let (x0, y0) = (p[0][0] as f64, p[0][1] as f64);
-        let (dx1, dy1) = (p[1][0] as f64 - x0, p[1][1] as f64 - y0);
-        let (dx2, dy2) = (p[2][0] as f64 - x0, p[2][1] as f64 - y0);
-        let det = dx1 * dy2 - dx2 * dy1;
-        if det == 0.0 {
+        // Differences and the determinant in integers (exact), one division.
+        let d = |k: usize, c: usize| (p[k][c] - p[0][c]) as i64;
+        let det = d(1, 0) * d(2, 1) - d(2, 0) * d(1, 1);
+        if det == 0 {
             return None;
         }
+        let (dx1, dy1, dx2, dy2) = (
+            d(1, 0) as f64,
+            d(1, 1) as f64,
+            d(2, 0) as f64,
+            d(2, 1) as f64,
+        );
+        let inv = 1.0 / det as f64;
         let z0 = z[0] as f64;
         let (dz1, dz2) = (z[1] as f64 - z0, z[2] as f64 - z0);
         Some(Plane {
-            x0,
-            y0,
+            x0: p[0][0] as f64,
+            y0: p[0][1] as f64,
             z0,
-            gx: (dz1 * dy2 - dz2 * dy1) / det,
-            gy: (dx1 * dz2 - dx2 * dz1) / det,
+            gx: (dz1 * dy2 - dz2 * dy1) * inv,
+            gy: (dx1 * dz2 - dx2 * dz1) * inv,
         })
     }
 }
@@ -216,7 +223,9 @@ impl<'a> Heights<'a> {
             }
             x += 1.0;
         }
-        m[0].max(m[1]).max(m[2].max(m[3]))
+        // Plain comparisons (the errors are never NaN): no NaN handling.
+        let big = |a: f64, b: f64| if a > b { a } else { b };
+        big(big(m[0], m[1]), big(m[2], m[3]))
     }
 
     /// The largest `|plane − h|` over every sample in or on triangle `p` with
@@ -229,7 +238,10 @@ impl<'a> Heights<'a> {
         };
         let mut m = 0f64;
         spans(p, |y, x0, x1| {
-            m = m.max(self.row_max(&pl, y, x0, x1));
+            let r = self.row_max(&pl, y, x0, x1);
+            if r > m {
+                m = r;
+            }
             m <= limit
         });
         m
