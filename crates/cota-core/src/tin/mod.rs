@@ -15,20 +15,20 @@
 //!    papers `000_ebf7e3a88dffd361.txt` and `001_49f2c365e8c41172.txt`): already
 //!    within `E` everywhere, built in `O(n log n)` and extracted in time
 //!    proportional to its size.
-//! 2. **Locked border** (option, [`border`]): the border re-meshed from the
+//! 2. **Locked border** (option, `tin/border.rs`): the border re-meshed from the
 //!    border samples alone, so adjacent tiles share their border vertices.
-//! 3. **Decimation** ([`decimate`]): vertices are removed, and their star
+//! 3. **Decimation** (`tin/decimate.rs`): vertices are removed, and their star
 //!    re-triangulated by the best valid fan from a link vertex, while every
 //!    sample of the star stays within `E`, checked exactly over every sample
 //!    of every new triangle (vertex decimation, Schroeder, Zarge & Lorensen
 //!    1992, "Decimation of triangle meshes"; the drop heuristic of Lee 1991,
 //!    "Comparison of existing methods for building triangular irregular
 //!    network models of terrain from grid digital elevation models").
-//! 4. **In parallel** ([`bands`]): bands of rows decimated independently with
+//! 4. **In parallel** (`tin/bands.rs`): bands of rows decimated independently with
 //!    their borders locked, merged, then relaxed across the band borders.
 //!
 //! Every accepted change is verified against every sample it affects
-//! ([`span`]: exact integer spans, closed triangles, so samples on shared
+//! (`tin/span.rs`: exact integer spans, closed triangles, so samples on shared
 //! edges are checked on both sides), so the bound holds by construction;
 //! [`crate::check_mesh`] with [`crate::CheckOptions::tin`] proves it again.
 //! The optional flip pass ([`TinOptions::flips`]) is the data-dependent
@@ -39,7 +39,7 @@
 //! ## The routes tried, measured
 //! Issue 21 lists three routes: exact-checked decimation of the bitree mesh,
 //! data-dependent diagonal flips, greedy insertion seeded from a coarse
-//! bitree mesh. Decimation alone already leaves 0.55–0.9× the triangles of
+//! bitree mesh. Decimation alone already leaves 0.48–0.92× the triangles of
 //! greedy Delaunay insertion (Delatin) at the same true error on the
 //! benchmark grids (`bench/README.md`), so the others were measured against
 //! it. Fuji 513², one thread, triangles and CPU milliseconds at 5 m / 20 m
@@ -93,7 +93,7 @@ pub struct TinOptions {
     /// bisection) that has at most this many triangles. Default: `None`.
     pub max_triangles: Option<usize>,
     /// Keep the border as simplified from the border samples alone (a
-    /// vertical Douglas–Peucker at the bound on each side, see [`border`]):
+    /// vertical Douglas–Peucker at the bound on each side, see `tin/border.rs`):
     /// the border vertices then depend only on the border's samples and the
     /// bound, so tiles that share a side, meshed at the same bound, share
     /// their vertices there exactly. Default: false (border vertices are
