@@ -111,48 +111,9 @@ impl Local {
 /// the region's border that cannot be removed (its border neighbours are not
 /// collinear with it, or it is not on the grid's border).
 pub(crate) fn gather(topo: &Topo, v: u32, l: &mut Local, size: [i32; 2]) -> bool {
-    l.tris.clear();
-    l.link.clear();
-    l.v = v;
-    let t0 = topo.verts[v as usize].t;
-    // Counter-clockwise from t0; if the border stops the walk, clockwise
-    // from t0 for the triangles before it.
-    let mut t = t0;
-    let mut closed = false;
-    loop {
-        let tr = &topo.tris[t as usize];
-        let k = corner_of(tr.v, v);
-        l.tris.push(t);
-        l.link.push(tr.v[NEXT[k]]);
-        let next = tr.n[PREV[k]];
-        if next == NONE {
-            l.link.push(tr.v[PREV[k]]);
-            break;
-        }
-        if next == t0 {
-            closed = true;
-            break;
-        }
-        t = next;
-    }
-    if !closed {
-        let mut t = t0;
-        loop {
-            let tr = &topo.tris[t as usize];
-            let prev = tr.n[corner_of(tr.v, v)];
-            if prev == NONE {
-                break;
-            }
-            let pt = &topo.tris[prev as usize];
-            let k = corner_of(pt.v, v);
-            l.tris.insert(0, prev);
-            l.link.insert(0, pt.v[NEXT[k]]);
-            t = prev;
-        }
-    }
-    l.closed = closed;
+    walk_star(topo, v, l);
     let pv = topo.pos(v);
-    if !closed {
+    if !l.closed {
         let (a, b) = (topo.pos(l.link[0]), topo.pos(*l.link.last().unwrap_or(&v)));
         // Only along the grid's own border, straight through v.
         let on_line = |c: usize, val: i32| a[c] == val && b[c] == val && pv[c] == val;
@@ -182,6 +143,47 @@ pub(crate) fn gather(topo: &Topo, v: u32, l: &mut Local, size: [i32; 2]) -> bool
         }
     }
     true
+}
+
+/// Fills `l`'s triangles and link with the star of `v`: counter-clockwise
+/// from `v`'s triangle; if the region's border stops the walk, clockwise
+/// from it for the triangles before.
+fn walk_star(topo: &Topo, v: u32, l: &mut Local) {
+    l.tris.clear();
+    l.link.clear();
+    l.v = v;
+    let t0 = topo.verts[v as usize].t;
+    let mut t = t0;
+    l.closed = loop {
+        let tr = &topo.tris[t as usize];
+        let k = corner_of(tr.v, v);
+        l.tris.push(t);
+        l.link.push(tr.v[NEXT[k]]);
+        let next = tr.n[PREV[k]];
+        if next == NONE {
+            l.link.push(tr.v[PREV[k]]);
+            break false;
+        }
+        if next == t0 {
+            break true;
+        }
+        t = next;
+    };
+    if l.closed {
+        return;
+    }
+    let mut t = t0;
+    loop {
+        let tr = &topo.tris[t as usize];
+        let prev = tr.n[corner_of(tr.v, v)];
+        if prev == NONE {
+            return;
+        }
+        let pt = &topo.tris[prev as usize];
+        l.tris.insert(0, prev);
+        l.link.insert(0, pt.v[NEXT[corner_of(pt.v, v)]]);
+        t = prev;
+    }
 }
 
 /// Whether every triangle of the fan from link index `j` is strictly

@@ -51,6 +51,26 @@ pub(crate) struct Vert {
     pub(crate) t: u32,
 }
 
+/// `tris` sorted by their smallest vertex (a counting sort over `nv`
+/// vertices), so that sweeps in vertex order walk the triangles forwards.
+fn by_first_vertex(tris: &[[u32; 3]], nv: usize) -> Vec<[u32; 3]> {
+    let first = |t: &[u32; 3]| t[0].min(t[1]).min(t[2]) as usize;
+    let mut at = vec![0u32; nv + 1];
+    for t in tris {
+        at[first(t) + 1] += 1;
+    }
+    for i in 0..nv {
+        at[i + 1] += at[i];
+    }
+    let mut order = vec![[0u32; 3]; tris.len()];
+    for t in tris {
+        let m = first(t);
+        order[at[m] as usize] = *t;
+        at[m] += 1;
+    }
+    order
+}
+
 /// A triangulation over grid samples, editable in place.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Topo {
@@ -66,7 +86,6 @@ impl Topo {
     /// counting sort), then each directed edge is paired with its reverse
     /// through a per-vertex list of outgoing edges: `O(V + T)`.
     pub(crate) fn from_mesh(mesh: &Mesh) -> Topo {
-        let nv = mesh.vertices.len();
         let mut verts: Vec<Vert> = mesh
             .vertices
             .iter()
@@ -76,26 +95,16 @@ impl Topo {
                 t: NONE,
             })
             .collect();
-        // Counting sort by smallest vertex; `start` doubles as the CSR of
-        // outgoing edges below (each vertex has as many outgoing edges as
-        // triangles).
-        let mut first = vec![0u32; nv + 1];
-        let mut start = vec![0u32; nv + 1];
-        for t in &mesh.triangles {
-            first[*t.iter().min().unwrap_or(&0) as usize + 1] += 1;
+        let order = by_first_vertex(&mesh.triangles, verts.len());
+        // Outgoing edges per vertex (CSR): as many as its triangles.
+        let mut start = vec![0u32; verts.len() + 1];
+        for t in &order {
             for &a in t {
                 start[a as usize + 1] += 1;
             }
         }
-        for i in 0..nv {
-            first[i + 1] += first[i];
+        for i in 0..verts.len() {
             start[i + 1] += start[i];
-        }
-        let mut order = vec![[0u32; 3]; mesh.triangles.len()];
-        for t in &mesh.triangles {
-            let m = *t.iter().min().unwrap_or(&0) as usize;
-            order[first[m] as usize] = *t;
-            first[m] += 1;
         }
         let mut fill = start.clone();
         let mut out = vec![(0u32, 0u32); 3 * order.len()];
@@ -106,19 +115,20 @@ impl Topo {
                 fill[a] += 1;
             }
         }
+        let across = |a: u32, b: u32| {
+            let list = &out[start[b as usize] as usize..start[b as usize + 1] as usize];
+            list.iter()
+                .find(|&&(to, _)| to == a)
+                .map_or(NONE, |&(_, u)| u)
+        };
         let tris = order
             .iter()
             .enumerate()
             .map(|(ti, t)| {
-                let mut n = [NONE; 3];
-                for k in 0..3 {
-                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                for &a in t {
                     verts[a as usize].t = ti as u32;
-                    let list = &out[start[b as usize] as usize..start[b as usize + 1] as usize];
-                    if let Some(&(_, u)) = list.iter().find(|&&(to, _)| to == a) {
-                        n[k] = u;
-                    }
                 }
+                let n = [0, 1, 2].map(|k| across(t[k], t[(k + 1) % 3]));
                 Tri { v: *t, n }
             })
             .collect();
@@ -448,5 +458,95 @@ impl Topo {
                 assert!(self.tris[v.t as usize].v.contains(&(vi as u32)));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+    use crate::grid::{GeoRef, HeightGrid};
+
+    fn grid() -> HeightGrid {
+        let (w, h) = (17, 13);
+        let v = (0..w * h)
+            .map(|i| ((i % w) as f32 * 0.4).sin() * 6.0 + (i / w) as f32 * 0.3)
+            .collect();
+        HeightGrid::new(w, h, v, GeoRef::unreferenced(1.0)).unwrap()
+    }
+
+    /// A valid triangulation that covers the grid (bound unchecked).
+    fn tiles(g: &HeightGrid, t: &Topo) {
+        t.validate();
+        crate::check_mesh(
+            g,
+            &t.to_mesh(),
+            &crate::CheckOptions::DEFAULT.with_general(true),
+        )
+        .unwrap();
+    }
+
+    #[test]
+    fn local_edits_keep_a_valid_tiling() {
+        let g = grid();
+        let seed = crate::Bitree::build(&g)
+            .unwrap()
+            .extract(&crate::ExtractOptions::max_error_m(3.0))
+            .unwrap()
+            .mesh;
+        let mut t = Topo::from_mesh(&seed);
+        tiles(&g, &t);
+        let mut made = Vec::new();
+        // Split a triangle inside, at a sample strictly inside it.
+        let inside = (0..t.tris.len() as u32).find_map(|ti| {
+            let p = t.tris[ti as usize].v.map(|v| t.pos(v));
+            let (x0, x1) = (p.iter().map(|q| q[0]).min()?, p.iter().map(|q| q[0]).max()?);
+            let (y0, y1) = (p.iter().map(|q| q[1]).min()?, p.iter().map(|q| q[1]).max()?);
+            (x0..=x1)
+                .flat_map(|x| (y0..=y1).map(move |y| [x, y]))
+                .find_map(|q| {
+                    (orient(p[0], p[1], q) > 0
+                        && orient(p[1], p[2], q) > 0
+                        && orient(p[2], p[0], q) > 0)
+                        .then_some((ti, q))
+                })
+        });
+        let (ti, q) = inside.expect("a triangle with a sample inside");
+        let v = t.add_vertex(q, g.get(q[0] as usize, q[1] as usize));
+        t.split_inside(ti, v, &mut made);
+        tiles(&g, &t);
+        // Flip every flippable edge of the first triangles.
+        let mut flips = 0;
+        for ti in 0..8u32 {
+            for k in 0..3 {
+                let tr = t.tris[ti as usize];
+                let u = tr.n[k];
+                if u == NONE {
+                    continue;
+                }
+                let (a, b, c) = (tr.v[k], tr.v[(k + 1) % 3], tr.v[(k + 2) % 3]);
+                let d = t.tris[u as usize].v[(t.corner(u, b) + 2) % 3];
+                let (pa, pb, pc, pd) = (t.pos(a), t.pos(b), t.pos(c), t.pos(d));
+                if orient(pc, pa, pd) > 0 && orient(pd, pb, pc) > 0 {
+                    t.flip(ti, k);
+                    tiles(&g, &t);
+                    flips += 1;
+                }
+            }
+        }
+        assert!(flips > 0);
+        // Remove a vertex by ear clipping its link polygon.
+        let v = (0..t.verts.len() as u32)
+            .find(|&v| {
+                let p = t.pos(v);
+                t.alive(v) && p[0] > 0 && p[1] > 0 && p[0] < 16 && p[1] < 12
+            })
+            .unwrap();
+        let mut l = super::super::decimate::Local::default();
+        assert!(super::super::decimate::gather(&t, v, &mut l, [17, 13]));
+        let mut new = Vec::new();
+        assert!(t.ear_clip(&l.link, &mut new));
+        t.replace_star(v, &l.tris, &l.link, &new, &mut made);
+        tiles(&g, &t);
+        assert!(!t.alive(v));
     }
 }
