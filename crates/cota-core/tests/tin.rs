@@ -58,7 +58,7 @@ fn columns(g: &HeightGrid, x0: usize, w: usize) -> HeightGrid {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 120, .. ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 300, .. ProptestConfig::default() })]
 
     #[test]
     fn every_tin_passes_the_checker_at_its_bound(
@@ -84,11 +84,12 @@ proptest! {
     #[test]
     fn budgets_are_met(
         w in 3usize..40, h in 3usize..40, seed in any::<u64>(), frac in 0.01f64..1.0,
+        lock in any::<bool>(),
     ) {
         let g = grid(w, h, seed, 10.0);
         let full = 2 * (w - 1) * (h - 1);
         let n = ((full as f64 * frac) as usize).max(2);
-        let t = tin::build(&g, &TinOptions::max_triangles(n)).unwrap();
+        let t = tin::build(&g, &TinOptions::max_triangles(n).with_lock_border(lock)).unwrap();
         prop_assert!(t.mesh.triangle_count() <= n);
         let r = check_mesh(&g, &t.mesh, &CheckOptions::tin(t.threshold_m));
         prop_assert!(r.is_ok(), "{:?}", r.err());
@@ -112,6 +113,16 @@ proptest! {
             prop_assert!(r.is_ok(), "{:?}", r.err());
         }
     }
+}
+
+/// A case the proptest once missed: a corner triangle with a border edge on
+/// each side, split on one, had its other border edge recorded under a stale
+/// edge index.
+#[test]
+fn a_corner_triangle_split_twice() {
+    let g = grid(15, 35, 3841386145391901, 20.0);
+    let t = tin::build(&g, &TinOptions::max_error_m(9.662).with_lock_border(true)).unwrap();
+    check_mesh(&g, &t.mesh, &CheckOptions::tin(9.662)).unwrap();
 }
 
 #[test]

@@ -163,33 +163,44 @@ fn side_of(p: [i32; 2], size: [i32; 2]) -> (u8, i32) {
     }
 }
 
+/// Records the border edges of triangle `t` in `edges`, by (side, lower
+/// coordinate).
+fn note_border_edges(
+    topo: &Topo,
+    t: u32,
+    size: [i32; 2],
+    edges: &mut std::collections::BTreeMap<(u8, i32), (u32, usize)>,
+) {
+    let tr = &topo.tris[t as usize];
+    for k in 0..3 {
+        if tr.n[k] == NONE {
+            let (a, b) = (topo.pos(tr.v[k]), topo.pos(tr.v[(k + 1) % 3]));
+            if let Some(key) = side_key(a, b, size) {
+                edges.insert(key, (t, k));
+            }
+        }
+    }
+}
+
 /// Inserts every kept border sample `topo` lacks, splitting the border edge
 /// that holds it; the new triangles go to `touched`.
 fn insert_kept(topo: &mut Topo, grid: &HeightGrid, border: &Border, touched: &mut Vec<u32>) {
     let size = [grid.width() as i32, grid.height() as i32];
-    // The border edges by (side, lower coordinate).
+    // The border edges by (side, lower coordinate). A split rewrites its
+    // triangles' slots, so their border edges are noted again after it (a
+    // corner triangle has two).
     let mut edges = std::collections::BTreeMap::new();
-    let mut have = std::collections::HashSet::new();
-    for (t, tr) in topo.tris.iter().enumerate() {
-        if tr.v[0] == NONE {
-            continue;
-        }
-        for k in 0..3 {
-            if tr.n[k] == NONE {
-                let (a, b) = (topo.pos(tr.v[k]), topo.pos(tr.v[(k + 1) % 3]));
-                if let Some(key) = side_key(a, b, size) {
-                    edges.insert(key, (t as u32, k));
-                    have.insert(a);
-                }
-            }
+    for t in 0..topo.tris.len() as u32 {
+        if topo.tris[t as usize].v[0] != NONE {
+            note_border_edges(topo, t, size, &mut edges);
         }
     }
+    let have: std::collections::HashSet<[i32; 2]> = topo.verts.iter().map(|v| v.p).collect();
     let mut made = Vec::new();
     for p in border.points() {
         if have.contains(&p) {
             continue;
         }
-        have.insert(p);
         let (side, x) = side_of(p, size);
         let Some((&key, &(t, k))) = edges.range(..=(side, x)).next_back() else {
             continue;
@@ -197,21 +208,13 @@ fn insert_kept(topo: &mut Topo, grid: &HeightGrid, border: &Border, touched: &mu
         if key.0 != side {
             continue;
         }
-        let tv = topo.tris[t as usize].v;
-        let a = topo.pos(tv[k]);
         let z = grid.heights()[p[1] as usize * grid.width() + p[0] as usize];
         let v = topo.add_vertex(p, z);
         made.clear();
         topo.split_edge(t, k, v, &mut made);
-        // made = [t: (a, v, c), t1: (v, b, c)]; their edge 0 is on the border.
-        let a_low = side_key(a, p, size).is_some_and(|q| q.1 < x);
-        let (low, high) = if a_low {
-            (made[0], made[1])
-        } else {
-            (made[1], made[0])
-        };
-        edges.insert(key, (low, 0));
-        edges.insert((side, x), (high, 0));
+        for &m in &made {
+            note_border_edges(topo, m, size, &mut edges);
+        }
         touched.extend_from_slice(&made);
     }
 }
@@ -276,6 +279,11 @@ pub(crate) fn repair(
             continue;
         }
         let (_, q) = hs.tri_error_at(p, z, count);
+        if p.contains(&q) {
+            // A degenerate triangle (never made here): nothing to insert.
+            debug_assert!(false, "repair: degenerate triangle {p:?}");
+            continue;
+        }
         let nv = topo.add_vertex(q, hs.h[q[1] as usize * hs.w + q[0] as usize]);
         made.clear();
         match (0..3).find(|&k| orient(p[k], p[(k + 1) % 3], q) == 0) {
