@@ -30,7 +30,7 @@
 //! boundaries cancels on every matched interior edge, so it lies on the
 //! rectangle's border and the covering count is the same almost everywhere;
 //! the areas make it 1), and (5) scans any triangle exactly
-//! ([`crate::raster`]). For a general triangulation, such as a TIN
+//! ([`crate::mesh::raster`]). For a general triangulation, such as a TIN
 //! ([`crate::tin`]), [`CheckOptions::tin`] adds two direct tests
 //! ([`CheckOptions::general`]):
 //! 6. **no vertex inside an edge**: every lattice point strictly inside every
