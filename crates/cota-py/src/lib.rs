@@ -6,12 +6,12 @@
 //! with the GIL released, and turns their errors into Python exceptions that
 //! carry cota's messages. No meshing logic lives here.
 //!
-//! * [`arrays`]: 2-D numpy heights (float32, float64, int16, any strides) to a
+//! * `arrays`: 2-D numpy heights (float32, float64, int16, any strides) to a
 //!   `HeightGrid`, and read-only numpy views of results;
-//! * [`dem`]: `cota.read` and `cota.Dem` (`cota_io::read_region`);
-//! * [`bitree`]: `cota.Bitree` (`cota_core::Bitree`: build once, extract,
+//! * `dem`: `cota.read` and `cota.Dem` (`cota_io::read_region`);
+//! * `bitree`: `cota.Bitree` (`cota_core::Bitree`: build once, extract,
 //!   check, measure);
-//! * [`mesh`]: `cota.Mesh` (numpy vertices and triangles, `write`).
+//! * `mesh`: `cota.Mesh` (numpy vertices and triangles, `write`).
 
 use pyo3::prelude::*;
 
