@@ -110,3 +110,69 @@ pub(crate) fn readonly_2d<'py, T: numpy::Element>(
     a.call_method1("setflags", (false,))?;
     Ok(a.into_any())
 }
+
+/// `obj` as a C-ordered 2-D array of `dtype` (numpy's `ascontiguousarray`).
+fn as_2d<'py, T: numpy::Element>(
+    py: Python<'py>,
+    obj: &Bound<'py, PyAny>,
+    dtype: &str,
+    what: &str,
+) -> PyResult<Bound<'py, numpy::PyArray2<T>>> {
+    let np = py.import("numpy")?;
+    let a = np.call_method1("ascontiguousarray", (obj, dtype))?;
+    a.cast_into::<numpy::PyArray2<T>>()
+        .map_err(|_| PyValueError::new_err(format!("expected {what} as a 2-D array")))
+}
+
+/// A mesh of `grid` from foreign arrays: vertices on samples (column, row in
+/// the first two columns), heights from the grid, triangles as indices.
+pub(crate) fn foreign_mesh(
+    py: Python<'_>,
+    grid: &cota_core::HeightGrid,
+    vertices: &Bound<'_, PyAny>,
+    triangles: &Bound<'_, PyAny>,
+) -> PyResult<cota_core::Mesh> {
+    let v = as_2d::<f64>(py, vertices, "float64", "vertices")?;
+    let t = as_2d::<i64>(py, triangles, "int64", "triangles")?;
+    let (v, t) = (v.try_readonly()?, t.try_readonly()?);
+    let (v, t) = (v.as_array(), t.as_array());
+    if v.ncols() < 2 || t.ncols() != 3 {
+        return Err(PyValueError::new_err(format!(
+            "expected vertices (n, 2 or 3) and triangles (m, 3), found {:?} and {:?}",
+            v.shape(),
+            t.shape()
+        )));
+    }
+    let (w, h) = (grid.width() as f64, grid.height() as f64);
+    let mut out = Vec::with_capacity(v.nrows());
+    for (i, r) in v.outer_iter().enumerate() {
+        let (c, row) = (r[0], r[1]);
+        if c.fract() != 0.0
+            || row.fract() != 0.0
+            || !(0.0..w).contains(&c)
+            || !(0.0..h).contains(&row)
+        {
+            return Err(PyValueError::new_err(format!(
+                "expected vertex {i} on a sample of the {w}x{h} grid, found ({c}, {row})"
+            )));
+        }
+        let (c, row) = (c as u32, row as u32);
+        let z_m = grid.get(c as usize, row as usize);
+        out.push(cota_core::MeshVertex { col: c, row, z_m });
+    }
+    let n = out.len() as i64;
+    let mut tris = Vec::with_capacity(t.nrows());
+    for (i, r) in t.outer_iter().enumerate() {
+        if r.iter().any(|&k| !(0..n).contains(&k)) {
+            return Err(PyValueError::new_err(format!(
+                "expected triangle {i}'s indices below {n}, found {:?}",
+                r.to_vec()
+            )));
+        }
+        tris.push([r[0] as u32, r[1] as u32, r[2] as u32]);
+    }
+    Ok(cota_core::Mesh {
+        vertices: out,
+        triangles: tris,
+    })
+}

@@ -4,6 +4,7 @@
 
 use std::sync::{Arc, OnceLock};
 
+use cota_core::tin::TinOptions;
 use cota_core::{
     check_mesh, fill_voids, measure, Bitree as CoreBitree, CheckOptions, ExtractOptions,
     FillOptions, GeoRef, HeightGrid, Metrics, VoidPolicy,
@@ -142,19 +143,25 @@ impl Bitree {
 
     /// Extracts the coarsest conforming mesh whose error is at most
     /// `max_error` metres at every sample, or the mesh with the smallest error
-    /// that has at most `max_triangles` triangles. Give exactly one. Raises
+    /// that has at most `max_triangles` triangles. Give exactly one.
+    /// `tin=True`: an irregular triangulation (cota's TIN: the bitree's mesh
+    /// decimated under the same exact bound, fewer triangles, slower). Raises
     /// `cota.MeshError` for a negative bound or a budget below the coarsest
     /// mesh. The GIL is released.
-    #[pyo3(signature = (*, max_error = None, max_triangles = None))]
+    #[pyo3(signature = (*, max_error = None, max_triangles = None, tin = false))]
     fn extract(
         &self,
         py: Python<'_>,
         max_error: Option<f64>,
         max_triangles: Option<usize>,
+        tin: bool,
     ) -> PyResult<Mesh> {
-        let opts = match (max_error, max_triangles) {
-            (Some(e), None) => ExtractOptions::max_error_m(e),
-            (None, Some(n)) => ExtractOptions::max_triangles(n),
+        let (opts, tin_opts) = match (max_error, max_triangles) {
+            (Some(e), None) => (ExtractOptions::max_error_m(e), TinOptions::max_error_m(e)),
+            (None, Some(n)) => (
+                ExtractOptions::max_triangles(n),
+                TinOptions::max_triangles(n),
+            ),
             _ => {
                 return Err(PyValueError::new_err(
                     "expected exactly one of max_error= or max_triangles=",
@@ -162,15 +169,27 @@ impl Bitree {
             }
         };
         let bitree = self.prepared.borrow_dependent();
-        let x = py.detach(|| bitree.extract(&opts)).map_err(errors::mesh)?;
-        Ok(Mesh::new(x.mesh, Arc::clone(self.grid()), x.threshold_m))
+        let x = py
+            .detach(|| match tin {
+                false => bitree.extract(&opts),
+                true => cota_core::tin::build_from(bitree, &tin_opts),
+            })
+            .map_err(errors::mesh)?;
+        Ok(Mesh::new(
+            x.mesh,
+            Arc::clone(self.grid()),
+            x.threshold_m,
+            tin,
+        ))
     }
 
     /// Proves `mesh` with cota's invariant checker against this grid: it
     /// covers the grid exactly, has no T-junction, its vertices carry their
     /// samples' heights, and |mesh - grid| <= `bound` metres at every sample.
-    /// Returns the metrics (as `metrics`); raises `cota.CheckError` with the
-    /// first violation. The GIL is released.
+    /// A TIN or a mesh from arrays also gets the direct tests of a general
+    /// triangulation (no vertex inside an edge, every vertex used). Returns
+    /// the metrics (as `metrics`); raises `cota.CheckError` with the first
+    /// violation. The GIL is released.
     fn check<'py>(
         &self,
         py: Python<'py>,
@@ -179,8 +198,9 @@ impl Bitree {
     ) -> PyResult<Bound<'py, PyDict>> {
         self.same_grid(&mesh)?;
         let (grid, m) = (self.grid().as_ref(), mesh.core());
+        let opts = CheckOptions::conforming(bound).with_general(mesh.general());
         let report = py
-            .detach(|| check_mesh(grid, m, &CheckOptions::conforming(bound)))
+            .detach(|| check_mesh(grid, m, &opts))
             .map_err(errors::check)?;
         metrics_dict(py, &report.metrics)
     }
@@ -197,6 +217,22 @@ impl Bitree {
         let (grid, m) = (self.grid().as_ref(), mesh.core());
         let metrics = py.detach(|| measure(grid, m));
         metrics_dict(py, &metrics)
+    }
+
+    /// A `Mesh` of this grid from another mesher's arrays, to measure or
+    /// check it with cota: `vertices` (n, 2 or more) with integer column and
+    /// row in the first two columns (further columns are ignored: heights are
+    /// the grid's samples), `triangles` (m, 3) indices into `vertices`.
+    /// Raises `ValueError` for a vertex off the grid or not on a sample, or an
+    /// index out of range.
+    fn mesh_from_arrays(
+        &self,
+        py: Python<'_>,
+        vertices: &Bound<'_, PyAny>,
+        triangles: &Bound<'_, PyAny>,
+    ) -> PyResult<Mesh> {
+        let mesh = arrays::foreign_mesh(py, self.grid(), vertices, triangles)?;
+        Ok(Mesh::new(mesh, Arc::clone(self.grid()), f64::NAN, true))
     }
 
     /// The (filled) heights the bitree was built on, float32, read-only.

@@ -17,16 +17,25 @@ pub(crate) struct Mesh {
     mesh: CoreMesh,
     grid: Arc<HeightGrid>,
     threshold_m: f64,
+    general: bool,
     vertices: OnceLock<Py<PyAny>>,
     triangles: OnceLock<Py<PyAny>>,
 }
 
 impl Mesh {
-    pub(crate) fn new(mesh: CoreMesh, grid: Arc<HeightGrid>, threshold_m: f64) -> Self {
+    /// `general`: a TIN or foreign triangles, checked as a general
+    /// triangulation.
+    pub(crate) fn new(
+        mesh: CoreMesh,
+        grid: Arc<HeightGrid>,
+        threshold_m: f64,
+        general: bool,
+    ) -> Self {
         Mesh {
             mesh,
             grid,
             threshold_m,
+            general,
             vertices: OnceLock::new(),
             triangles: OnceLock::new(),
         }
@@ -34,6 +43,10 @@ impl Mesh {
 
     pub(crate) fn core(&self) -> &CoreMesh {
         &self.mesh
+    }
+
+    pub(crate) fn general(&self) -> bool {
+        self.general
     }
 
     pub(crate) fn grid(&self) -> &HeightGrid {

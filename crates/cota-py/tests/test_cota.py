@@ -82,6 +82,22 @@ def test_extract_is_proved_at_every_sample(tree, bound):
     assert np.array_equal(v[:, 2], tree.heights[rows, cols].astype(np.float64))
 
 
+def test_tin_has_fewer_triangles_and_is_proved(dem):
+    crop = np.array(dem.heights[600:857, 900:1157])
+    tree = cota.Bitree(crop)
+    for bound in (1.0, 5.0):
+        bitree_mesh = tree.extract(max_error=bound)
+        tin = tree.extract(max_error=bound, tin=True)
+        assert 1000 < tin.triangle_count < bitree_mesh.triangle_count
+        # the TIN's exact ties may read bound + 1e-13 in f64 (ARCHITECTURE.md, TIN)
+        assert tree.check(tin, bound)["max_error_m"] <= bound + 1e-9
+    worst, all_covered = rasterized_max_error(crop.astype(np.float64), tin)
+    assert all_covered and worst <= 5.0 + 1e-6
+    budget = tree.extract(max_triangles=3000, tin=True)
+    assert budget.triangle_count <= 3000
+    tree.check(budget, budget.threshold_m)
+
+
 def test_budget(tree):
     mesh = tree.extract(max_triangles=20000)
     assert 0 < mesh.triangle_count <= 20000
@@ -119,14 +135,32 @@ def rasterized_max_error(heights, mesh):
 
 
 def test_independent_rasterizer_agrees(dem):
-    crop = np.array(dem.heights[300:557, 600:857])  # 257 x 257
+    crop = np.array(dem.heights[600:729, 900:1029])  # 129 x 129, 1000+ m of relief
     tree = cota.Bitree(crop, cell_size_m=90.0)
     for bound in (2.0, 10.0):
         mesh = tree.extract(max_error=bound)
+        assert mesh.triangle_count > 1000  # rough terrain: not a trivial mesh
         worst, all_covered = rasterized_max_error(crop.astype(np.float64), mesh)
         assert all_covered
-        assert worst <= bound + 1e-6
+        assert bound / 2 < worst <= bound + 1e-6
         assert abs(worst - tree.metrics(mesh)["max_error_m"]) < 1e-6
+
+
+def test_foreign_arrays_are_measured_and_checked(tree):
+    mesh = tree.extract(max_error=5.0)
+    again = tree.mesh_from_arrays(mesh.vertices[:, :2].astype(np.uint16), mesh.triangles)
+    assert same_mesh(mesh, again)
+    assert tree.metrics(again) == tree.check(again, 5.0)
+    clockwise = tree.mesh_from_arrays(mesh.vertices, mesh.triangles[:, ::-1])
+    with pytest.raises(cota.CheckError, match="clockwise"):
+        tree.check(clockwise, 5.0)
+    assert tree.metrics(clockwise) == tree.metrics(mesh)  # the metrics need no orientation
+    with pytest.raises(ValueError, match="vertex 0"):
+        tree.mesh_from_arrays([[0.5, 0.0]], [[0, 0, 0]])
+    with pytest.raises(ValueError, match="vertex 1"):
+        tree.mesh_from_arrays([[0, 0], [1201, 0]], [[0, 1, 0]])
+    with pytest.raises(ValueError, match="triangle 0"):
+        tree.mesh_from_arrays([[0, 0], [1, 0], [0, 1]], [[0, 1, 3]])
 
 
 # --- numpy round trips -----------------------------------------------------------------------
@@ -154,10 +188,11 @@ def test_dtypes_and_nodata_agree():
 
 
 def test_non_contiguous_arrays_are_read_in_logical_order(dem):
-    h = dem.heights[:400, :300]
+    h = dem.heights[600:1000, 800:1100]
     flipped = h[::-1, ::2]
     assert not flipped.flags.c_contiguous
     a = cota.Bitree(flipped).extract(max_error=3.0)
+    assert a.triangle_count > 1000
     b = cota.Bitree(np.ascontiguousarray(flipped)).extract(max_error=3.0)
     assert same_mesh(a, b)
     fortran = np.asfortranarray(h)

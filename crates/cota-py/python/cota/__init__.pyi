@@ -91,15 +91,27 @@ class Bitree:
         MeshError. Wrong dtype: TypeError; wrong ndim or empty: ValueError.
         """
     def extract(
-        self, *, max_error: Union[float, None] = None, max_triangles: Union[int, None] = None
+        self,
+        *,
+        max_error: Union[float, None] = None,
+        max_triangles: Union[int, None] = None,
+        tin: bool = False,
     ) -> Mesh:
         """The coarsest conforming mesh within ``max_error`` m at every sample,
-        or the most accurate with at most ``max_triangles`` triangles."""
+        or the most accurate with at most ``max_triangles`` triangles.
+        ``tin=True``: cota's irregular TIN under the same exact bound (fewer
+        triangles, slower)."""
     def check(self, mesh: Mesh, bound: float) -> Metrics:
-        """Prove coverage, no T-junction and |error| <= bound at every sample;
-        raises CheckError."""
+        """Prove coverage, no T-junction and |error| <= bound at every sample
+        (plus, for a TIN or a mesh from arrays, no vertex inside an edge and
+        every vertex used); raises CheckError."""
     def metrics(self, mesh: Mesh) -> Metrics:
         """Exact error of ``mesh`` over every sample."""
+    def mesh_from_arrays(self, vertices: npt.ArrayLike, triangles: npt.ArrayLike) -> Mesh:
+        """A Mesh of this grid from another mesher's arrays (vertices: integer column,
+        row in the first two columns; heights are the grid's), to measure or check it.
+        Its ``threshold_m`` is NaN. Raises ValueError for a vertex off the samples or
+        an index out of range."""
     @property
     def heights(self) -> npt.NDArray[np.float32]:
         """The (filled) heights built on; read-only."""
