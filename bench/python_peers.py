@@ -5,7 +5,7 @@
 
 For each 1201x1201 DEM (default: the bundled fixtures/S29W072.hgt.zip; the heights as
 cota.read gives them, voids filled) and each E (env COTA_PY_E, default 5 m):
-* time per mesh: cota Bitree(heights) + extract(max_error=E), pymartini
+* time per mesh: cota Bitree(heights) + extract(max_error=E) (and with tin=True), pymartini
   create_tile + get_mesh(E) (Martini(n) itself, built once per size, apart), pydelatin
   Delatin(heights, max_error=E); medians of COTA_PY_RUNS runs (default 5; pydelatin 1);
 * triangles at equal true error: every mesh measured by cota at every sample
@@ -43,8 +43,8 @@ def timed(fn, runs):
     return statistics.median(times), out
 
 
-def cota_mesh(h, e):
-    return cota.Bitree(h).extract(max_error=e)
+def cota_mesh(h, e, tin=False):
+    return cota.Bitree(h).extract(max_error=e, tin=tin)
 
 
 def martini_mesh(martini, h, e):
@@ -80,6 +80,7 @@ def martini_at_true_error(tree, martini, h, e):
 
 def tile_row(name, h, e, martini2049):
     ms_cota, mesh = timed(lambda: cota_mesh(h, e), RUNS)
+    ms_tin, tin = timed(lambda: cota_mesh(h, e, tin=True), RUNS)
     pad = np.pad(h, ((0, 2049 - h.shape[0]), (0, 2049 - h.shape[1])), mode="edge")
     ms_martini, _ = timed(lambda: martini_mesh(martini2049, pad, e), RUNS)
     ms_delatin, (v, t) = timed(lambda: delatin_mesh(h, e), 1)
@@ -87,8 +88,10 @@ def tile_row(name, h, e, martini2049):
     err_d = true_error(tree, v, t)
     return (
         f"| {name} {h.shape[1]}² | {e:g} | {ms_cota:.1f} ({mesh.triangle_count:,}) "
+        f"| {ms_tin:.1f} ({tin.triangle_count:,}) "
         f"| {ms_martini:.1f} (2049² padded) | {ms_delatin:,.0f} ({len(t):,}; {err_d:.3f} m) "
-        f"| {ms_martini / ms_cota:.1f}× | {ms_delatin / ms_cota:.0f}× |"
+        f"| {ms_martini / ms_cota:.1f}× | {ms_delatin / ms_cota:.0f}× | {ms_delatin / ms_tin:.1f}× "
+        f"| {tin.triangle_count / len(t):.2f} |"
     )
 
 
@@ -117,8 +120,9 @@ def main():
     martini1025 = Martini(1025)
     ms_m1025 = (time.perf_counter() - t0) * 1e3
     print(f"Martini(2049) {ms_m2049:.0f} ms, Martini(1025) {ms_m1025:.0f} ms (once per size)\n")
-    print("| grid | E (m) | cota build+extract ms (tris) | pymartini tile+mesh ms | pydelatin ms (tris; true err) | martini/cota | delatin/cota |")
-    print("|---|---:|---:|---:|---:|---:|---:|")
+    print("| grid | E (m) | cota build+extract ms (tris) | cota TIN ms (tris) | pymartini tile+mesh ms "
+          "| pydelatin ms (tris; true err) | martini/cota | delatin/cota | delatin/cota TIN | TIN/delatin tris |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     heights = {p.name: np.array(cota.read(p).heights) for p in paths}
     for name, h in heights.items():
         for e in ES:
