@@ -143,25 +143,40 @@ pub(crate) fn foreign_mesh(
             t.shape()
         )));
     }
+    let vertices = on_samples(grid, v)?;
+    let triangles = indices_below(t, vertices.len())?;
+    Ok(cota_core::Mesh {
+        vertices,
+        triangles,
+    })
+}
+
+/// Each row's column and row as a vertex on its sample, with its height.
+fn on_samples(
+    grid: &cota_core::HeightGrid,
+    v: numpy::ndarray::ArrayView2<'_, f64>,
+) -> PyResult<Vec<cota_core::MeshVertex>> {
     let (w, h) = (grid.width() as f64, grid.height() as f64);
     let mut out = Vec::with_capacity(v.nrows());
     for (i, r) in v.outer_iter().enumerate() {
         let (c, row) = (r[0], r[1]);
-        if c.fract() != 0.0
-            || row.fract() != 0.0
-            || !(0.0..w).contains(&c)
-            || !(0.0..h).contains(&row)
-        {
+        let on_grid = (0.0..w).contains(&c) && (0.0..h).contains(&row);
+        if !on_grid || c.fract() != 0.0 || row.fract() != 0.0 {
             return Err(PyValueError::new_err(format!(
                 "expected vertex {i} on a sample of the {w}x{h} grid, found ({c}, {row})"
             )));
         }
-        let (c, row) = (c as u32, row as u32);
-        let z_m = grid.get(c as usize, row as usize);
-        out.push(cota_core::MeshVertex { col: c, row, z_m });
+        let (col, row) = (c as u32, row as u32);
+        let z_m = grid.get(col as usize, row as usize);
+        out.push(cota_core::MeshVertex { col, row, z_m });
     }
-    let n = out.len() as i64;
-    let mut tris = Vec::with_capacity(t.nrows());
+    Ok(out)
+}
+
+/// Each row as a triangle of indices below `n`.
+fn indices_below(t: numpy::ndarray::ArrayView2<'_, i64>, n: usize) -> PyResult<Vec<[u32; 3]>> {
+    let n = n as i64;
+    let mut out = Vec::with_capacity(t.nrows());
     for (i, r) in t.outer_iter().enumerate() {
         if r.iter().any(|&k| !(0..n).contains(&k)) {
             return Err(PyValueError::new_err(format!(
@@ -169,10 +184,7 @@ pub(crate) fn foreign_mesh(
                 r.to_vec()
             )));
         }
-        tris.push([r[0] as u32, r[1] as u32, r[2] as u32]);
+        out.push([r[0] as u32, r[1] as u32, r[2] as u32]);
     }
-    Ok(cota_core::Mesh {
-        vertices: out,
-        triangles: tris,
-    })
+    Ok(out)
 }
