@@ -21,7 +21,10 @@
 //! * [`mesh`](mod@mesh): the [`Mesh`], the exact [`measure`]s and the one
 //!   invariant checker ([`check_mesh`]);
 //! * [`strip`]: triangle strips; [`stream`]: the progressive stream;
-//!   [`compare`]: paper 000's tables.
+//!   [`compare`]: paper 000's tables;
+//! * [`texture`]: imagery over the DEM and paper 004's texture quadtree;
+//!   [`pair`](mod@pair): paper 004's best (mesh, texture) pair under a
+//!   memory budget.
 //!
 //! ```
 //! use cota_core::{check_mesh, GeoRef, HeightGrid, MaxVerticalError, MeshPlan, Mesher, Mode};
@@ -53,6 +56,7 @@ pub mod grid;
 pub mod hierarchy;
 pub mod mesh;
 pub mod mesher;
+pub mod pair;
 mod par;
 pub mod quadtree;
 pub mod refine;
@@ -61,6 +65,7 @@ pub mod strip;
 #[cfg(test)]
 #[allow(clippy::unwrap_used, reason = "tests")]
 mod testing;
+pub mod texture;
 
 // The public face: the types and entry points of the pipeline, in its
 // order; everything else by its module's path.
