@@ -166,7 +166,7 @@ pub(super) fn jpeg(bytes: &[u8]) -> Result<Decoded, ImageErrorKind> {
     let (w, h) = dec.dimensions().unwrap_or((0, 0));
     check_size(w as u64, h as u64)?;
     let data = dec.decode().map_err(bad)?;
-    let channels = if w * h == 0 { 0 } else { data.len() / (w * h) };
+    let channels = data.len().checked_div(w * h).unwrap_or(0);
     if channels == 0 || data.len() != channels * w * h {
         return Err(ImageErrorKind::Decode {
             format: "JPEG",

@@ -74,10 +74,10 @@ impl Bands {
             .map(|s| s.trim().parse::<u16>())
             .collect::<Result<_, _>>()
             .map_err(|_| bad())?;
-        match v.as_slice() {
+        match *v.as_slice() {
             _ if v.contains(&0) => Err(bad()),
-            &[g] => Ok(Bands::Gray(g)),
-            &[r, g, b] => Ok(Bands::Rgb([r, g, b])),
+            [g] => Ok(Bands::Gray(g)),
+            [r, g, b] => Ok(Bands::Rgb([r, g, b])),
             _ => Err(bad()),
         }
     }

@@ -188,7 +188,6 @@ fn material() -> json::Material {
     m.pbr_metallic_roughness.roughness_factor = json::material::StrengthFactor(1.0);
     m.extensions = Some(json::extensions::material::Material {
         unlit: Some(json::extensions::material::Unlit {}),
-        ..Default::default()
     });
     m
 }
