@@ -25,6 +25,8 @@
 //! * [`texture`]: imagery over the DEM and paper 004's texture quadtree;
 //!   [`pair`](mod@pair): paper 004's best (mesh, texture) pair under a
 //!   memory budget.
+//! * [`tin`]: an irregular triangulation (TIN) with the same guaranteed
+//!   error and fewer triangles ([`tin::build`]).
 //!
 //! ```
 //! use cota_core::{check_mesh, GeoRef, HeightGrid, MaxVerticalError, MeshPlan, Mesher, Mode};
@@ -66,6 +68,7 @@ pub mod strip;
 #[allow(clippy::unwrap_used, reason = "tests")]
 mod testing;
 pub mod texture;
+pub mod tin;
 
 // The public face: the types and entry points of the pipeline, in its
 // order; everything else by its module's path.
