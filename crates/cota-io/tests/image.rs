@@ -4,7 +4,7 @@
 
 mod common;
 
-use cota_core::texture::{drape, DrapeOptions, RgbImage};
+use cota_core::texture::{drape, DrapeOptions, RgbImage, TextureQuadtree};
 use cota_core::{Bitree, ExtractOptions, HeightGrid};
 use cota_io::export::{encode_png, textured_mesh_bytes, write_glb_textured, ExportOptions};
 use cota_io::image::{place_on, read_image, Bands, ImageErrorKind, ImageOptions};
@@ -249,5 +249,43 @@ fn textured_glb_maps_each_vertex_to_the_texel_of_its_ground_position() {
             ty(j) + 1e-6 >= gy && gy >= ty(j + 1) - 1e-6,
             "vertex {k}: y {gy} not in texel row {j}"
         );
+    }
+}
+
+#[test]
+fn the_texture_quadtree_tiles_the_draped_landsat_image_exactly() {
+    let grid = dem();
+    let img = read_image(&common::fixture("L7_ETMs.tif"), &true_colour()).unwrap();
+    let at = place_on(&img, &grid, false).unwrap().placement;
+    let texture = drape(&img.rgb, &at, &grid, &DrapeOptions::DEFAULT).unwrap();
+    let tree = TextureQuadtree::build(&texture);
+    let (w, h) = (texture.width(), texture.height());
+    let mut last = usize::MAX;
+    for tol in [0.0, 4.0, 16.0, 64.0] {
+        let x = tree.extract(tol);
+        // Each texel in exactly one leaf.
+        let mut count = vec![0u8; w * h];
+        for l in &x.leaves {
+            for y in l.y..l.y + l.height {
+                for xx in l.x..l.x + l.width {
+                    count[y as usize * w + xx as usize] += 1;
+                }
+            }
+        }
+        assert!(count.iter().all(|&c| c == 1), "gaps or overlaps at {tol}");
+        // D(T) is the squared RGB difference of the rendered leaves.
+        let r = x.render();
+        let brute: u64 = texture
+            .as_bytes()
+            .iter()
+            .zip(r.as_bytes())
+            .map(|(a, b)| (i64::from(*a) - i64::from(*b)).pow(2) as u64)
+            .sum();
+        assert_eq!(x.distortion, brute, "at {tol}");
+        if tol == 0.0 {
+            assert_eq!((x.distortion, &r), (0, &texture));
+        }
+        assert!(x.leaves.len() < last);
+        last = x.leaves.len();
     }
 }
