@@ -284,13 +284,11 @@ pub fn run(a: &PairArgs) -> anyhow::Result<ExitCode> {
         ),
         (Pick::Optimum, _) => choice.optimum,
     };
+    let chosen = &meshes[pair.mesh];
+    cota_core::check_mesh(&grid, &chosen.mesh, &chosen.check)
+        .context("the invariant checker rejected the chosen mesh (this is a bug in cota)")?;
     let t = Instant::now();
-    let written = write(
-        a,
-        &grid,
-        &meshes[pair.mesh].mesh,
-        &textures[pair.texture].png,
-    )?;
+    let written = write(a, &grid, &chosen.mesh, &textures[pair.texture].png)?;
     let timing = json!({"read_ms": read_ms, "lists_ms": lists_ms, "choose_us": choose_us,
         "sweep_budgets": budgets, "sweep_us": sweep_us, "write_ms": ms(t)});
     let report = report(a, &about, &meshes, &textures, &choice, written, timing);
@@ -403,6 +401,7 @@ fn report(
         "greedy": choice.greedy.map(|g| pair_json(&g, meshes, textures)),
         "greedy_gap": gap,
         "greedy_gap_relative": gap.map(|g| g / choice.optimum.distortion.max(f64::MIN_POSITIVE)),
+        "checked": true,
         "picked": if a.pick == Pick::Greedy { "greedy" } else { "optimum" },
         "glb_bytes": glb_bytes,
         "output": a.output.as_ref().map(|p| p.display().to_string()),

@@ -34,6 +34,9 @@ pub struct MeshCandidate {
     pub distortion_m2: f64,
     /// `C(M)`, bytes, in the caller's byte model.
     pub bytes: u64,
+    /// What [`crate::check_mesh`] must prove of this mesh (the plan's
+    /// bound, conformity, fictitious points), as [`Mesher::mesh`] says.
+    pub check: crate::CheckOptions,
 }
 
 impl MeshCandidate {
@@ -108,7 +111,8 @@ pub fn mesh_list(
         for &tol in &opts.tolerances_m {
             let bound = MaxVerticalError::new(tol).map_err(|_| MeshError::BadMaxError(tol))?;
             let plan = MeshPlan::new(&bound).with_hierarchy(hierarchy);
-            let mesh = mesher.mesh(&plan)?.mesh;
+            let meshed = mesher.mesh(&plan)?;
+            let (mesh, check) = (meshed.mesh, meshed.check);
             let d = distortion_m2(mesher.grid(), &mesh);
             let seen = out.iter().any(|c| {
                 c.hierarchy == hierarchy
@@ -122,6 +126,7 @@ pub fn mesh_list(
                     bytes: bytes(&mesh),
                     distortion_m2: d,
                     mesh,
+                    check,
                 });
             }
         }
