@@ -2,7 +2,7 @@
 //!
 //! * [`image`]: [`RgbImage`], 8-bit RGB pixels (plain data; readers live in
 //!   `cota-io`);
-//! * [`drape`]: where an image lies in the DEM's CRS ([`ImagePlacement`]),
+//! * [`drape`](mod@drape): where an image lies in the DEM's CRS ([`ImagePlacement`]),
 //!   its resampling onto the *texture raster* that spans the DEM's samples
 //!   (bilinear per channel, [`drape()`]) and the texture coordinates of a
 //!   sample ([`uv`]);
