@@ -197,7 +197,10 @@ fn run_bounds(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
         .par_chunks(RUN)
         .map(|run| {
             run.iter().fold((u32::MAX, 0), |(lo, hi), t| {
-                (lo.min(t[0].min(t[1]).min(t[2])), hi.max(t[0].max(t[1]).max(t[2])))
+                (
+                    lo.min(t[0].min(t[1]).min(t[2])),
+                    hi.max(t[0].max(t[1]).max(t[2])),
+                )
             })
         })
         .collect()

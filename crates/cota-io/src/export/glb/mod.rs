@@ -208,14 +208,7 @@ fn write_glb_primitive<W: Write + Send>(
     let bounds = bounds(mesh, &frame);
     let root = build_root(bounds, &layout, mode, &GeoInfo::new(grid, opts.coords))?;
     write_container(&mut w, &root, layout.buffer_bytes, |w| {
-        write_bin(
-            w,
-            mesh,
-            strip.as_deref(),
-            &frame,
-            &normals,
-            layout.index,
-        )
+        write_bin(w, mesh, strip.as_deref(), &frame, &normals, layout.index)
     })
 }
 
