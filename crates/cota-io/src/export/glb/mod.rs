@@ -208,7 +208,7 @@ fn write_glb_primitive<W: Write + Send>(
         index_count,
         index_type(mesh.vertices.len(), opts.index_width)?,
     );
-    let bounds = bounds(mesh, &frame);
+    let bounds = bounds(&mesh.vertices, |v| to_f32(frame.vertex(v)));
     let root = build_root(bounds, &layout, mode, &GeoInfo::new(grid, opts.coords))?;
     write_container(&mut w, &root, layout.buffer_bytes, |w| {
         write_bin(w, mesh, strip.as_deref(), &frame, &normals, layout.index)
@@ -328,10 +328,10 @@ fn build_root(
     })
 }
 
-/// Component-wise minimum and maximum of the written (f32) positions (the
-/// mesh has at least one vertex; no value is NaN, so the order of the
-/// reduction does not matter).
-fn bounds(mesh: &Mesh, frame: &Frame) -> ([f32; 3], [f32; 3]) {
+/// Component-wise minimum and maximum of the written (f32) positions,
+/// `position(item)` for each of `items` (at least one; no value is NaN, so
+/// the order of the reduction does not matter).
+fn bounds<T: Sync>(items: &[T], position: impl Fn(&T) -> [f32; 3] + Sync) -> ([f32; 3], [f32; 3]) {
     let init = || ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
     let widen = |(mut lo, mut hi): ([f32; 3], [f32; 3]), p: [f32; 3]| {
         for k in 0..3 {
@@ -340,9 +340,9 @@ fn bounds(mesh: &Mesh, frame: &Frame) -> ([f32; 3], [f32; 3]) {
         }
         (lo, hi)
     };
-    mesh.vertices
+    items
         .par_iter()
-        .fold(init, |b, v| widen(b, to_f32(frame.vertex(v))))
+        .fold(init, |b, v| widen(b, position(v)))
         .reduce(init, |a, b| widen(widen(a, b.0), b.1))
 }
 
