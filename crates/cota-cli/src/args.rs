@@ -57,6 +57,11 @@ pub struct InputArgs {
     /// Where adjacent tiles overlap and disagree: their mean, or the first file's value.
     #[arg(long, value_enum, default_value_t = Seam::Mean)]
     pub seam: Seam,
+    /// Largest grid one file may declare, in samples; larger files are refused
+    /// before anything is allocated. Default: from the machine's memory (16
+    /// bytes per sample, at most 2^30); a gzipped .hgt at most one 3601² tile.
+    #[arg(long, value_name = "N")]
+    pub max_samples: Option<u64>,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]

@@ -62,6 +62,7 @@ fn read_options(a: &InputArgs) -> ReadOptions {
         .with_gray(a.gray_scale_m, a.gray_offset_m)
         .with_cell_size_m(a.cell_size_m)
         .with_band(a.band)
+        .with_max_samples(a.max_samples)
 }
 
 /// Reads every input (or the bundled sample) and mosaics them.

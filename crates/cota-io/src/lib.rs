@@ -15,6 +15,7 @@
 pub mod dem;
 pub mod error;
 pub mod export;
+pub mod limits;
 pub mod read;
 pub mod stream_file;
 
