@@ -38,7 +38,9 @@ fn read(path: &Path) -> Dem {
 }
 
 fn read_bytes(bytes: &[u8], name: &str) -> Result<Dem, ReadError> {
-    read_dem_bytes(bytes, Path::new(name), &ReadOptions::default())
+    // The whole sample range: these tests are about format checks, not the memory budget.
+    let opts = ReadOptions::default().with_max_samples(Some(cota_core::grid::MAX_SAMPLES));
+    read_dem_bytes(bytes, Path::new(name), &opts)
 }
 
 fn err_bytes(bytes: &[u8], name: &str) -> String {
