@@ -124,6 +124,11 @@ pub struct MeshArgs {
     /// the report is printed.
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
+    /// Replace OUT even when it is a read-only file (refused otherwise). A
+    /// symbolic link OUT is written through: its target is replaced, the
+    /// link kept.
+    #[arg(long)]
+    pub force: bool,
     /// Output coordinates.
     #[arg(long, value_enum, default_value_t = CoordsArg::Local)]
     pub coords: CoordsArg,

@@ -270,6 +270,7 @@ fn export_options(a: &MeshArgs) -> ExportOptions {
         .with_coords(coords)
         .with_base_m(a.base_m)
         .with_quantize(a.quantize)
+        .with_replace_read_only(a.force)
 }
 
 /// With `--quantize`, the plan of the quantized GLB (planning the file
@@ -355,10 +356,10 @@ fn write(
     let eo = export_options(a);
     let t = Instant::now();
     match (strip, a.strip, quant) {
-        (Some(s), true, _) => cota_io::export::write_atomically(out, |w| {
+        (Some(s), true, _) => cota_io::export::write_atomically_forced(out, a.force, |w| {
             cota_io::export::write_glb_strip(w, &s.mesh, &s.strip.indices, grid, &eo)
         })?,
-        (_, _, Some(q)) => cota_io::export::write_atomically(out, |w| {
+        (_, _, Some(q)) => cota_io::export::write_atomically_forced(out, a.force, |w| {
             cota_io::export::write_glb_quantized(w, &m.mesh, grid, &eo, q)
         })?,
         _ => write_mesh(out, &m.mesh, grid, &eo)?,
