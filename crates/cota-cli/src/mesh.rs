@@ -183,11 +183,11 @@ fn validate(a: &MeshArgs) -> anyhow::Result<()> {
     check_quantize(a)?;
     if let Some(e) = a.max_error {
         if e.is_nan() || e < 0.0 {
-            anyhow::bail!("--max-error: expected 0 m or more, found {e} m");
+            anyhow::bail!(
+                "--max-error: expected 0 m or more, found {} m",
+                crate::input::num(e)
+            );
         }
-    }
-    if a.max_triangles == Some(0) {
-        anyhow::bail!("--max-triangles: expected at least 2 triangles, found 0");
     }
     if !is_fast(a) {
         if a.max_triangles.is_some() {
@@ -373,9 +373,10 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let mut grid = input.grid;
     let nodata = grid.void_count();
     let t = Instant::now();
-    let fill = crate::input::fill(&mut grid, a.voids)?;
+    let files = crate::input::name(&input.files);
+    let fill = crate::input::fill(&mut grid, a.voids).with_context(|| files.clone())?;
     let fill_ms = ms(t);
-    let (mut m, build_ms, extract_ms) = mesh_grid(a, &grid)?;
+    let (mut m, build_ms, extract_ms) = mesh_grid(a, &grid).with_context(|| files.clone())?;
     let (quant, quantize_ms) = quantization(a, &grid, &m)?;
     let t = Instant::now();
     let metrics = measure_mesh(a, &grid, &mut m, quant.as_ref())?;
