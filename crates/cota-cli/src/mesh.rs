@@ -256,7 +256,10 @@ fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f6
     }
     let build_ms = ms(t);
     let t = Instant::now();
-    let meshed = mesher.mesh(&plan)?;
+    let meshed = mesher.mesh(&plan).map_err(|e| match e {
+        cota_core::MeshError::BudgetTooSmall { .. } => anyhow::anyhow!("--max-triangles: {e}"),
+        e => e.into(),
+    })?;
     Ok((meshed, build_ms, criterion_ms + ms(t)))
 }
 
