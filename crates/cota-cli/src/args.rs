@@ -201,7 +201,7 @@ pub struct MeshArgs {
 /// How `cota mesh --strip` makes its strip (`cota_core::strip::StripMethod`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum StripMethodArg {
-    /// Rows of re-triangulated unit cells, the rest guided (the default).
+    /// Rows of re-triangulated unit cells, the rest guided (`mesh --strip`'s default).
     Cells,
     /// Greedy growth guided by the bitree traversal.
     Guided,

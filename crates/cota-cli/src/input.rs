@@ -115,6 +115,15 @@ fn check_cell_size(grid: &HeightGrid, files: &[FileInfo]) -> anyhow::Result<()> 
     Ok(())
 }
 
+/// The cell size assumed for an input without georeference (PNG, a `.hgt`
+/// without a position in its name), if any.
+pub fn assumed_cell_m(files: &[FileInfo]) -> Option<f64> {
+    files
+        .iter()
+        .find(|f| !f.georef.known)
+        .map(|f| f.cell_size_m[0])
+}
+
 /// Warns (stderr) for each SRTM tile whose name gave no position.
 fn warn_unpositioned(files: &[FileInfo]) {
     for f in files {

@@ -395,6 +395,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let mesh = &m.mesh;
     let report = json!({
         "input": crate::input::name(&input.files),
+        "assumed_cell_size_m": crate::input::assumed_cell_m(&input.files),
         "width": grid.width(),
         "height": grid.height(),
         "voids_filled": fill.filled,
@@ -453,6 +454,12 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
         r["width"],
         r["height"]
     );
+    if let Some(c) = r["assumed_cell_size_m"].as_f64() {
+        println!(
+            "cell        assumed {} m: the input has no georeference (set it with --cell-size-m)",
+            crate::input::num(c)
+        );
+    }
     if let Some(s) = seams {
         println!(
             "seams       largest difference {} m over {} samples",

@@ -134,3 +134,63 @@ fn a_badly_named_hgt_warns_that_it_has_no_position() {
     let o = cota(&["info", named.to_str().unwrap()]);
     assert!(!stderr(&o).contains("warning"), "{}", stderr(&o));
 }
+
+#[test]
+fn compare_help_states_one_default_strip_method() {
+    let o = cota(&["compare", "--help"]);
+    let help = common::stdout(&o);
+    assert!(help.contains("[default: guided]"), "{help}");
+    assert!(!help.contains("(the default)"), "{help}");
+}
+
+#[test]
+fn a_png_without_georeference_reports_its_assumed_cell() {
+    let png = common::fixture("terrarium.png");
+    let o = cota(&["mesh", png.to_str().unwrap(), "--max-error", "20"]);
+    let out = common::stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(out.contains("cell        assumed 1 m"), "{out}");
+    let o = cota(&["mesh", png.to_str().unwrap(), "--max-error", "20", "--json"]);
+    let r: serde_json::Value = serde_json::from_str(&common::stdout(&o)).unwrap();
+    assert_eq!(r["assumed_cell_size_m"], 1.0);
+    let o = cota(&["mesh", "--max-error", "50", "--json"]);
+    let r: serde_json::Value = serde_json::from_str(&common::stdout(&o)).unwrap();
+    assert!(r["assumed_cell_size_m"].is_null());
+}
+
+/// The README lists every command `cota --help` shows, the install step, and
+/// git ignores the output of its first command (issue 23).
+#[test]
+fn readme_lists_every_command_and_its_output_is_ignored() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    assert!(readme.contains("cargo install --path crates/cota-cli"));
+    let help = common::stdout(&cota(&["--help"]));
+    let commands: Vec<&str> = help
+        .split("Commands:")
+        .nth(1)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .take_while(|l| !l.trim().is_empty())
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .collect();
+    assert!(commands.len() >= 4, "{help}");
+    for c in &commands {
+        assert!(
+            readme.contains(&format!("cota {c} ")),
+            "README lacks `cota {c}`"
+        );
+    }
+    let out = readme
+        .split("-o ")
+        .nth(1)
+        .and_then(|t| t.split_whitespace().next())
+        .unwrap();
+    let ignore = std::fs::read_to_string(root.join(".gitignore")).unwrap();
+    assert!(
+        ignore.lines().any(|l| l.trim_start_matches('/') == out),
+        "{out} not in .gitignore"
+    );
+}
