@@ -1,6 +1,7 @@
 //! Hostile inputs (issue 23): a gzip bomb and a PNG dimension bomb are
 //! refused at once with a "too large" message naming the file and the limit,
 //! never read into memory. The bombs are written into a temporary directory.
+#![allow(clippy::unwrap_used, reason = "tests unwrap to fail loudly")]
 
 mod common;
 

@@ -1,5 +1,6 @@
 //! Outputs (issue 23): a read-only existing file is refused unless `--force`;
 //! a symbolic link is written through.
+#![allow(clippy::unwrap_used, reason = "tests unwrap to fail loudly")]
 
 mod common;
 

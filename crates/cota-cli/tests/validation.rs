@@ -1,5 +1,6 @@
 //! Small validation gaps (issue 23): each flag or input a user trips on gives
 //! a clear error naming the flag or the file.
+#![allow(clippy::unwrap_used, reason = "tests unwrap to fail loudly")]
 
 mod common;
 
