@@ -184,11 +184,11 @@ fn validate(a: &MeshArgs) -> anyhow::Result<()> {
     crate::pair::check_texture(&a.texture, a.output.as_deref(), a.strip, a.quantize)?;
     if let Some(e) = a.max_error {
         if e.is_nan() || e < 0.0 {
-            anyhow::bail!("--max-error: expected 0 m or more, found {e} m");
+            anyhow::bail!(
+                "--max-error: expected 0 m or more, found {} m",
+                crate::input::num(e)
+            );
         }
-    }
-    if a.max_triangles == Some(0) {
-        anyhow::bail!("--max-triangles: expected at least 2 triangles, found 0");
     }
     if !is_fast(a) {
         if a.max_triangles.is_some() {
@@ -257,7 +257,10 @@ fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f6
     }
     let build_ms = ms(t);
     let t = Instant::now();
-    let meshed = mesher.mesh(&plan)?;
+    let meshed = mesher.mesh(&plan).map_err(|e| match e {
+        cota_core::MeshError::BudgetTooSmall { .. } => anyhow::anyhow!("--max-triangles: {e}"),
+        e => e.into(),
+    })?;
     Ok((meshed, build_ms, criterion_ms + ms(t)))
 }
 
@@ -271,6 +274,7 @@ fn export_options(a: &MeshArgs) -> ExportOptions {
         .with_coords(coords)
         .with_base_m(a.base_m)
         .with_quantize(a.quantize)
+        .with_replace_read_only(a.force)
 }
 
 /// With `--quantize`, the plan of the quantized GLB (planning the file
@@ -359,10 +363,10 @@ fn write(
         return Ok(ms(t));
     }
     match (strip, a.strip, quant) {
-        (Some(s), true, _) => cota_io::export::write_atomically(out, |w| {
+        (Some(s), true, _) => cota_io::export::write_atomically_forced(out, a.force, |w| {
             cota_io::export::write_glb_strip(w, &s.mesh, &s.strip.indices, grid, &eo)
         })?,
-        (_, _, Some(q)) => cota_io::export::write_atomically(out, |w| {
+        (_, _, Some(q)) => cota_io::export::write_atomically_forced(out, a.force, |w| {
             cota_io::export::write_glb_quantized(w, &m.mesh, grid, &eo, q)
         })?,
         _ => write_mesh(out, &m.mesh, grid, &eo)?,
@@ -448,9 +452,10 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let mut grid = input.grid;
     let nodata = grid.void_count();
     let t = Instant::now();
-    let fill = crate::input::fill(&mut grid, a.voids)?;
+    let files = crate::input::name(&input.files);
+    let fill = crate::input::fill(&mut grid, a.voids).with_context(|| files.clone())?;
     let fill_ms = ms(t);
-    let (mut m, build_ms, extract_ms) = mesh_grid(a, &grid)?;
+    let (mut m, build_ms, extract_ms) = mesh_grid(a, &grid).with_context(|| files.clone())?;
     let (quant, quantize_ms) = quantization(a, &grid, &m)?;
     let measured = measure_first(a, &grid, &mut m, quant.as_ref())?;
     let done = strip_and_write(a, &grid, &m, quant.as_ref(), measured)?;
@@ -464,6 +469,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let mesh = &m.mesh;
     let report = json!({
         "input": crate::input::name(&input.files),
+        "assumed_cell_size_m": crate::input::assumed_cell_m(&input.files),
         "width": grid.width(),
         "height": grid.height(),
         "voids_filled": fill.filled,
@@ -523,6 +529,12 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
         r["width"],
         r["height"]
     );
+    if let Some(c) = r["assumed_cell_size_m"].as_f64() {
+        println!(
+            "cell        assumed {} m: the input has no georeference (set it with --cell-size-m)",
+            crate::input::num(c)
+        );
+    }
     if let Some(s) = seams {
         println!(
             "seams       largest difference {} m over {} samples",

@@ -47,6 +47,13 @@ pub struct ReadOptions {
     /// 1-based band to read from a multi-band raster. `None` reads single-band
     /// files and refuses multi-band ones as ambiguous. Default: `None`.
     pub band: Option<u16>,
+    /// Largest grid, in samples, one file may declare; larger headers are
+    /// refused before anything is allocated, and compressed inputs stop
+    /// decompressing beyond it. `None`: the machine's default
+    /// ([`crate::limits::default_max_samples`]; a gzipped `.hgt` then at most
+    /// one 3601² tile). Never above [`cota_core::grid::MAX_SAMPLES`].
+    /// Default: `None`.
+    pub max_samples: Option<u64>,
 }
 
 impl ReadOptions {
@@ -57,6 +64,7 @@ impl ReadOptions {
         gray_offset_m: 0.0,
         cell_size_m: 1.0,
         band: None,
+        max_samples: None,
     };
 
     /// Sets [`ReadOptions::png_encoding`].
@@ -75,6 +83,12 @@ impl ReadOptions {
     /// Sets [`ReadOptions::band`].
     pub const fn with_band(mut self, band: Option<u16>) -> Self {
         self.band = band;
+        self
+    }
+
+    /// Sets [`ReadOptions::max_samples`].
+    pub const fn with_max_samples(mut self, max_samples: Option<u64>) -> Self {
+        self.max_samples = max_samples;
         self
     }
 
