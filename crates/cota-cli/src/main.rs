@@ -13,6 +13,7 @@ mod mesh;
 mod progress;
 mod refine;
 mod stream;
+mod tiles;
 
 fn main() -> ExitCode {
     quiet_broken_pipe();
@@ -32,6 +33,7 @@ fn run() -> anyhow::Result<ExitCode> {
         args::Command::Mesh(a) => mesh::run(&a),
         args::Command::Compare(a) => compare::run(&a),
         args::Command::Stream(c) => stream::run(&c),
+        args::Command::Tiles(a) => tiles::run(&a),
     }
 }
 

@@ -25,6 +25,10 @@
 //! hanging vertices on their neighbour's edge) check 3 only forbids repeated
 //! directed edges, and coverage rests on (4) plus the per-sample coverage test.
 
+pub mod placed;
+
+pub use placed::{check_placed_mesh, PlacedMesh, PlacedVertex, Region};
+
 use crate::fictitious::diagonal_of;
 use crate::grid::HeightGrid;
 use crate::hierarchy::Hierarchy;

@@ -35,6 +35,7 @@ pub mod stream_marks;
 pub mod strip;
 pub mod strip_cells;
 pub mod strip_quadtree;
+pub mod tiles;
 pub mod view;
 pub mod voids;
 

@@ -6,6 +6,7 @@
 //!   and ESRI ASCII grids. The format is detected from the content, the file name
 //!   only breaking ties.
 //! * Mesh writers (OBJ, PLY, STL, GLB), each written atomically.
+//! * Cesium quantized-mesh-1.0 terrain pyramids ([`tiles`]).
 //!
 //! Every error names the file and says what was expected and what was found.
 #![warn(missing_docs)]
@@ -20,6 +21,7 @@ mod srtm;
 
 pub mod export;
 pub mod stream_file;
+pub mod tiles;
 
 pub use error::{ReadError, ReadErrorKind};
 pub use read::{read_dem, read_dem_bytes, DataType, Dem, Format, PngEncoding, ReadOptions};
