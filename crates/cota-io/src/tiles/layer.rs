@@ -30,7 +30,7 @@ pub fn layer_json(prep: &Prepared<'_>, ext: &TileExtensions) -> Value {
             |p| json!({"zoom": p.zoom, "max_error_m": p.max_error_m, "threshold_m": p.threshold_m}),
         )
         .collect();
-    json!({
+    let mut v = json!({
         "tilejson": "2.1.0",
         "name": "cota",
         "description": "quantized-mesh-1.0 terrain made by cota: every tile within its zoom's error bound at every sample of its lattice, after quantization",
@@ -46,7 +46,15 @@ pub fn layer_json(prep: &Prepared<'_>, ext: &TileExtensions) -> Value {
         "available": available,
         "extensions": ext.names(),
         "cota": {"tile_cells": s.tile_cells, "lattice_deg": s.cell_deg(), "errors": errors}
-    })
+    });
+    if ext.metadata {
+        // Each tile's metadata lists its children: availability one level
+        // at a time. CesiumJS then takes availability from the tiles (and
+        // requires this key whenever tiles carry metadata); `available`
+        // stays for the clients that read only this file.
+        v["metadataAvailability"] = json!(1);
+    }
+    v
 }
 
 /// What decides the tiles' content: a run into a directory that holds
