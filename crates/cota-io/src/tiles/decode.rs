@@ -245,12 +245,11 @@ pub fn decode(bytes: &[u8]) -> Result<DecodedTile, DecodeError> {
     Ok(tile)
 }
 
+/// Triangles and the west, south, east and north edge lists.
+type Indices = (Vec<[u32; 3]>, [Vec<u32>; 4]);
+
 /// The triangles (high-water-mark decoded) and the four edge lists.
-fn indices(
-    r: &mut Reader<'_>,
-    n: usize,
-    wide: bool,
-) -> Result<(Vec<[u32; 3]>, [Vec<u32>; 4]), DecodeError> {
+fn indices(r: &mut Reader<'_>, n: usize, wide: bool) -> Result<Indices, DecodeError> {
     let count = r.u32("triangle count")? as usize;
     let codes = r.indices(count.saturating_mul(3), wide, "triangle indices")?;
     let mut highest = 0u32;
