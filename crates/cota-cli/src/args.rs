@@ -25,6 +25,8 @@ pub enum Command {
     /// Progressive compact stream (paper 000): encode a DEM, decode any prefix.
     #[command(subcommand)]
     Stream(StreamCommand),
+    /// Cesium quantized-mesh-1.0 tile pyramid: error bound per zoom, no seams.
+    Tiles(crate::tiles::TilesArgs),
 }
 
 /// How to read and combine the input files.

@@ -12,6 +12,7 @@ mod input;
 mod mesh;
 mod progress;
 mod stream;
+mod tiles;
 
 fn main() -> ExitCode {
     quiet_broken_pipe();
@@ -31,6 +32,7 @@ fn run() -> anyhow::Result<ExitCode> {
         args::Command::Mesh(a) => mesh::run(&a),
         args::Command::Compare(a) => compare::run(&a),
         args::Command::Stream(c) => stream::run(&c),
+        args::Command::Tiles(a) => tiles::run(&a),
     }
 }
 

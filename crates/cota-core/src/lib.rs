@@ -61,6 +61,7 @@ pub mod strip;
 #[cfg(test)]
 #[allow(clippy::unwrap_used, reason = "tests")]
 mod testing;
+pub mod tiles;
 
 // The public face: the types and entry points of the pipeline, in its
 // order; everything else by its module's path.

@@ -8,6 +8,7 @@
 //! * [`read_region`]: several files read in parallel, joined into one grid
 //!   (`cota_core::grid::mosaic`) and their voids filled (`cota_core::grid::voids`).
 //! * Mesh writers (OBJ, PLY, STL, GLB), each written atomically.
+//! * Cesium quantized-mesh-1.0 terrain pyramids ([`tiles`]).
 //!
 //! Every error names the file and says what was expected and what was found.
 #![warn(missing_docs)]
@@ -17,6 +18,7 @@ pub mod error;
 pub mod export;
 pub mod read;
 pub mod stream_file;
+pub mod tiles;
 
 pub use dem::{DataType, Dem, DemSummary, Format, PngEncoding, ReadOptions};
 pub use error::{ReadError, ReadErrorKind, RegionError};
