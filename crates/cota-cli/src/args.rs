@@ -23,6 +23,8 @@ pub enum Command {
     /// Progressive compact stream (paper 000): encode a DEM, decode any prefix.
     #[command(subcommand)]
     Stream(StreamCommand),
+    /// Serve the terrain over HTTP: browser viewer, CesiumJS page, stream, tiles.
+    Serve(crate::serve::ServeArgs),
 }
 
 /// How to read and combine the input files.

@@ -12,6 +12,7 @@ mod input;
 mod mesh;
 mod progress;
 mod refine;
+mod serve;
 mod stream;
 
 fn main() -> ExitCode {
@@ -32,6 +33,7 @@ fn run() -> anyhow::Result<ExitCode> {
         args::Command::Mesh(a) => mesh::run(&a),
         args::Command::Compare(a) => compare::run(&a),
         args::Command::Stream(c) => stream::run(&c),
+        args::Command::Serve(a) => serve::run(&a),
     }
 }
 
