@@ -30,52 +30,58 @@
 // start frame per vertex).
 
 const SQRT2 = Math.SQRT2;
+/**
+ * Splits happen above this fraction of the target, so that a diamond left
+ * unsplit has a slack of at least (1 / SPLIT_FRACTION − 1) of its critical
+ * distance before it can reach the target: fewer re-evaluations.
+ */
+const SPLIT_FRACTION = 1;
 /** Merges happen below this fraction of the target (hysteresis). */
-const MERGE_FRACTION = 0.9;
+const MERGE_FRACTION = 0.8;
 
-/** A binary min-heap of (key, node, generation) with lazy deletion. */
+/**
+ * An indexed binary min-heap of (key, node): one entry per node at most, its
+ * key changed in place (no stale entries to skip).
+ */
 class Heap {
-  constructor() {
+  constructor(nodes) {
     this.keys = new Float64Array(1024);
     this.nodes = new Int32Array(1024);
-    this.gens = new Uint32Array(1024);
+    this.pos = new Int32Array(nodes).fill(-1);
     this.size = 0;
   }
 
-  push(key, node, gen) {
-    if (this.size === this.keys.length) this.grow();
-    let i = this.size++;
-    const { keys, nodes, gens } = this;
+  /** Puts `node` at `key`, or moves it there when it is in the heap. */
+  set(node, key) {
+    let i = this.pos[node];
+    if (i < 0) {
+      if (this.size === this.keys.length) this.grow();
+      i = this.size++;
+    } else if (key > this.keys[i]) {
+      this.down(i, key, node);
+      return;
+    }
+    this.up(i, key, node);
+  }
+
+  up(i, key, node) {
+    const { keys, nodes, pos } = this;
     while (i > 0) {
       const p = (i - 1) >> 1;
       if (keys[p] <= key) break;
       keys[i] = keys[p];
       nodes[i] = nodes[p];
-      gens[i] = gens[p];
+      pos[nodes[i]] = i;
       i = p;
     }
     keys[i] = key;
     nodes[i] = node;
-    gens[i] = gen;
+    pos[node] = i;
   }
 
-  grow() {
-    const g = (a) => {
-      const b = new a.constructor(a.length * 2);
-      b.set(a);
-      return b;
-    };
-    this.keys = g(this.keys);
-    this.nodes = g(this.nodes);
-    this.gens = g(this.gens);
-  }
-
-  /** Removes the top; returns nothing (read it first with topKey/topNode/topGen). */
-  pop() {
-    const { keys, nodes, gens } = this;
-    const n = --this.size;
-    const key = keys[n], node = nodes[n], gen = gens[n];
-    let i = 0;
+  down(i, key, node) {
+    const { keys, nodes, pos } = this;
+    const n = this.size;
     for (;;) {
       let c = 2 * i + 1;
       if (c >= n) break;
@@ -83,12 +89,30 @@ class Heap {
       if (keys[c] >= key) break;
       keys[i] = keys[c];
       nodes[i] = nodes[c];
-      gens[i] = gens[c];
+      pos[nodes[i]] = i;
       i = c;
     }
     keys[i] = key;
     nodes[i] = node;
-    gens[i] = gen;
+    pos[node] = i;
+  }
+
+  grow() {
+    const k = new Float64Array(this.keys.length * 2);
+    k.set(this.keys);
+    const n = new Int32Array(this.nodes.length * 2);
+    n.set(this.nodes);
+    this.keys = k;
+    this.nodes = n;
+  }
+
+  /** Removes and returns the node of smallest key. */
+  pop() {
+    const top = this.nodes[0];
+    this.pos[top] = -1;
+    const n = --this.size;
+    if (n > 0) this.down(0, this.keys[n], this.nodes[n]);
+    return top;
   }
 }
 
@@ -121,16 +145,16 @@ export class Lod {
     this.morphFrames = o.morphFrames ?? 8;
     const len = this.w * this.h;
     this.active = new Uint8Array(len); // 0 no, 1 split, 2 split in step 0 (never merges)
-    this.gen = new Uint32Array(len);
     this.bounds = new Float64Array(256).fill(Infinity);
     this.stated = [];
-    this.heap = new Heap();
+    this.heap = new Heap(len);
     this.travel = 0;
     this.eye = null;
     this.K = 1;
     this.targetPx = 1;
     this.frame = 0;
-    this.tris = new Map();
+    this.triSlot = new Int32Array(len * 4 + 2).fill(-1);
+    this.triCount = 0;
     this.initTriangles(1 << 14);
     this.initVertices(1 << 13, len);
     this.rootsInside = this.N + 1 <= this.w && this.N + 1 <= this.h;
@@ -147,6 +171,7 @@ export class Lod {
     this.triCap = cap;
     this.index = new Uint32Array(cap * 3);
     this.triSamples = new Int32Array(cap * 3);
+    this.triKey = new Int32Array(cap).fill(-1);
     this.triFree = [];
     this.triTop = 0;
     this.triDirty = [];
@@ -296,14 +321,18 @@ export class Lod {
     this.index[b] = this.useVertex(i0, i0 === fresh);
     this.index[b + 1] = this.useVertex(i1, i1 === fresh);
     this.index[b + 2] = this.useVertex(i2, i2 === fresh);
-    this.tris.set(key, slot);
+    this.triSlot[key] = slot;
+    this.triKey[slot] = key;
+    this.triCount++;
     this.markTri(slot);
   }
 
   removeTri(key) {
-    const slot = this.tris.get(key);
-    if (slot === undefined) return;
-    this.tris.delete(key);
+    const slot = this.triSlot[key];
+    if (slot < 0) return;
+    this.triSlot[key] = -1;
+    this.triKey[slot] = -1;
+    this.triCount--;
     for (let v = 0; v < 3; v++) this.releaseVertex(this.triSamples[slot * 3 + v]);
     this.index[slot * 3] = this.index[slot * 3 + 1] = this.index[slot * 3 + 2] = 0;
     this.triFree.push(slot);
@@ -334,6 +363,9 @@ export class Lod {
     index.set(this.index);
     const samples = new Int32Array(cap * 3);
     samples.set(this.triSamples);
+    const keys = new Int32Array(cap).fill(-1);
+    keys.set(this.triKey);
+    this.triKey = keys;
     this.index = index;
     this.triSamples = samples;
     this.triCap = cap;
@@ -458,7 +490,11 @@ export class Lod {
   hasActiveChild(i) {
     const x = i % this.w, y = (i / this.w) | 0;
     const s = this.scratch;
-    const f = this.diamond(x, y, s);
+    return this.childActiveIn(this.diamond(x, y, s), s);
+  }
+
+  /** True when a child point of the diamond `f`, `s` is split. */
+  childActiveIn(f, s) {
     if ((f & (1 << 30)) === 0 && (f & 0xffffff) === 1) return false;
     for (let k = 0; k < 4; k++) {
       const mx = (s[2 * k] + s[(2 * k + 2) & 7]) >> 1, my = (s[2 * k + 1] + s[(2 * k + 3) & 7]) >> 1;
@@ -497,22 +533,27 @@ export class Lod {
   distance(i, bound) {
     const x = i % this.w, y = (i / this.w) | 0;
     const s = this.scratch;
-    const f = this.diamond(x, y, s);
+    return this.distanceOf(i, x, y, this.diamond(x, y, s), s, bound);
+  }
+
+  /** `distance` with the diamond `f`, `s` of (x, y) already computed. */
+  distanceOf(i, x, y, f, s, bound) {
     const t = f & 0xffffff;
-    let zmin = this.z[i], zmax = zmin;
-    for (let k = 0; k < 4; k++) {
-      const vx = s[2 * k], vy = s[2 * k + 1];
-      if (!this.inGrid(vx, vy)) continue;
-      const v = this.z[vy * this.w + vx];
+    const { w, h, z } = this;
+    let zmin = z[i], zmax = zmin;
+    for (let k = 0; k < 8; k += 2) {
+      const vx = s[k], vy = s[k + 1];
+      if (vx < 0 || vy < 0 || vx >= w || vy >= h) continue;
+      const v = z[vy * w + vx];
       if (v < zmin) zmin = v;
-      if (v > zmax) zmax = v;
+      else if (v > zmax) zmax = v;
     }
     const rh = (f & (1 << 30) ? t * SQRT2 : t) * this.cell;
     const rz = (zmax - zmin) / 2 + bound;
-    const cx = (x - (this.w - 1) / 2) * this.cellX;
-    const cy = ((this.h - 1) / 2 - y) * this.cellY;
     const e = this.eye;
-    const dx = e[0] - cx, dy = e[1] - cy, dz = e[2] - (zmin + zmax) / 2;
+    const dx = e[0] - (x - (w - 1) / 2) * this.cellX;
+    const dy = e[1] - ((h - 1) / 2 - y) * this.cellY;
+    const dz = e[2] - (zmin + zmax) / 2;
     return Math.sqrt(dx * dx + dy * dy + dz * dz) - Math.sqrt(rh * rh + rz * rz);
   }
 
@@ -524,7 +565,7 @@ export class Lod {
   }
 
   schedule(i, key) {
-    this.heap.push(key, i, ++this.gen[i]);
+    this.heap.set(i, key);
   }
 
   /** Decides for i now, and schedules it again where its slack runs out. */
@@ -532,22 +573,34 @@ export class Lod {
     this.evaluations++;
     const a = this.active[i];
     if (a === 2) return;
-    if (a === 0 && !this.isCandidate(i)) return;
-    if (a === 1 && this.hasActiveChild(i)) return;
-    const bound = this.bounds[this.stepOf[i]];
+    const step = this.stepOf[i];
+    if (step === 255) return;
+    const x = i % this.w, y = (i / this.w) | 0;
+    const s = this.scratch;
+    const f = this.diamond(x, y, s);
+    if (a === 0) {
+      if (this.isCorner(x, y)) return;
+      const o = f & (1 << 29) ? 2 : 0;
+      const root = i === this.rootMid && this.rootsInside;
+      if (!root && !this.present(s[o], s[o + 1]) && !this.present(s[o + 4], s[o + 5])) return;
+    } else if (this.childActiveIn(f, s)) {
+      return;
+    }
+    const bound = this.bounds[step];
     if (bound === 0) {
       if (a === 1) this.merge(i);
       return;
     }
-    const d = this.distance(i, bound);
-    const dSplit = (bound * this.K) / this.targetPx;
+    const d = this.distanceOf(i, x, y, f, s, bound);
+    // At this distance the diamond's screen error is the target.
+    const dTarget = (bound * this.K) / this.targetPx;
     if (a === 0) {
-      if (d < dSplit) this.split(i);
-      else this.schedule(i, this.travel + (d - dSplit));
+      if (d < dTarget / SPLIT_FRACTION) this.split(i);
+      else this.heap.set(i, this.travel + (d - dTarget));
     } else {
-      const dMerge = dSplit / MERGE_FRACTION;
+      const dMerge = dTarget / MERGE_FRACTION;
       if (d > dMerge) this.merge(i);
-      else this.schedule(i, this.travel + (dMerge - d));
+      else this.heap.set(i, this.travel + (dMerge - d));
     }
   }
 
@@ -574,16 +627,12 @@ export class Lod {
     let n = 0;
     this.pending = false;
     while (heap.size > 0 && heap.keys[0] <= this.travel) {
-      const i = heap.nodes[0], g = heap.gens[0];
-      heap.pop();
-      if (g !== this.gen[i]) continue;
-      this.evaluate(i);
+      this.evaluate(heap.pop());
       if ((++n & 255) === 0 && performance.now() - t0 > budgetMs) {
         this.pending = true;
         break;
       }
     }
-    if (heap.size > 4 * this.tris.size + 65536) this.compactHeap();
     return n;
   }
 
@@ -591,14 +640,6 @@ export class Lod {
   rescheduleAll() {
     for (let i = 0; i < this.w * this.h; i++) {
       if (this.active[i] === 1 || this.isCandidate(i)) this.schedule(i, this.travel);
-    }
-  }
-
-  compactHeap() {
-    const old = this.heap;
-    this.heap = new Heap();
-    for (let k = 0; k < old.size; k++) {
-      if (old.gens[k] === this.gen[old.nodes[k]]) this.heap.push(old.keys[k], old.nodes[k], old.gens[k]);
     }
   }
 
@@ -614,8 +655,9 @@ export class Lod {
     let sent = 0, all = 0;
     const latest = this.latestStated();
     const s = new Int32Array(8);
-    for (const [key, slot] of this.tris) {
-      void slot;
+    for (let slot = 0; slot < this.triTop; slot++) {
+      const key = this.triKey[slot];
+      if (key < 0) continue;
       const m = this.leafSplitPoint(key, s);
       if (m < 0) continue;
       if (this.stepOf[m] === 255) {
@@ -644,7 +686,8 @@ export class Lod {
   /** The leaves as sample-index triples (for tests). */
   leafTriangles() {
     const out = [];
-    for (const slot of this.tris.values()) {
+    for (let slot = 0; slot < this.triTop; slot++) {
+      if (this.triKey[slot] < 0) continue;
       out.push([this.triSamples[slot * 3], this.triSamples[slot * 3 + 1], this.triSamples[slot * 3 + 2]]);
     }
     return out;
