@@ -82,7 +82,8 @@ impl ServerState {
 }
 
 /// Serves `state` on `listener` until `shutdown` resolves; requests in
-/// flight are completed first.
+/// flight are completed first. Connections get `TCP_NODELAY`: small tiles and
+/// ranges leave at once instead of waiting on the client's delayed ACK.
 ///
 /// # Errors
 /// The listener's I/O error.
@@ -91,6 +92,12 @@ pub async fn serve(
     state: ServerState,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
+    use axum::serve::ListenerExt;
+    let listener = listener.tap_io(|tcp| {
+        // Without it a response may wait for the peer's delayed ACK; serving
+        // goes on either way.
+        let _ = tcp.set_nodelay(true);
+    });
     axum::serve(listener, router(state))
         .with_graceful_shutdown(shutdown)
         .await

@@ -233,9 +233,12 @@ async fn tile(
 ) -> Result<Response> {
     let src = s.tiles.clone().ok_or_else(no_tiles)?;
     let id = TileId::parse(&z, &x, &y)?;
-    let t = tokio::task::spawn_blocking(move || src.tile(id))
-        .await
-        .map_err(|e| ServeError::Internal(format!("tile task: {e}")))??;
+    let t = match src.cached(id) {
+        Some(t) => t,
+        None => tokio::task::spawn_blocking(move || src.tile(id))
+            .await
+            .map_err(|e| ServeError::Internal(format!("tile task: {e}")))??,
+    };
     let mut extra = vec![
         (header::CONTENT_TYPE, TILE_TYPE),
         (header::CACHE_CONTROL, "public, max-age=86400"),

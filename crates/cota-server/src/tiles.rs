@@ -13,7 +13,9 @@
 //! [`MAX_TILE_BYTES`], and files that are neither gzip nor a plausible
 //! quantized-mesh tile (too short for its header and vertex count).
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::RwLock;
 
 use axum::body::Bytes;
 use serde_json::Value;
@@ -110,6 +112,13 @@ pub trait TileSource: Send + Sync + 'static {
     /// [`ServeError::CorruptTile`] / [`ServeError::Io`] for a stored tile
     /// that cannot be served.
     fn tile(&self, id: TileId) -> Result<Tile>;
+
+    /// The tile `id` if the source holds it in memory already: answered
+    /// without the blocking pool. Default: `None`.
+    fn cached(&self, id: TileId) -> Option<Tile> {
+        let _ = id;
+        None
+    }
 }
 
 /// An inclusive rectangle of tiles of one level (`layer.json`'s `available`).
@@ -121,14 +130,20 @@ struct TileRange {
     end_y: u32,
 }
 
-/// The tiles of a `cota tiles` output directory.
-#[derive(Debug, Clone)]
+/// Bytes of tiles a [`DirTileSource`] keeps in memory.
+pub const CACHE_BYTES: usize = 256 << 20;
+
+/// The tiles of a `cota tiles` output directory. Tiles read once are kept in
+/// memory (up to [`CACHE_BYTES`]): the directory is taken as immutable while
+/// it is served.
+#[derive(Debug)]
 pub struct DirTileSource {
     root: PathBuf,
     layer: Bytes,
     max_zoom: u32,
     geographic: bool,
     available: Option<Vec<Vec<TileRange>>>,
+    cache: RwLock<(HashMap<TileId, Tile>, usize)>,
 }
 
 impl DirTileSource {
@@ -173,6 +188,7 @@ impl DirTileSource {
             max_zoom: parsed.0,
             geographic: parsed.1,
             available: parsed.2,
+            cache: RwLock::new((HashMap::new(), 0)),
         })
     }
 
@@ -335,8 +351,29 @@ impl TileSource for DirTileSource {
         &self.layer
     }
 
+    fn cached(&self, id: TileId) -> Option<Tile> {
+        self.cache.read().ok()?.0.get(&id).cloned()
+    }
+
     fn tile(&self, id: TileId) -> Result<Tile> {
         self.check(id)?;
+        if let Some(t) = self.cached(id) {
+            return Ok(t);
+        }
+        let t = self.read(id)?;
+        if let Ok(mut c) = self.cache.write() {
+            if c.1 + t.bytes.len() <= CACHE_BYTES {
+                c.1 += t.bytes.len();
+                c.0.insert(id, t.clone());
+            }
+        }
+        Ok(t)
+    }
+}
+
+impl DirTileSource {
+    /// Reads and checks the file of tile `id`.
+    fn read(&self, id: TileId) -> Result<Tile> {
         let rel = format!("{}/{}/{}.terrain", id.z, id.x, id.y);
         let missing = || ServeError::NotFound(format!("tile {rel}"));
         let path = self.root.join(&rel);

@@ -63,6 +63,7 @@ async fn start() -> (
 /// One client: REQUESTS requests on one connection; (is a tile, latency ms).
 async fn client(addr: SocketAddr, id: usize, stream_len: u64) -> Vec<(bool, f64)> {
     let s = TcpStream::connect(addr).await.unwrap();
+    s.set_nodelay(true).unwrap();
     let mut r = BufReader::new(s);
     let mut lat = Vec::with_capacity(REQUESTS);
     for k in 0..REQUESTS {
