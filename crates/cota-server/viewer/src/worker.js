@@ -1,10 +1,10 @@
-// The stream in a Web Worker: fetch /stream in ranges (64 KiB first, then
+// The stream in a Web Worker: fetch /stream in ranges (32 KiB first, then
 // doubling), decode each step as soon as its frame is complete and post the
 // points it split, with their heights, to the page. Coarse first: the page
 // can draw after the first few hundred bytes.
 import { StreamReader } from './decoder.js';
 
-const FIRST_BYTES = 64 * 1024;
+const FIRST_BYTES = 32 * 1024;
 
 async function fetchRange(url, from, to) {
   const r = await fetch(url, { headers: { Range: `bytes=${from}-${to}` } });
