@@ -40,7 +40,12 @@ fn main() {
     let (dir, how) = locate(&viewer, &out);
     let code = match &dir {
         Some(d) => assets_code(d, how),
-        None => fallback_code(&out),
+        None => {
+            // Notice a later `npm ci` or `npm run build` (the folder is small
+            // without node_modules).
+            println!("cargo:rerun-if-changed=viewer");
+            fallback_code(&out)
+        }
     };
     if let Err(e) = fs::write(out.join("assets.rs"), code) {
         println!("cargo:warning=cannot write assets.rs: {e}");
