@@ -27,6 +27,8 @@ pub enum Command {
     Stream(StreamCommand),
     /// Cesium quantized-mesh-1.0 tile pyramid: error bound per zoom, no seams.
     Tiles(crate::tiles::TilesArgs),
+    /// Serve the terrain over HTTP: browser viewer, CesiumJS page, stream, tiles.
+    Serve(crate::serve::ServeArgs),
 }
 
 /// How to read and combine the input files.

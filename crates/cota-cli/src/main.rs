@@ -11,6 +11,7 @@ mod info;
 mod input;
 mod mesh;
 mod progress;
+mod serve;
 mod stream;
 mod tiles;
 
@@ -33,6 +34,7 @@ fn run() -> anyhow::Result<ExitCode> {
         args::Command::Compare(a) => compare::run(&a),
         args::Command::Stream(c) => stream::run(&c),
         args::Command::Tiles(a) => tiles::run(&a),
+        args::Command::Serve(a) => serve::run(&a),
     }
 }
 
