@@ -52,6 +52,9 @@ pub enum ServeError {
         /// What was found.
         found: String,
     },
+    /// Tiles cannot be made from the source (at start).
+    #[error("tiles: {0}")]
+    Tiling(#[from] cota_core::tiles::TilesError),
     /// Reading a file failed.
     #[error("{}: {source}", path.display())]
     Io {
@@ -96,6 +99,7 @@ pub fn status_of(e: &ServeError) -> StatusCode {
         }
         ServeError::CorruptTile { .. }
         | ServeError::BadTileSet { .. }
+        | ServeError::Tiling(_)
         | ServeError::Io { .. }
         | ServeError::BadStream { .. }
         | ServeError::Bind { .. }

@@ -8,8 +8,10 @@
 //! * `/stream`: the `.cstream` bytes, with single HTTP ranges: a prefix ending
 //!   on a step boundary decodes to a coarser crack-free mesh.
 //! * `/meta.json`: size, cell size, steps (end offsets, stated errors).
-//! * `/layer.json`, `/tiles/{z}/{x}/{y}.terrain`: quantized-mesh tiles from a
-//!   [`TileSource`] (a `cota tiles` directory: [`DirTileSource`]).
+//! * `/tiles/layer.json` (and `/layer.json`), `/tiles/{z}/{x}/{y}.terrain`:
+//!   quantized-mesh tiles from a [`TileSource`]: a `cota tiles` directory
+//!   ([`DirTileSource`]) or tiles made on demand from the in-memory
+//!   hierarchy ([`DemandTileSource`]); see [`tiles`] for the URL layout.
 //! * `/health`: liveness and what is served.
 //!
 //! [`router`] builds the whole service from a [`ServerState`] without a
@@ -39,16 +41,27 @@ use std::future::Future;
 use std::net::SocketAddr;
 use std::sync::Arc;
 
+use axum::body::Bytes;
+
 pub use error::{status_of, Result, ServeError};
 pub use routes::{router, MAX_URI_BYTES};
 pub use stream::{StreamAsset, StreamMeta};
-pub use tiles::{DirTileSource, Tile, TileId, TileSource};
+pub use tiles::{DemandTileSource, DirTileSource, Tile, TileId, TileSource};
 
 /// What the server serves: the stream and, optionally, tiles.
 #[derive(Clone)]
 pub struct ServerState {
     stream: Arc<StreamAsset>,
-    tiles: Option<Arc<dyn TileSource>>,
+    tiles: Option<Tiles>,
+}
+
+/// A tile source and its two layers (see [`tiles`]).
+#[derive(Clone)]
+pub(crate) struct Tiles {
+    /// Where the tiles come from.
+    pub(crate) source: Arc<dyn TileSource>,
+    /// `/layer.json`: the source's layer, template relative to the root.
+    pub(crate) root_layer: Bytes,
 }
 
 impl std::fmt::Debug for ServerState {
@@ -69,9 +82,11 @@ impl ServerState {
         }
     }
 
-    /// Adds a tile source for `/layer.json` and `/tiles/…`.
-    pub fn with_tiles(mut self, tiles: Arc<dyn TileSource>) -> Self {
-        self.tiles = Some(tiles);
+    /// Adds a tile source for `/tiles/layer.json`, `/layer.json` and
+    /// `/tiles/{z}/{x}/{y}.terrain`.
+    pub fn with_tiles(mut self, source: Arc<dyn TileSource>) -> Self {
+        let root_layer = tiles::root_layer(source.layer_json());
+        self.tiles = Some(Tiles { source, root_layer });
         self
     }
 

@@ -44,7 +44,8 @@ pub fn router(state: ServerState) -> Router {
         .route("/health", get(health))
         .route("/meta.json", get(meta))
         .route("/stream", get(stream))
-        .route("/layer.json", get(layer))
+        .route("/layer.json", get(root_layer))
+        .route("/tiles/layer.json", get(layer))
         .route("/tiles/{z}/{x}/{y}", get(tile))
         .fallback(embedded)
         .with_state(state)
@@ -208,22 +209,35 @@ async fn stream(State(s): State<ServerState>, headers: HeaderMap) -> Result<Resp
 }
 
 fn no_tiles() -> ServeError {
-    ServeError::NotFound("no tile set: start `cota serve` with --tiles DIR".into())
+    ServeError::NotFound(
+        "no tile set: `cota serve` makes tiles from a geographic source, or serves --tiles DIR"
+            .into(),
+    )
 }
 
+/// `/tiles/layer.json`: the layer as the source has it.
 async fn layer(State(s): State<ServerState>, headers: HeaderMap) -> Result<Response> {
     let t = s.tiles.as_ref().ok_or_else(no_tiles)?;
-    let body = t.layer_json().clone();
-    let etag = format!("\"{:016x}\"", crate::stream::fnv64(&body));
-    Ok(cached(
-        &headers,
+    Ok(json_layer(&headers, t.source.layer_json().clone()))
+}
+
+/// `/layer.json`: the layer with its template relative to the root.
+async fn root_layer(State(s): State<ServerState>, headers: HeaderMap) -> Result<Response> {
+    let t = s.tiles.as_ref().ok_or_else(no_tiles)?;
+    Ok(json_layer(&headers, t.root_layer.clone()))
+}
+
+fn json_layer(headers: &HeaderMap, body: Bytes) -> Response {
+    let etag = crate::tiles::etag_of(&body);
+    cached(
+        headers,
         body,
         &[
             (header::CONTENT_TYPE, "application/json"),
             (header::CACHE_CONTROL, "no-cache"),
         ],
         &etag,
-    ))
+    )
 }
 
 async fn tile(
@@ -231,7 +245,7 @@ async fn tile(
     Path((z, x, y)): Path<(String, String, String)>,
     headers: HeaderMap,
 ) -> Result<Response> {
-    let src = s.tiles.clone().ok_or_else(no_tiles)?;
+    let src = s.tiles.as_ref().ok_or_else(no_tiles)?.source.clone();
     let id = TileId::parse(&z, &x, &y)?;
     let t = match src.cached(id) {
         Some(t) => t,

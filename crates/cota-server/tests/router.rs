@@ -136,6 +136,11 @@ async fn tiles_types_encodings_and_validators() {
     assert_eq!(s, StatusCode::OK);
     let v: serde_json::Value = serde_json::from_slice(&b).unwrap();
     assert_eq!(v["tiles"][0], "tiles/{z}/{x}/{y}.terrain");
+    // The tile set mounted at /tiles/: its layer as written, template relative.
+    let (s, _, b) = get(&app, "/tiles/layer.json", &[]).await;
+    assert_eq!(s, StatusCode::OK);
+    let v: serde_json::Value = serde_json::from_slice(&b).unwrap();
+    assert_eq!(v["tiles"][0], "{z}/{x}/{y}.terrain?v={version}");
     let (s, h, b) = get(&app, "/tiles/0/0/0.terrain", &[]).await;
     assert_eq!(s, StatusCode::OK);
     assert_eq!(h[header::CONTENT_TYPE], "application/vnd.quantized-mesh");

@@ -1,7 +1,8 @@
-// The CesiumJS page: the server's quantized-mesh tiles (/layer.json,
-// /tiles/{z}/{x}/{y}.terrain) in a stock CesiumJS viewer, served locally
-// (no Ion token, no imagery from the network). window.cotaCesium reports
-// tile loads and errors for the browser test.
+// The CesiumJS page: the server's quantized-mesh tiles (the tile set mounted
+// at /tiles/: /tiles/layer.json, /tiles/{z}/{x}/{y}.terrain) in a stock
+// CesiumJS viewer, served locally (no Ion token, no imagery from the
+// network). window.cotaCesium reports tile loads and errors, and holds the
+// terrain provider, for the browser test.
 const Cesium = window.Cesium;
 const status = document.getElementById('status');
 const report = { ready: false, tileErrors: 0, tilesLoaded: false, error: null };
@@ -9,8 +10,9 @@ window.cotaCesium = report;
 
 async function main() {
   Cesium.Ion.defaultAccessToken = '';
-  const layer = await (await fetch('/layer.json')).json();
-  const terrainProvider = await Cesium.CesiumTerrainProvider.fromUrl('/', { requestVertexNormals: false, requestWaterMask: false });
+  const layer = await (await fetch('/tiles/layer.json')).json();
+  const terrainProvider = await Cesium.CesiumTerrainProvider.fromUrl('/tiles/', { requestVertexNormals: false, requestWaterMask: false });
+  report.terrainProvider = terrainProvider;
   terrainProvider.errorEvent.addEventListener((e) => {
     report.tileErrors++;
     report.lastError = String(e.message || e);

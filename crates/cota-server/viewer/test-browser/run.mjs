@@ -7,18 +7,21 @@
 //     on a 1280×720 viewport: no console error, terrain on screen, triangles
 //     rising then falling, the screen error within the target, the refinement
 //     time per frame measured in the page;
-//  2. the CesiumJS page over a hand-made quantized-mesh tile set (test-browser/
-//     qm.mjs): tiles load, no tile or console error.
+//  2. the CesiumJS page over real quantized-mesh tiles of the same input, twice:
+//     a `cota tiles` output served with --tiles DIR, and tiles made on demand
+//     by `cota serve` itself: tiles load, no tile or console error, and
+//     sampleTerrainMostDetailed agrees with the DEM within the finest zoom's
+//     bound plus the lattice's own deviation.
 // Usage: node test-browser/run.mjs [--docs DIR] (COTA_BIN: the cota binary,
 // default target/release/cota; CHROMIUM: default /usr/bin/chromium).
 // Writes target/viewer-tests/results.json and screenshots beside it.
 import { chromium } from 'playwright-core';
-import { spawn } from 'node:child_process';
-import { existsSync, mkdirSync, mkdtempSync, writeFileSync, rmSync } from 'node:fs';
+import { spawn, spawnSync } from 'node:child_process';
+import { existsSync, mkdirSync, mkdtempSync, readFileSync, writeFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { writeTileSet } from './qm.mjs';
+import { readDem } from '../test-tiles/common.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const repo = resolve(here, '../../../..');
@@ -191,36 +194,72 @@ async function docShots(browser, url, path) {
   await page.close();
 }
 
-async function cesiumTest(browser) {
+/** `cota tiles` on the input into a temporary directory, and its --json report. */
+function makeTiles(files) {
   const dir = mkdtempSync(join(tmpdir(), 'cota-tiles-'));
-  writeTileSet(dir);
-  const s = await serve([join(repo, 'fixtures/S29W072.hgt.zip'), '--tiles', dir]);
+  const t0 = Date.now();
+  const r = spawnSync(bin, ['tiles', ...files, '-o', dir, '--normals', '--metadata', '--gzip', '--json'], { encoding: 'utf8' });
+  if (r.status !== 0) throw new Error(`cota tiles failed (${r.status}): ${r.stderr}`);
+  console.log(`cota tiles: ${((Date.now() - t0) / 1000).toFixed(1)} s`);
+  return { dir, report: JSON.parse(r.stdout) };
+}
+
+/** DEM samples on a 19×19 grid over the first input file, away from its edges. */
+function demPoints(input) {
+  const p = readDem(input.files).parts[0];
+  const pts = [];
+  for (let j = 1; j < 20; j++) for (let i = 1; i < 20; i++) {
+    const [c, r] = [Math.round((i / 20) * (p.n - 1)), Math.round((j / 20) * (p.n - 1))];
+    const h = p.h[r * p.n + c];
+    if (h !== -32768) pts.push({ lon: p.lon + c / (p.n - 1), lat: p.lat + 1 - r / (p.n - 1), h });
+  }
+  return pts;
+}
+
+/** The CesiumJS page of `cota serve` over real tiles: `mode` 'directory' (--tiles DIR) or 'on demand'. */
+async function cesiumTest(browser, input, tiles, mode) {
+  const s = await serve(mode === 'directory' ? [...input.files, '--tiles', tiles.dir] : input.files);
   const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
   const errors = collectErrors(page);
-  const tiles = [];
+  const served = [];
   page.on('response', (r) => {
-    if (r.url().includes('/tiles/')) tiles.push({ url: r.url(), status: r.status(), type: r.headers()['content-type'] });
+    if (r.url().includes('/tiles/') && r.url().endsWith('.terrain')) served.push({ url: r.url(), status: r.status(), type: r.headers()['content-type'] });
   });
   try {
+    const layer = await (await fetch(`${s.url}/tiles/layer.json`)).json();
+    const written = JSON.parse(readFileSync(join(tiles.dir, 'layer.json'), 'utf8'));
+    check(`the ${mode} layer is the cota tiles layer`, JSON.stringify(layer.available) === JSON.stringify(written.available)
+      && layer.tiles[0].startsWith('{z}/{x}/{y}.terrain'), `template ${layer.tiles[0]}, ${layer.available.length} zooms`);
     await page.goto(`${s.url}/cesium`);
     await page.waitForFunction(() => window.cotaCesium && (window.cotaCesium.error || (window.cotaCesium.ready && window.cotaCesium.tilesLoaded)), null, { timeout: 120000 });
     await page.waitForTimeout(1000);
     const r = await page.evaluate(() => ({ error: window.cotaCesium.error, tileErrors: window.cotaCesium.tileErrors, lastError: window.cotaCesium.lastError }));
-    await page.screenshot({ path: join(out, 'cesium.png') });
-    if (docs) {
+    const shot = mode === 'directory' ? 'cesium.png' : 'cesium-on-demand.png';
+    await page.screenshot({ path: join(out, shot) });
+    if (docs && mode === 'directory') {
       await page.setViewportSize({ width: 640, height: 360 });
       await page.waitForTimeout(1500);
       await page.screenshot({ path: join(docs, 'cesium.png') });
     }
-    const ok = tiles.filter((t) => t.status === 200 && t.type === 'application/vnd.quantized-mesh');
-    check('CesiumJS page loads the server\'s quantized-mesh tiles', !r.error && ok.length >= 2 && r.tileErrors === 0,
+    const ok = served.filter((t) => t.status === 200 && t.type === 'application/vnd.quantized-mesh');
+    check(`CesiumJS page loads the server's quantized-mesh tiles (${mode})`, !r.error && ok.length >= 2 && r.tileErrors === 0,
       `${ok.length} tiles served, ${r.tileErrors} tile errors${r.error ? `, ${r.error}` : ''}${r.lastError ? `, ${r.lastError}` : ''}`);
-    check('no console errors on the CesiumJS page', errors.length === 0, errors.slice(0, 3).join(' | '));
-    results.cesium = { tiles: tiles.length, ok: ok.length, tileErrors: r.tileErrors };
+    const pts = demPoints(input);
+    const got = await page.evaluate(async (points) => {
+      const C = window.Cesium;
+      const carto = points.map((q) => C.Cartographic.fromDegrees(q.lon, q.lat));
+      const out = await C.sampleTerrainMostDetailed(window.cotaCesium.terrainProvider, carto);
+      return out.map((c) => c.height);
+    }, pts);
+    const bound = layer.cota.errors.find((e) => e.zoom === layer.maxzoom).max_error_m + tiles.report.lattice.deviation_max_m;
+    const worst = Math.max(...pts.map((q, k) => Math.abs(got[k] - q.h)));
+    check(`CesiumJS heights agree with the DEM (${mode})`, pts.length > 300 && worst <= bound + 1e-3,
+      `${pts.length} points at zoom ${layer.maxzoom}, largest |Cesium − DEM| ${worst.toFixed(3)} m, bound ${bound.toFixed(3)} m`);
+    check(`no console errors on the CesiumJS page (${mode})`, errors.length === 0, errors.slice(0, 3).join(' | '));
+    results[`cesium_${mode.replace(' ', '_')}`] = { tiles: served.length, ok: ok.length, tileErrors: r.tileErrors, points: pts.length, worst_m: worst, bound_m: bound };
   } finally {
     await page.close();
     await stop(s);
-    rmSync(dir, { recursive: true, force: true });
   }
 }
 
@@ -234,10 +273,14 @@ async function main() {
     const e = await stop(s);
     check('the server stops on SIGTERM', e.code === 0, `exit ${e.code} ${e.sig ?? ''}`);
   }
+  let tiles = null;
   try {
-    await cesiumTest(browser);
+    tiles = makeTiles(input.files);
+    for (const mode of ['directory', 'on demand']) await cesiumTest(browser, input, tiles, mode);
   } catch (e) {
     check('CesiumJS page', false, String(e.message || e));
+  } finally {
+    if (tiles) rmSync(tiles.dir, { recursive: true, force: true });
   }
   await browser.close();
   writeFileSync(join(out, 'results.json'), JSON.stringify(results, null, 2));

@@ -1,4 +1,5 @@
-// Shared by the tiles-check tests: the pyramid and the DEM it was made from.
+// Shared by the tiles tests (test-tiles/) and the browser test of the
+// CesiumJS page (test-browser/): the pyramid and the DEM it was made from.
 //
 // Environment:
 //   COTA_TILES         the pyramid directory (layer.json, {z}/{x}/{y}.terrain)
@@ -85,9 +86,9 @@ function readSrtm(file) {
   return { lat, lon, n, h };
 }
 
-/** The DEM: SRTM tiles, bilinear heights and the list of their samples. */
-export function dem() {
-  const parts = demFiles.map(readSrtm);
+/** The DEM of `files`: SRTM tiles, bilinear heights and the list of their samples. */
+export function readDem(files) {
+  const parts = files.map(readSrtm);
   const find = (lon, lat) => parts.find((p) => lon >= p.lon && lon <= p.lon + 1 && lat >= p.lat && lat <= p.lat + 1);
   return {
     parts,
@@ -111,3 +112,6 @@ export function dem() {
     },
   };
 }
+
+/** The DEM of COTA_TILES_DEM. */
+export const dem = () => readDem(demFiles);

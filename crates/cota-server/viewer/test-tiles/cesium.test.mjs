@@ -14,8 +14,8 @@ import { requireEnv, tilesDir, layer, report, bounds, dem } from './common.mjs';
 
 requireEnv();
 const here = path.dirname(fileURLToPath(import.meta.url));
-const cesiumDir = path.join(here, 'node_modules', 'cesium', 'Build', 'Cesium');
-const screenshot = process.env.COTA_TILES_SCREENSHOT || path.join(here, '..', '..', 'target', 'tiles-cesium.png');
+const cesiumDir = path.join(here, '..', 'node_modules', 'cesium', 'Build', 'Cesium');
+const screenshot = process.env.COTA_TILES_SCREENSHOT || path.join(here, '..', '..', '..', '..', 'target', 'tiles-cesium.png');
 const L = layer();
 const maxZoom = L.maxzoom;
 const bound = bounds(L).get(maxZoom).maxError + report().lattice.deviation_max_m;
