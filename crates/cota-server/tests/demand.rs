@@ -3,7 +3,10 @@
 //! to the tile route), every tile of the layer served, byte for byte the
 //! file `cota tiles` writes with the same options, decoded and within its
 //! zoom's bound at every lattice sample (the one checker's placed mode),
-//! and tiles outside the layer refused.
+//! and tiles outside the layer refused; over real loopback sockets, many
+//! clients asking for the same tiles at once in different orders get the
+//! same bytes, malformed tile requests get a 4xx, and
+//! the server serves afterwards.
 #![allow(clippy::unwrap_used, clippy::panic, reason = "tests")]
 
 mod common;
@@ -124,4 +127,82 @@ fn a_projected_source_gives_no_tiles() {
     )
     .unwrap_err();
     assert!(e.to_string().contains("32719"), "{e}");
+}
+
+/// One request on its own connection (`Connection: close`): status, body.
+async fn fetch_raw(addr: std::net::SocketAddr, target: &str) -> (u16, Vec<u8>) {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let mut s = tokio::net::TcpStream::connect(addr).await.unwrap();
+    let req = format!("GET {target} HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n");
+    s.write_all(req.as_bytes()).await.unwrap();
+    let mut all = Vec::new();
+    s.read_to_end(&mut all).await.unwrap();
+    let split = all.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+    let status = std::str::from_utf8(&all[9..12]).unwrap().parse().unwrap();
+    (status, all[split + 4..].to_vec())
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn concurrent_clients_get_the_same_tiles_and_bad_requests_4xx() {
+    let src = DemandTileSource::new(
+        &common::grid(),
+        &LatticeOptions::DEFAULT,
+        &TilerOptions::DEFAULT,
+        OPTIONS,
+    )
+    .unwrap();
+    let uris: Vec<String> = src
+        .prepared()
+        .tiles()
+        .map(|t| format!("/tiles/{}/{}/{}.terrain", t.z, t.x, t.y))
+        .collect();
+    let state = common::state().with_tiles(Arc::new(src));
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let (tx, rx) = tokio::sync::oneshot::channel::<()>();
+    let server = tokio::spawn(cota_server::serve(listener, state, async move {
+        let _ = rx.await;
+    }));
+
+    // 16 clients, each walking every tile from its own starting point.
+    let clients: Vec<_> = (0..16)
+        .map(|c| {
+            let uris = uris.clone();
+            tokio::spawn(async move {
+                let n = uris.len();
+                let mut got = vec![Vec::new(); n];
+                for k in 0..n {
+                    let i = (k + c * 7) % n;
+                    let (status, body) = fetch_raw(addr, &uris[i]).await;
+                    assert_eq!(status, 200, "{}", uris[i]);
+                    got[i] = body;
+                }
+                got
+            })
+        })
+        .collect();
+    let mut first: Option<Vec<Vec<u8>>> = None;
+    for c in clients {
+        let got = c.await.unwrap();
+        match &first {
+            None => first = Some(got),
+            Some(f) => assert!(f == &got, "clients got different bytes for a tile"),
+        }
+    }
+
+    for bad in [
+        "/tiles/x/0/0.terrain",
+        "/tiles/0/0/0.png",
+        "/tiles/0/9/0.terrain",
+        "/tiles/99/0/0.terrain",
+        "/tiles/0/0/99999999999.terrain",
+        "/tiles/0/%2e%2e/0.terrain",
+        "/tiles/../../etc/passwd",
+    ] {
+        let (status, _) = fetch_raw(addr, bad).await;
+        assert!((400..500).contains(&status), "{bad}: {status}");
+    }
+    assert_eq!(fetch_raw(addr, &uris[0]).await.0, 200);
+    tx.send(()).unwrap();
+    server.await.unwrap().unwrap();
 }
