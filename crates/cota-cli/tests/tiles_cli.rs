@@ -17,6 +17,7 @@ fn sample_pyramid_report_and_resume() {
         "7",
         "--normals",
         "--metadata",
+        "--check",
         "--json",
         "-o",
         o,
@@ -27,10 +28,11 @@ fn sample_pyramid_report_and_resume() {
     assert!(tiles > 5 && v["written"].as_u64() == Some(tiles), "{v}");
     for z in v["zooms"].as_array().unwrap() {
         assert!(
-            z["measured_error_m"].as_f64() <= z["max_error_m"].as_f64(),
+            z["measured_error_m"].as_f64().unwrap() <= z["max_error_m"].as_f64().unwrap(),
             "{z}"
         );
     }
+    assert!(v["check"].as_str().unwrap().starts_with("passed"), "{v}");
     assert!(out.join("layer.json").is_file() && out.join("0/0/0.terrain").is_file());
     let again = cota(&[
         "tiles",

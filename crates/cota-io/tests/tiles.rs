@@ -13,8 +13,8 @@ use cota_core::mesh::check::check_placed_mesh;
 use cota_core::tiles::{ErrorSchedule, Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
 use cota_core::{fill_voids, mosaic, FillOptions, HeightGrid, Mesh, MeshVertex, MosaicOptions};
 use cota_io::tiles::{
-    compare_border, decode, edge_lists_match, encode, tile_path, write_pyramid, DecodedTile,
-    Extensions, Neighbour, PyramidError, PyramidOptions, TileExtensions, TileFrame,
+    compare_border, decode, edge_lists_match, encode, make_tile, tile_path, write_pyramid,
+    DecodedTile, Extensions, Neighbour, PyramidError, PyramidOptions, TileExtensions, TileFrame,
 };
 use cota_io::{read_dem, ReadOptions};
 
@@ -118,6 +118,25 @@ fn two_tile_mosaic_small_bounds_and_seams() {
     let tiles = decode_all(&prep, out.path());
     let (borders, _) = assert_no_seams(&tiles);
     assert!(borders > 2000, "{borders}");
+}
+
+#[test]
+fn unchecked_tiles_are_the_checked_tiles() {
+    let g = load(&[common::fixture("S29W072.hgt.zip")]);
+    let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(7))).unwrap();
+    let prep = Prepared::new(&lat, &TilerOptions::DEFAULT).unwrap();
+    let opts = PyramidOptions::DEFAULT.with_gzip(true);
+    for t in prep.tiles() {
+        let checked = make_tile(&prep, t, &opts).unwrap();
+        let fast = make_tile(&prep, t, &opts.with_check(false)).unwrap();
+        assert_eq!(checked.bytes, fast.bytes, "{t}");
+        assert_eq!(
+            (checked.triangles, checked.vertices),
+            (fast.triangles, fast.vertices),
+            "{t}"
+        );
+        assert!(checked.measured_error_m <= checked.max_error_m && fast.measured_error_m.is_nan());
+    }
 }
 
 #[test]

@@ -1,5 +1,6 @@
 //! Writing a pyramid: `OUT/layer.json` and `OUT/{z}/{x}/{y}.terrain`, every
-//! tile cut, encoded, decoded again and checked before it is written.
+//! tile cut and encoded, and with [`PyramidOptions::check`] (the default)
+//! decoded again and checked before it is written.
 //!
 //! * **Parallel**: all tiles of all zooms go to the rayon pool at once; each
 //!   is independent (the prepared hierarchy is shared, read-only).
@@ -14,8 +15,8 @@
 //!   the tiles already there (`force` redoes them), one whose manifest
 //!   differs is refused unless `force`. Runs over disjoint sets of tiles can
 //!   share a directory.
-//! * **Verified**: [`make_tile`] decodes the bytes with the independent
-//!   decoder and checks the decoded tile with
+//! * **Verified** (with [`PyramidOptions::check`]): [`make_tile`] decodes the
+//!   bytes with the independent decoder and checks the decoded tile with
 //!   [`cota_core::mesh::check::check_placed_mesh`] against its zoom's bound at
 //!   every sample of its square of the lattice, and its edge lists.
 
@@ -94,6 +95,10 @@ pub struct PyramidOptions {
     pub gzip: bool,
     /// Redo tiles that exist, and ignore another run's manifest. Default: false.
     pub force: bool,
+    /// Decode every tile again and check it (the one checker's placed mode,
+    /// every lattice sample of its square, and its edge lists) before it is
+    /// written. Default: true (`cota tiles` turns it on with `--check`).
+    pub check: bool,
 }
 
 impl PyramidOptions {
@@ -102,6 +107,7 @@ impl PyramidOptions {
         extensions: TileExtensions::NONE,
         gzip: false,
         force: false,
+        check: true,
     };
 
     /// Sets [`PyramidOptions::extensions`].
@@ -121,6 +127,12 @@ impl PyramidOptions {
         self.force = yes;
         self
     }
+
+    /// Sets [`PyramidOptions::check`].
+    pub const fn with_check(mut self, yes: bool) -> Self {
+        self.check = yes;
+        self
+    }
 }
 
 /// One tile, encoded and verified.
@@ -136,12 +148,13 @@ pub struct MadeTile {
     pub vertices: usize,
     /// The bound it meets, metres.
     pub max_error_m: f64,
-    /// The largest error measured on the decoded tile, metres.
+    /// The largest error measured on the decoded tile, metres; NaN when
+    /// [`PyramidOptions::check`] is off.
     pub measured_error_m: f64,
 }
 
-/// Cuts, encodes and verifies one tile: the entry point for making tiles on
-/// demand from a prepared hierarchy.
+/// Cuts, encodes and (with [`PyramidOptions::check`]) verifies one tile: the
+/// entry point for making tiles on demand from a prepared hierarchy.
 ///
 /// # Errors
 /// [`PyramidError::Tiles`] for a tile outside the pyramid, and
@@ -157,6 +170,16 @@ pub fn make_tile(
     let raw =
         encode_tile(&tile, &ext).map_err(|source| PyramidError::Encode { tile: t, source })?;
     let bytes = if opts.gzip { gzip(&raw) } else { raw };
+    if !opts.check {
+        return Ok(MadeTile {
+            tile: t,
+            bytes,
+            triangles: tile.mesh.triangles.len(),
+            vertices: tile.mesh.vertices.len(),
+            max_error_m: tile.max_error_m,
+            measured_error_m: f64::NAN,
+        });
+    }
     let decoded = decode(&bytes).map_err(|source| PyramidError::Decode { tile: t, source })?;
     let report = check_placed_mesh(
         &prep.region(t),
@@ -209,7 +232,8 @@ pub struct ZoomReport {
     pub max_error_m: f64,
     /// The margin left for quantization, metres.
     pub margin_m: f64,
-    /// The largest error measured over its written tiles, metres.
+    /// The largest error measured over its written tiles, metres; NaN when
+    /// they were not checked ([`PyramidOptions::check`] off).
     pub measured_error_m: f64,
 }
 
@@ -370,7 +394,12 @@ fn fold(prep: &Prepared<'_>, outcomes: &[Outcome]) -> Vec<ZoomReport> {
                     r.bytes += o.bytes;
                     r.triangles += o.triangles;
                     r.vertices += o.vertices;
-                    r.measured_error_m = r.measured_error_m.max(o.measured);
+                    // NaN (not checked) stays NaN: `f64::max` would drop it.
+                    r.measured_error_m = if o.measured.is_nan() {
+                        f64::NAN
+                    } else {
+                        r.measured_error_m.max(o.measured)
+                    };
                 } else {
                     r.skipped += 1;
                 }
