@@ -1,0 +1,216 @@
+//! The shard plan: a deterministic split of a pyramid's tiles into `N`
+//! disjoint parts aligned to the tile grid, so that `N` processes (or
+//! machines) can each write one part into the same directory.
+//!
+//! Reference: the tiling of paper `001_49f2c365e8c41172.txt` (one hierarchy
+//! over a mosaic), on the geographic TMS of the quantized-mesh-1.0
+//! specification (CesiumGS/quantized-mesh).
+//!
+//! The finest zoom's range is cut along its longer axis (columns, or TMS
+//! rows) into `N` bands of (nearly) equal width: band `i` holds the positions
+//! `⌊i·L/N⌋ .. ⌊(i+1)·L/N⌋` of the `L` along that axis. A tile of a coarser
+//! zoom `z` at position `p` goes to the shard whose band holds its first
+//! descendant at the finest zoom, `p·2^(max−z)` (clamped into the range), so
+//! every tile of every zoom belongs to exactly one shard, and a shard's
+//! tiles at each zoom are one rectangle (a [`TileRange`]). The plan depends
+//! only on the zooms' ranges and `N`: every process computes the same one.
+//! A shard may be empty when `N` exceeds the bands the range allows.
+
+use super::error::TilesError;
+use super::plan::{TileRange, ZoomPlan};
+use super::scheme::TileId;
+
+/// One shard's part of the pyramid.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Shard {
+    /// This shard, `0..shards`.
+    pub index: u32,
+    /// The number of shards.
+    pub shards: u32,
+    /// Its tiles, zoom by zoom, coarse to fine (zooms where it has none are
+    /// left out).
+    pub ranges: Vec<(u8, TileRange)>,
+}
+
+impl Shard {
+    /// True when tile `t` belongs to this shard.
+    pub fn contains(&self, t: TileId) -> bool {
+        self.ranges
+            .iter()
+            .any(|(z, r)| *z == t.z && r.contains(t.x, t.y))
+    }
+
+    /// Number of tiles.
+    pub fn tile_count(&self) -> u64 {
+        self.ranges.iter().map(|(_, r)| r.count()).sum()
+    }
+
+    /// Its tiles, zoom by zoom (rows, then columns, as
+    /// [`super::Prepared::tiles`] orders them).
+    pub fn tiles(&self) -> impl Iterator<Item = TileId> + '_ {
+        self.ranges.iter().flat_map(|&(z, r)| {
+            (r.y0..=r.y1).flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z, x, y }))
+        })
+    }
+}
+
+/// The band of each position along the cut axis at the finest zoom:
+/// the shard of finest position `q` (`start..start+len`).
+fn band_of(q: u64, start: u64, len: u64, shards: u64) -> u32 {
+    let k = q.clamp(start, start + len - 1) - start;
+    // The largest i with ⌊i·len/shards⌋ ≤ k.
+    let mut i = (k * shards) / len;
+    while i + 1 < shards && ((i + 1) * len) / shards <= k {
+        i += 1;
+    }
+    while i > 0 && (i * len) / shards > k {
+        i -= 1;
+    }
+    i as u32
+}
+
+/// The plan of `shards` shards over the zooms `zooms` (coarse to fine, as
+/// [`super::Prepared::zooms`] or [`super::plan::plan`] give them).
+///
+/// # Errors
+/// [`TilesError::BadOptions`] when `shards` is 0 or `zooms` is empty.
+pub fn shard_plan(zooms: &[ZoomPlan], shards: u32) -> Result<Vec<Shard>, TilesError> {
+    let Some(finest) = zooms.last() else {
+        return Err(TilesError::BadOptions(
+            "expected at least one zoom to shard, found none".into(),
+        ));
+    };
+    if shards == 0 {
+        return Err(TilesError::BadOptions(
+            "expected at least one shard, found 0".into(),
+        ));
+    }
+    let f = finest.range;
+    let by_columns = f.x1 - f.x0 >= f.y1 - f.y0;
+    let (start, len) = if by_columns {
+        (u64::from(f.x0), u64::from(f.x1 - f.x0) + 1)
+    } else {
+        (u64::from(f.y0), u64::from(f.y1 - f.y0) + 1)
+    };
+    let mut out: Vec<Shard> = (0..shards)
+        .map(|index| Shard {
+            index,
+            shards,
+            ranges: Vec::new(),
+        })
+        .collect();
+    for p in zooms {
+        let shift = u32::from(finest.zoom - p.zoom);
+        let r = p.range;
+        let (a, b) = if by_columns {
+            (r.x0, r.x1)
+        } else {
+            (r.y0, r.y1)
+        };
+        let mut pos = a;
+        while pos <= b {
+            let owner = band_of(u64::from(pos) << shift, start, len, u64::from(shards));
+            let mut end = pos;
+            while end < b
+                && band_of(u64::from(end + 1) << shift, start, len, u64::from(shards)) == owner
+            {
+                end += 1;
+            }
+            let part = if by_columns {
+                TileRange {
+                    x0: pos,
+                    x1: end,
+                    ..r
+                }
+            } else {
+                TileRange {
+                    y0: pos,
+                    y1: end,
+                    ..r
+                }
+            };
+            out[owner as usize].ranges.push((p.zoom, part));
+            pos = end + 1;
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    fn zoom(z: u8, x0: u32, x1: u32, y0: u32, y1: u32) -> ZoomPlan {
+        ZoomPlan {
+            zoom: z,
+            range: TileRange { x0, x1, y0, y1 },
+            max_error_m: 1.0,
+            margin_m: 0.1,
+            threshold_m: 0.9,
+        }
+    }
+
+    fn pyramid() -> Vec<ZoomPlan> {
+        vec![
+            zoom(0, 0, 1, 0, 0),
+            zoom(1, 1, 1, 0, 1),
+            zoom(2, 2, 3, 1, 2),
+            zoom(3, 5, 7, 3, 4),
+            zoom(4, 11, 15, 7, 8),
+        ]
+    }
+
+    #[test]
+    fn every_tile_in_exactly_one_shard() {
+        let zooms = pyramid();
+        let all: Vec<TileId> = zooms
+            .iter()
+            .flat_map(|p| {
+                let r = p.range;
+                (r.y0..=r.y1)
+                    .flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z: p.zoom, x, y }))
+            })
+            .collect();
+        for n in 1..=7 {
+            let plan = shard_plan(&zooms, n).unwrap();
+            assert_eq!(plan.len(), n as usize);
+            for t in &all {
+                assert_eq!(
+                    plan.iter().filter(|s| s.contains(*t)).count(),
+                    1,
+                    "{t} n={n}"
+                );
+            }
+            let total: u64 = plan.iter().map(Shard::tile_count).sum();
+            assert_eq!(total, all.len() as u64);
+            assert_eq!(plan, shard_plan(&zooms, n).unwrap(), "deterministic");
+        }
+    }
+
+    #[test]
+    fn finest_zoom_bands_are_balanced() {
+        let plan = shard_plan(&pyramid(), 2).unwrap();
+        let finest: Vec<u64> = plan
+            .iter()
+            .map(|s| {
+                s.ranges
+                    .iter()
+                    .filter(|(z, _)| *z == 4)
+                    .map(|(_, r)| r.count())
+                    .sum()
+            })
+            .collect();
+        assert_eq!(finest, vec![4, 6]);
+        // A coarse tile goes with its first finest descendant.
+        assert!(plan[0].contains(TileId { z: 0, x: 0, y: 0 }));
+        assert!(plan[0].contains(TileId { z: 3, x: 6, y: 3 }));
+        assert!(plan[1].contains(TileId { z: 3, x: 7, y: 3 }));
+    }
+
+    #[test]
+    fn zero_shards_refused() {
+        assert!(shard_plan(&pyramid(), 0).is_err());
+        assert!(shard_plan(&[], 2).is_err());
+    }
+}
