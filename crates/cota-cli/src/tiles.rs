@@ -7,10 +7,14 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
+use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
-    resampling_deviation, Deviation, ErrorSchedule, Lattice, LatticeOptions, Prepared, TilerOptions,
+    resampling_deviation, shard_plan, Deviation, ErrorSchedule, Lattice, LatticeOptions, Prepared,
+    Shard, TilerOptions, ZoomPlan,
 };
-use cota_io::tiles::{write_pyramid, PyramidOptions, PyramidReport, TileExtensions};
+use cota_io::tiles::{
+    reduce_shards, write_pyramid, write_shard, PyramidOptions, PyramidReport, TileExtensions,
+};
 use serde_json::json;
 
 use crate::args::{InputArgs, Voids};
@@ -64,10 +68,41 @@ pub struct TilesArgs {
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Print the shard plan (each shard's tiles, zoom by zoom) for --shards N and exit.
+    #[arg(long, conflicts_with_all = ["shard", "reduce"])]
+    pub plan: bool,
+    /// Number of shards for --plan and --reduce.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub shards: u32,
+    /// Write only shard I of N (0-based) and its record OUT/.cota-shard-I-of-N.json;
+    /// idempotent. Then --reduce --shards N writes layer.json.
+    #[arg(long, value_name = "I/N", value_parser = parse_shard, conflicts_with = "reduce")]
+    pub shard: Option<(u32, u32)>,
+    /// Check the records of --shards N shards in OUT, write layer.json, remove
+    /// the records (reads no input: the shards recorded it).
+    #[arg(long)]
+    pub reduce: bool,
+}
+
+/// `I/N` with `I < N`.
+fn parse_shard(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected I/N with 0 <= I < N (e.g. 0/4), found {s:?}");
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let (i, n): (u32, u32) = (
+        i.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if i >= n {
+        return Err(bad());
+    }
+    Ok((i, n))
 }
 
 /// Runs `cota tiles`.
 pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
+    if a.reduce {
+        return reduce(a);
+    }
     let t0 = Instant::now();
     let mut inp = input::load(&a.input)?;
     input::fill(&mut inp.grid, a.voids)?;
@@ -85,43 +120,109 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
             factor: q.unwrap_or(1.0),
         },
     };
-    let t_prep = Instant::now();
     let opts = TilerOptions::DEFAULT
         .with_min_zoom(a.min_zoom)
         .with_error(error);
+    if a.plan {
+        let zooms = plan(&lattice, &opts).with_context(|| format!("tiling {name}"))?;
+        return print_plan(&zooms, a.shards, a.json);
+    }
+    let t_prep = Instant::now();
     let prepared = Prepared::new(&lattice, &opts).with_context(|| format!("tiling {name}"))?;
     let prep_s = t_prep.elapsed().as_secs_f64();
+    let report = write(a, &prepared)?;
+    let total_s = t0.elapsed().as_secs_f64();
+    let times = [prep_s, total_s];
+    if a.json {
+        let mut v = report_json(&name, &prepared, &deviation, &report, times, a.check);
+        if let Some((i, n)) = a.shard {
+            v["shard"] = json!([i, n]);
+        }
+        println!("{v}");
+    } else {
+        print_report(
+            &name, &prepared, &deviation, &report, times, &a.output, a.check,
+        );
+    }
+    Ok(std::process::ExitCode::SUCCESS)
+}
+
+/// Writes the pyramid, or with --shard one shard of it.
+fn write(a: &TilesArgs, prepared: &Prepared<'_>) -> anyhow::Result<PyramidReport> {
     let pyramid = PyramidOptions::DEFAULT
         .with_extensions(TileExtensions::with(a.normals, a.watermask, a.metadata))
         .with_gzip(a.gzip)
         .with_force(a.force)
         .with_check(a.check);
-    let pb = progress::bar(prepared.tile_count(), "tiles");
-    let report = write_pyramid(&prepared, &a.output, &pyramid, &|n| pb.set_position(n))
-        .with_context(|| format!("writing {}", a.output.display()))?;
+    let shard = match a.shard {
+        Some((i, n)) => Some(shard_plan(prepared.zooms(), n)?.swap_remove(i as usize)),
+        None => None,
+    };
+    let total = shard
+        .as_ref()
+        .map_or(prepared.tile_count(), Shard::tile_count);
+    let pb = progress::bar(total, "tiles");
+    let report = match &shard {
+        Some(s) => write_shard(prepared, &a.output, &pyramid, s, &|n| pb.set_position(n)),
+        None => write_pyramid(prepared, &a.output, &pyramid, &|n| pb.set_position(n)),
+    }
+    .with_context(|| format!("writing {}", a.output.display()))?;
     pb.finish_and_clear();
-    let total_s = t0.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+/// `--reduce`: the shards' records into layer.json.
+fn reduce(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
+    let r = reduce_shards(&a.output, a.shards)
+        .with_context(|| format!("reducing {}", a.output.display()))?;
     if a.json {
-        println!(
-            "{}",
-            report_json(
-                &name,
-                &prepared,
-                &deviation,
-                &report,
-                [prep_s, total_s],
-                a.check
-            )
-        );
+        println!("{}", json!({"reduced": r.shards, "tiles": r.tiles}));
     } else {
-        print_report(
-            &name,
-            &prepared,
-            &deviation,
-            &report,
-            [prep_s, total_s],
-            &a.output,
-            a.check,
+        println!(
+            "reduced     {} shards, {} tiles; wrote {}",
+            r.shards,
+            r.tiles,
+            a.output.join("layer.json").display()
+        );
+    }
+    Ok(std::process::ExitCode::SUCCESS)
+}
+
+/// `--plan`: each shard's tiles, zoom by zoom.
+fn print_plan(
+    zooms: &[ZoomPlan],
+    shards: u32,
+    as_json: bool,
+) -> anyhow::Result<std::process::ExitCode> {
+    let plan = shard_plan(zooms, shards)?;
+    if as_json {
+        let v: Vec<serde_json::Value> = plan
+            .iter()
+            .map(|s| {
+                let ranges: Vec<serde_json::Value> = s
+                    .ranges
+                    .iter()
+                    .map(|(z, r)| json!({"zoom": z, "x0": r.x0, "x1": r.x1, "y0": r.y0, "y1": r.y1}))
+                    .collect();
+                json!({"shard": s.index, "shards": s.shards, "tiles": s.tile_count(), "ranges": ranges})
+            })
+            .collect();
+        println!("{}", json!({"shards": shards, "plan": v}));
+        return Ok(std::process::ExitCode::SUCCESS);
+    }
+    println!("shard       tiles  zoom: columns x rows (TMS)");
+    for s in &plan {
+        let parts: Vec<String> = s
+            .ranges
+            .iter()
+            .map(|(z, r)| format!("{z}: {}..={} x {}..={}", r.x0, r.x1, r.y0, r.y1))
+            .collect();
+        println!(
+            "{:>2}/{:<2} {:>10}  {}",
+            s.index,
+            s.shards,
+            s.tile_count(),
+            parts.join("; ")
         );
     }
     Ok(std::process::ExitCode::SUCCESS)

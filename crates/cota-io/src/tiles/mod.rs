@@ -33,6 +33,7 @@ pub mod layer;
 pub mod pyramid;
 pub mod quantized_mesh;
 pub mod seams;
+pub mod shard;
 
 pub use decode::{decode, DecodeError, DecodedTile, Header};
 pub use layer::layer_json;
@@ -42,3 +43,4 @@ pub use pyramid::{
 };
 pub use quantized_mesh::{encode, encode_tile, EncodeError, Extensions, TileExtensions, TileFrame};
 pub use seams::{compare_border, edge_lists_match, BorderCheck, Neighbour};
+pub use shard::{reduce_shards, shard_record_path, write_shard, ReduceReport};

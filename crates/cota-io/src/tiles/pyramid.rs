@@ -73,6 +73,14 @@ pub enum PyramidError {
         /// The violations.
         source: CheckError,
     },
+    /// A shard's record is missing or does not match the others.
+    #[error("{path}: {message}")]
+    Shard {
+        /// The directory or record.
+        path: PathBuf,
+        /// What was expected and found.
+        message: String,
+    },
     /// The output holds tiles made with other settings.
     #[error("{path} was made with other settings (found {found}, expected {expected}); use --force to redo every tile, or another directory")]
     Changed {
@@ -298,14 +306,19 @@ pub fn tile_path(out: &Path, t: TileId) -> PathBuf {
 }
 
 /// Checks or writes the run manifest.
-fn manifest(prep: &Prepared<'_>, out: &Path, opts: &PyramidOptions) -> Result<(), PyramidError> {
+pub(crate) fn manifest(
+    prep: &Prepared<'_>,
+    out: &Path,
+    opts: &PyramidOptions,
+) -> Result<(), PyramidError> {
     std::fs::create_dir_all(out).map_err(io_err(out))?;
     let path = out.join(".cota-tiles.json");
     let want = run_manifest(prep, &opts.extensions, opts.gzip);
     if !opts.force && path.exists() {
         let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
-        let found: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
-        if found != want {
+        // Compared as text: serde_json's parser does not round-trip every
+        // f64 exactly, so parsed values of the same text could differ.
+        if text != want.to_string() {
             return Err(PyramidError::Changed {
                 path,
                 found: text,
@@ -319,7 +332,7 @@ fn manifest(prep: &Prepared<'_>, out: &Path, opts: &PyramidOptions) -> Result<()
 
 /// Per-tile outcome folded into the report.
 #[derive(Debug, Clone, Copy, Default)]
-struct Outcome {
+pub(crate) struct Outcome {
     zoom: u8,
     written: bool,
     bytes: u64,
@@ -341,10 +354,33 @@ pub fn write_pyramid(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<PyramidReport, PyramidError> {
     let t0 = Instant::now();
-    manifest(prep, out, opts)?;
     let tiles: Vec<TileId> = prep.tiles().collect();
+    let outcomes = write_tiles(prep, out, opts, &tiles, progress)?;
+    write_file_atomically(&out.join("layer.json"), layer_text(prep, opts).as_bytes())?;
+    Ok(PyramidReport {
+        zooms: fold(prep, &outcomes),
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The bytes of `layer.json`.
+pub(crate) fn layer_text(prep: &Prepared<'_>, opts: &PyramidOptions) -> String {
+    let layer = layer_json(prep, &opts.extensions);
+    format!("{layer:#}\n")
+}
+
+/// Checks or writes the run manifest, then writes `tiles` (those not yet
+/// there unless `force`) in parallel; `progress(done)` after each.
+pub(crate) fn write_tiles(
+    prep: &Prepared<'_>,
+    out: &Path,
+    opts: &PyramidOptions,
+    tiles: &[TileId],
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<Outcome>, PyramidError> {
+    manifest(prep, out, opts)?;
     let done = AtomicU64::new(0);
-    let outcomes: Vec<Outcome> = tiles
+    tiles
         .par_iter()
         .map(|&t| {
             let path = tile_path(out, t);
@@ -368,17 +404,11 @@ pub fn write_pyramid(
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
             Ok(o)
         })
-        .collect::<Result<_, PyramidError>>()?;
-    let layer = layer_json(prep, &opts.extensions);
-    write_file_atomically(&out.join("layer.json"), format!("{layer:#}\n").as_bytes())?;
-    Ok(PyramidReport {
-        zooms: fold(prep, &outcomes),
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+        .collect()
 }
 
 /// The per-zoom report of the tiles' outcomes.
-fn fold(prep: &Prepared<'_>, outcomes: &[Outcome]) -> Vec<ZoomReport> {
+pub(crate) fn fold(prep: &Prepared<'_>, outcomes: &[Outcome]) -> Vec<ZoomReport> {
     prep.zooms()
         .iter()
         .map(|p| {

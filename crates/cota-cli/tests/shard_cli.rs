@@ -1,0 +1,124 @@
+//! Sharded `cota tiles` (issue 20): `--plan`, `--shard I/N` and `--reduce`
+//! give a directory byte-identical to one plain `cota tiles` run, for 1, 2
+//! and 3 shards, on the bundled sample and on the two-tile mosaic; a shard
+//! run again is idempotent; a reduce with a shard missing is refused.
+#![allow(clippy::unwrap_used, clippy::panic)]
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use common::{cota, stderr, stdout};
+
+/// Every file under `dir` (hidden ones included), by relative path.
+fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let rel = p.strip_prefix(dir).unwrap().to_path_buf();
+                out.insert(rel, std::fs::read(&p).unwrap());
+            }
+        }
+    }
+    out
+}
+
+fn run_ok(args: &[&str]) -> String {
+    let r = cota(args);
+    assert!(r.status.success(), "{args:?}: {}", stderr(&r));
+    stdout(&r)
+}
+
+/// Plain run, then 1, 2, 3 shards + reduce, each compared file by file.
+fn sharded_equals_plain(inputs: &[&str], settings: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let plain = dir.path().join("plain");
+    let mut args: Vec<&str> = vec!["tiles"];
+    args.extend(inputs);
+    args.extend(settings);
+    let p = plain.to_str().unwrap();
+    run_ok(&[&args[..], &["-o", p]].concat());
+    let want = files(&plain);
+    assert!(want.len() > 5, "{want:?}");
+    for n in 1..=3u32 {
+        let out = dir.path().join(format!("sharded{n}"));
+        let o = out.to_str().unwrap();
+        let ns = n.to_string();
+        let plan = run_ok(&[&args[..], &["-o", o, "--plan", "--shards", &ns, "--json"]].concat());
+        let plan: serde_json::Value = serde_json::from_str(&plan).unwrap();
+        let planned: u64 = plan["plan"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s["tiles"].as_u64().unwrap())
+            .sum();
+        // The plan lists every tile once: as many as the pyramid has (but layer.json and the run manifest).
+        assert_eq!(planned as usize, want.len() - 2, "{plan}");
+        for i in (0..n).rev() {
+            let s = format!("{i}/{n}");
+            run_ok(&[&args[..], &["-o", o, "--shard", &s]].concat());
+        }
+        assert!(
+            !out.join("layer.json").exists(),
+            "the shards leave layer.json to the reduce"
+        );
+        run_ok(&["tiles", "-o", o, "--reduce", "--shards", &ns]);
+        assert!(files(&out) == want, "{n} shards differ from the plain run");
+    }
+}
+
+#[test]
+fn shards_and_reduce_equal_plain_run_on_the_sample() {
+    sharded_equals_plain(&[], &["--max-zoom", "8", "--normals", "--metadata"]);
+}
+
+#[test]
+fn shards_and_reduce_equal_plain_run_on_the_two_tile_mosaic() {
+    let (Some(a), Some(b)) = (
+        common::shared("srtm/N00E010.hgt"),
+        common::shared("srtm/N00E011.hgt.zip"),
+    ) else {
+        return;
+    };
+    let (a, b) = (
+        a.to_str().unwrap().to_owned(),
+        b.to_str().unwrap().to_owned(),
+    );
+    sharded_equals_plain(&[&a, &b], &["--max-zoom", "7", "--gzip"]);
+}
+
+#[test]
+fn shard_is_idempotent_and_reduce_needs_every_shard() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t");
+    let o = out.to_str().unwrap();
+    let base = ["tiles", "--max-zoom", "7", "-o", o];
+    let first = run_ok(&[&base[..], &["--shard", "1/2", "--json"]].concat());
+    let first: serde_json::Value = serde_json::from_str(&first).unwrap();
+    let written = first["written"].as_u64().unwrap();
+    assert!(written > 0, "{first}");
+    let before = files(&out);
+    let again = run_ok(&[&base[..], &["--shard", "1/2", "--json"]].concat());
+    let again: serde_json::Value = serde_json::from_str(&again).unwrap();
+    assert_eq!(
+        (again["written"].as_u64(), again["skipped"].as_u64()),
+        (Some(0), Some(written))
+    );
+    assert!(
+        files(&out) == before,
+        "a shard run again changed the directory"
+    );
+    let r = cota(&["tiles", "-o", o, "--reduce", "--shards", "2"]);
+    assert!(!r.status.success());
+    assert!(stderr(&r).contains("missing shard(s) 0"), "{}", stderr(&r));
+    assert!(!out.join("layer.json").exists());
+    let bad = cota(&[&base[..], &["--shard", "2/2"]].concat());
+    assert!(!bad.status.success());
+    assert!(stderr(&bad).contains("expected I/N"), "{}", stderr(&bad));
+}
