@@ -11,7 +11,9 @@
 //! * `dem`: `cota.read` and `cota.Dem` (`cota_io::read_region`);
 //! * `bitree`: `cota.Bitree` (`cota_core::Bitree`: build once, extract,
 //!   check, measure);
-//! * `mesh`: `cota.Mesh` (numpy vertices and triangles, `write`).
+//! * `mesh`: `cota.Mesh` (numpy vertices and triangles, `write`);
+//! * `tiles`: `cota.tiles` (a quantized-mesh pyramid, whole or one shard),
+//!   `cota.tiles_plan`, `cota.tiles_reduce` (used by `cota.dask`).
 
 use pyo3::prelude::*;
 
@@ -20,6 +22,7 @@ mod bitree;
 mod dem;
 mod errors;
 mod mesh;
+mod tiles;
 
 /// The extension module: classes, `read`, and the exception hierarchy.
 #[pymodule]
@@ -29,6 +32,10 @@ fn _cota(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<bitree::Bitree>()?;
     m.add_class::<mesh::Mesh>()?;
     m.add_function(wrap_pyfunction!(dem::read, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::tiles, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::tiles_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::tiles_reduce, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::shard_record, m)?)?;
     m.add("CotaError", py.get_type::<errors::CotaError>())?;
     m.add("ReadError", py.get_type::<errors::ReadError>())?;
     m.add("MeshError", py.get_type::<errors::MeshError>())?;

@@ -313,21 +313,21 @@ pub(crate) fn manifest(
 ) -> Result<(), PyramidError> {
     std::fs::create_dir_all(out).map_err(io_err(out))?;
     let path = out.join(".cota-tiles.json");
-    let want = run_manifest(prep, &opts.extensions, opts.gzip);
+    let want = run_manifest(prep, &opts.extensions, opts.gzip).to_string();
     if !opts.force && path.exists() {
         let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
         // Compared as text: serde_json's parser does not round-trip every
         // f64 exactly, so parsed values of the same text could differ.
-        if text != want.to_string() {
+        if text != want {
             return Err(PyramidError::Changed {
                 path,
                 found: text,
-                expected: want.to_string(),
+                expected: want,
             });
         }
         return Ok(());
     }
-    write_file_atomically(&path, want.to_string().as_bytes())
+    write_file_atomically(&path, want.as_bytes())
 }
 
 /// Per-tile outcome folded into the report.

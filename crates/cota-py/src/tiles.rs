@@ -1,0 +1,194 @@
+//! `cota.tiles`, `cota.tiles_plan` and `cota.tiles_reduce`: a quantized-mesh
+//! pyramid (`cota_io::tiles`), whole or one shard of it, as `cota tiles`
+//! writes it; the GIL is released while reading and tiling.
+
+use std::path::PathBuf;
+
+use cota_core::tiles::plan::plan;
+use cota_core::tiles::{
+    shard_plan, ErrorSchedule, Lattice, LatticeOptions, Prepared, TilerOptions,
+};
+use cota_core::FillOptions;
+use cota_io::tiles::{
+    reduce_shards, shard_record_path, write_pyramid, write_shard, PyramidOptions, TileExtensions,
+};
+use cota_io::{read_region, RegionOptions};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::errors;
+
+/// The settings that decide the tiles (as `cota tiles`' flags).
+#[derive(Clone, Copy)]
+struct Settings {
+    min_zoom: u8,
+    max_zoom: Option<u8>,
+    tile_cells: u32,
+    error: ErrorSchedule,
+}
+
+fn paths_of(paths: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
+    match paths.extract::<PathBuf>() {
+        Ok(p) => Ok(vec![p]),
+        Err(_) => paths.extract(),
+    }
+}
+
+fn schedule(factor: Option<f64>, at_max: Option<f64>) -> ErrorSchedule {
+    match (factor, at_max) {
+        (_, Some(e)) => ErrorSchedule::AtMaxZoom { max_error_m: e },
+        (q, None) => ErrorSchedule::Cesium {
+            factor: q.unwrap_or(1.0),
+        },
+    }
+}
+
+/// Reads, fills the voids (harmonic, as `cota tiles`) and resamples.
+fn lattice(paths: &[PathBuf], s: &Settings) -> PyResult<Lattice> {
+    let opts = RegionOptions::DEFAULT.with_fill(Some(FillOptions::DEFAULT));
+    let region = read_region(paths, &opts).map_err(errors::read)?;
+    let lo = LatticeOptions::DEFAULT
+        .with_max_zoom(s.max_zoom)
+        .with_tile_cells(s.tile_cells);
+    Lattice::resample(&region.grid, &lo).map_err(errors::mesh)
+}
+
+fn tiler(s: &Settings) -> TilerOptions {
+    TilerOptions::DEFAULT
+        .with_min_zoom(s.min_zoom)
+        .with_error(s.error)
+}
+
+/// Writes a pyramid of the DEM file(s) `paths` under `out`
+/// (`out/layer.json`, `out/{z}/{x}/{y}.terrain`), byte for byte as
+/// `cota tiles` with the same settings. With `shard=(i, n)` only shard `i`
+/// of `n` (see `tiles_plan`) and its record; `tiles_reduce(out, n)` then
+/// writes `layer.json`. Returns a dict: `tiles`, `written`, `skipped`,
+/// `bytes`. Raises `ReadError`, `MeshError` or `WriteError`.
+#[pyfunction]
+#[pyo3(signature = (paths, out, *, min_zoom = 0, max_zoom = None, tile_cells = 64,
+    error_factor = None, max_error_m_at_max_zoom = None, normals = false, watermask = false,
+    metadata = false, gzip = false, force = false, check = false, shard = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn tiles<'py>(
+    py: Python<'py>,
+    paths: &Bound<'py, PyAny>,
+    out: PathBuf,
+    min_zoom: u8,
+    max_zoom: Option<u8>,
+    tile_cells: u32,
+    error_factor: Option<f64>,
+    max_error_m_at_max_zoom: Option<f64>,
+    normals: bool,
+    watermask: bool,
+    metadata: bool,
+    gzip: bool,
+    force: bool,
+    check: bool,
+    shard: Option<(u32, u32)>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let paths = paths_of(paths)?;
+    let s = Settings {
+        min_zoom,
+        max_zoom,
+        tile_cells,
+        error: schedule(error_factor, max_error_m_at_max_zoom),
+    };
+    let opts = PyramidOptions::DEFAULT
+        .with_extensions(TileExtensions::with(normals, watermask, metadata))
+        .with_gzip(gzip)
+        .with_force(force)
+        .with_check(check);
+    if let Some((i, n)) = shard {
+        if i >= n {
+            return Err(errors::value(format!(
+                "expected shard (i, n) with 0 <= i < n, found ({i}, {n})"
+            )));
+        }
+    }
+    let (total, report) = py.detach(|| -> PyResult<_> {
+        let lat = lattice(&paths, &s)?;
+        let prep = Prepared::new(&lat, &tiler(&s)).map_err(errors::mesh)?;
+        let report = match shard {
+            Some((i, n)) => {
+                let part = shard_plan(prep.zooms(), n)
+                    .map_err(errors::value)?
+                    .swap_remove(i as usize);
+                write_shard(&prep, &out, &opts, &part, &|_| {})
+            }
+            None => write_pyramid(&prep, &out, &opts, &|_| {}),
+        }
+        .map_err(errors::write)?;
+        Ok((prep.tile_count(), report))
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("tiles", total)?;
+    d.set_item("written", report.written())?;
+    d.set_item("skipped", report.skipped())?;
+    d.set_item("bytes", report.bytes())?;
+    Ok(d)
+}
+
+/// The shard plan of `cota tiles --plan --shards n`: a list of `n` dicts
+/// (`shard`, `shards`, `tiles`, `ranges`: a list of `(zoom, x0, x1, y0, y1)`,
+/// TMS, inclusive). Deterministic: every process computes the same.
+#[pyfunction]
+#[pyo3(signature = (paths, shards, *, min_zoom = 0, max_zoom = None, tile_cells = 64,
+    error_factor = None, max_error_m_at_max_zoom = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn tiles_plan<'py>(
+    py: Python<'py>,
+    paths: &Bound<'py, PyAny>,
+    shards: u32,
+    min_zoom: u8,
+    max_zoom: Option<u8>,
+    tile_cells: u32,
+    error_factor: Option<f64>,
+    max_error_m_at_max_zoom: Option<f64>,
+) -> PyResult<Bound<'py, PyList>> {
+    let paths = paths_of(paths)?;
+    let s = Settings {
+        min_zoom,
+        max_zoom,
+        tile_cells,
+        error: schedule(error_factor, max_error_m_at_max_zoom),
+    };
+    let parts = py.detach(|| -> PyResult<_> {
+        let lat = lattice(&paths, &s)?;
+        let zooms = plan(&lat, &tiler(&s)).map_err(errors::mesh)?;
+        shard_plan(&zooms, shards).map_err(errors::value)
+    })?;
+    let list = PyList::empty(py);
+    for p in parts {
+        let d = PyDict::new(py);
+        d.set_item("shard", p.index)?;
+        d.set_item("shards", p.shards)?;
+        d.set_item("tiles", p.tile_count())?;
+        let ranges: Vec<(u8, u32, u32, u32, u32)> = p
+            .ranges
+            .iter()
+            .map(|(z, r)| (*z, r.x0, r.x1, r.y0, r.y1))
+            .collect();
+        d.set_item("ranges", ranges)?;
+        list.append(d)?;
+    }
+    Ok(list)
+}
+
+/// Checks the records of the `shards` shards written under `out`, writes
+/// `layer.json` and removes the records (`cota tiles --reduce`). Returns
+/// the number of tiles the shards recorded. Raises `WriteError` naming a
+/// missing or disagreeing shard.
+#[pyfunction]
+pub(crate) fn tiles_reduce(py: Python<'_>, out: PathBuf, shards: u32) -> PyResult<u64> {
+    py.detach(|| reduce_shards(&out, shards))
+        .map(|r| r.tiles)
+        .map_err(errors::write)
+}
+
+/// The path of shard `index`'s record under `out`: it exists once the shard
+/// has written all its tiles (and until `tiles_reduce` removes it).
+#[pyfunction]
+pub(crate) fn shard_record(out: PathBuf, index: u32, shards: u32) -> PathBuf {
+    shard_record_path(&out, index, shards)
+}
