@@ -14,6 +14,9 @@ From numpy: ``cota.Bitree(heights, cell_size_m=30.0)`` with a 2-D float32,
 float64 or int16 array; NaN marks voids (filled by default, see ``Bitree``).
 Long calls release the GIL; errors are ``cota.CotaError`` subclasses carrying
 cota's messages, bad arrays ``TypeError`` / ``ValueError``.
+
+Tile pyramids: ``cota.tiles(paths, out, ...)`` (as ``cota tiles``), one shard of
+one with ``shard=(i, n)``, and ``cota.dask.build_pyramid`` across a Dask cluster.
 """
 
 from ._cota import (
@@ -26,6 +29,10 @@ from ._cota import (
     ReadError,
     WriteError,
     read,
+    shard_record,
+    tiles,
+    tiles_plan,
+    tiles_reduce,
 )
 
 __all__ = [
@@ -38,4 +45,8 @@ __all__ = [
     "ReadError",
     "WriteError",
     "read",
+    "shard_record",
+    "tiles",
+    "tiles_plan",
+    "tiles_reduce",
 ]

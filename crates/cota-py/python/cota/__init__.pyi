@@ -49,6 +49,61 @@ def read(paths: Union[_Path, Sequence[_Path]], fill: bool = True) -> Dem:
     leaves them NaN. Raises ReadError. Releases the GIL.
     """
 
+class TilesReport(TypedDict):
+    """What ``tiles`` wrote."""
+    tiles: int
+    written: int
+    skipped: int
+    bytes: int
+
+class ShardPlan(TypedDict):
+    """One shard of ``tiles_plan``: its tiles as ``(zoom, x0, x1, y0, y1)``, TMS, inclusive."""
+    shard: int
+    shards: int
+    tiles: int
+    ranges: list[tuple[int, int, int, int, int]]
+
+def tiles(
+    paths: Union[_Path, Sequence[_Path]],
+    out: _Path,
+    *,
+    min_zoom: int = 0,
+    max_zoom: int | None = None,
+    tile_cells: int = 64,
+    error_factor: float | None = None,
+    max_error_m_at_max_zoom: float | None = None,
+    normals: bool = False,
+    watermask: bool = False,
+    metadata: bool = False,
+    gzip: bool = False,
+    force: bool = False,
+    check: bool = False,
+    shard: tuple[int, int] | None = None,
+) -> TilesReport:
+    """Write a quantized-mesh pyramid under ``out``, byte for byte as ``cota tiles``.
+
+    ``shard=(i, n)``: only shard ``i`` of ``n`` and its record; ``tiles_reduce``
+    then writes ``layer.json``. Raises ReadError, MeshError, WriteError. Releases the GIL.
+    """
+
+def tiles_plan(
+    paths: Union[_Path, Sequence[_Path]],
+    shards: int,
+    *,
+    min_zoom: int = 0,
+    max_zoom: int | None = None,
+    tile_cells: int = 64,
+    error_factor: float | None = None,
+    max_error_m_at_max_zoom: float | None = None,
+) -> list[ShardPlan]:
+    """The deterministic shard plan of ``cota tiles --plan --shards n``."""
+
+def tiles_reduce(out: _Path, shards: int) -> int:
+    """Check the ``shards`` shards' records, write ``layer.json``, remove the records; the tile count."""
+
+def shard_record(out: _Path, index: int, shards: int) -> str:
+    """The path of shard ``index``'s record (present once the shard is complete)."""
+
 class Dem:
     """A DEM read by ``cota.read``."""
 

@@ -1,0 +1,81 @@
+"""Sharded pyramids from Python (issue 20): ``cota.tiles`` with ``shard=`` and
+``tiles_reduce`` equal one ``cota.tiles`` run byte for byte (and the ``cota`` CLI's
+output when the binary is built), and ``cota.dask.build_pyramid`` on a
+``LocalCluster(n_workers=2, processes=True)`` gives the same directory; it resumes
+(finished shards skipped). Skipped, visibly, when dask.distributed is not installed."""
+
+import os
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+import cota
+
+ROOT = Path(__file__).resolve().parents[3]
+TILE = ROOT / "fixtures" / "S29W072.hgt.zip"
+SETTINGS = {"max_zoom": 8, "normals": True, "metadata": True}
+
+
+def files(d: Path) -> dict:
+    return {p.relative_to(d): p.read_bytes() for p in d.rglob("*") if p.is_file()}
+
+
+@pytest.fixture(scope="module")
+def plain(tmp_path_factory):
+    out = tmp_path_factory.mktemp("plain") / "t"
+    r = cota.tiles(TILE, out, **SETTINGS)
+    assert r["written"] == r["tiles"] > 5
+    return files(out)
+
+
+def test_plain_equals_cli(plain, tmp_path):
+    exe = next((p for p in (ROOT / "target/release/cota", ROOT / "target/debug/cota") if p.is_file()), None)
+    if exe is None:
+        pytest.skip("the cota binary is not built")
+    out = tmp_path / "cli"
+    subprocess.run([exe, "tiles", TILE, "--max-zoom", "8", "--normals", "--metadata", "-o", out], check=True,
+                   capture_output=True)
+    assert files(out) == plain
+
+
+@pytest.mark.parametrize("n", [1, 2, 3])
+def test_shards_and_reduce_equal_plain(plain, tmp_path, n):
+    plan = cota.tiles_plan(TILE, n, max_zoom=8)
+    assert sum(p["tiles"] for p in plan) == len(plain) - 2  # but layer.json and .cota-tiles.json
+    for i in range(n):
+        cota.tiles(TILE, tmp_path, shard=(i, n), **SETTINGS)
+        assert os.path.exists(cota.shard_record(tmp_path, i, n))
+    again = cota.tiles(TILE, tmp_path, shard=(0, n), **SETTINGS)
+    assert again["written"] == 0 and again["skipped"] == plan[0]["tiles"]
+    assert cota.tiles_reduce(tmp_path, n) == len(plain) - 2
+    assert files(tmp_path) == plain
+
+
+def test_reduce_with_a_shard_missing_is_refused(tmp_path):
+    cota.tiles(TILE, tmp_path, shard=(1, 2), **SETTINGS)
+    with pytest.raises(cota.WriteError, match="missing shard"):
+        cota.tiles_reduce(tmp_path, 2)
+    with pytest.raises(ValueError):
+        cota.tiles(TILE, tmp_path, shard=(2, 2), **SETTINGS)
+
+
+def test_dask_local_cluster_equals_plain(plain, tmp_path):
+    distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed")
+    import cota.dask
+
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        out = tmp_path / "dask"
+        r = cota.dask.build_pyramid(TILE, out, client=client, shards=3, **SETTINGS)
+        assert r == {"shards": 3, "skipped_shards": 0, "tiles": len(plain) - 2}
+        assert files(out) == plain
+        # Resume: two shards done (their records present), one not; only it runs.
+        resumed = tmp_path / "resumed"
+        for i in (0, 2):
+            cota.tiles(TILE, resumed, shard=(i, 3), **SETTINGS)
+        r = cota.dask.build_pyramid(TILE, resumed, client=client, shards=3, **SETTINGS)
+        assert r["skipped_shards"] == 2
+        assert files(resumed) == plain
+    shutil.rmtree(tmp_path, ignore_errors=True)
