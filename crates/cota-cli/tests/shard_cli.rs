@@ -1,7 +1,8 @@
 //! Sharded `cota tiles` (issue 20): `--plan`, `--shard I/N` and `--reduce`
 //! give a directory byte-identical to one plain `cota tiles` run, for 1, 2
 //! and 3 shards, on the bundled sample and on the two-tile mosaic; a shard
-//! run again is idempotent; a reduce with a shard missing is refused.
+//! run again is idempotent; a reduce with a shard missing is refused, and
+//! the reduce removes the temporary files a killed shard left.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
 mod common;

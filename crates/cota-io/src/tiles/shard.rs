@@ -16,7 +16,8 @@
 //!   its last tile, so a record proves the shard complete.
 //! * The record `OUT/.cota-shard-I-of-N.json` holds the run manifest and the
 //!   text of `layer.json`; the reduce refuses records that disagree or are
-//!   missing (naming them), writes `layer.json` and removes the records.
+//!   missing (naming them), removes the temporary files a killed process
+//!   left, writes `layer.json` and removes the records.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -65,6 +66,29 @@ pub fn write_shard(
         zooms: fold(prep, &outcomes),
         seconds: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// Removes the temporary files (`.NAME.PID.tmp`) that a process killed
+/// between writing a tile and renaming it left under `out`: the tiles
+/// themselves are complete or absent, and every shard has recorded its end.
+fn remove_temporaries(out: &Path) -> Result<(), PyramidError> {
+    let mut stack = vec![out.to_path_buf()];
+    while let Some(dir) = stack.pop() {
+        let entries = std::fs::read_dir(&dir).map_err(|source| PyramidError::Io {
+            path: dir.clone(),
+            source,
+        })?;
+        for e in entries.flatten() {
+            let p = e.path();
+            let name = e.file_name().to_string_lossy().into_owned();
+            if e.file_type().is_ok_and(|t| t.is_dir()) {
+                stack.push(p);
+            } else if name.starts_with('.') && name.ends_with(".tmp") {
+                std::fs::remove_file(&p).map_err(|source| PyramidError::Io { path: p, source })?;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// What [`reduce_shards`] found.
@@ -137,6 +161,7 @@ pub fn reduce_shards(out: &Path, shards: u32) -> Result<ReduceReport, PyramidErr
         }
         tiles += r["tiles"].as_u64().unwrap_or(0);
     }
+    remove_temporaries(out)?;
     write_file_atomically(&out.join("layer.json"), layer.as_bytes())?;
     for p in &paths {
         std::fs::remove_file(p).map_err(|source| PyramidError::Io {
