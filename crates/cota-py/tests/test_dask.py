@@ -79,3 +79,43 @@ def test_dask_local_cluster_equals_plain(plain, tmp_path):
         assert r["skipped_shards"] == 2
         assert files(resumed) == plain
     shutil.rmtree(tmp_path, ignore_errors=True)
+
+
+def test_dask_worker_killed_mid_shard_gives_identical_output(tmp_path):
+    """A worker process SIGKILLed while it runs a shard: the nanny restarts it, Dask
+    reruns the lost task, the shard skips the tiles already complete, and the reduce
+    removes the killed write's temporary file: the directory equals a plain run."""
+    distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed")
+    import signal
+    import threading
+    import time
+
+    import cota.dask
+
+    heavy = {"tile_cells": 16, "check": True}  # about 2 s per shard of 2 here
+    plain = tmp_path / "plain"
+    cota.tiles(TILE, plain, **heavy)
+    want = files(plain)
+    out = tmp_path / "killed"
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        pids = client.run(os.getpid)
+        result = {}
+        run = threading.Thread(target=lambda: result.update(
+            cota.dask.build_pyramid(TILE, out, client=client, shards=2, **heavy)))
+        run.start()
+        killed = None
+        deadline = time.monotonic() + 60
+        while killed is None and run.is_alive() and time.monotonic() < deadline:
+            for addr, keys in client.processing().items():
+                # Kill once the shard has begun writing tiles.
+                if any(str(k).startswith("cota-shard") for k in keys) and len(list(out.rglob("*.terrain"))) > 50:
+                    print("killing", addr, "with", len(list(out.rglob("*.terrain"))), "tiles written", flush=True)
+                    os.kill(pids[addr], signal.SIGKILL)
+                    killed = addr
+                    break
+            time.sleep(0.01)
+        run.join(timeout=300)
+    assert killed is not None, "no worker was caught running a shard (the run ended first)"
+    assert result["tiles"] == len(want) - 2
+    assert files(out) == want
