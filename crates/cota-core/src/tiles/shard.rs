@@ -92,6 +92,13 @@ pub fn shard_plan(zooms: &[ZoomPlan], shards: u32) -> Result<Vec<Shard>, TilesEr
     } else {
         (u64::from(f.y0), u64::from(f.y1 - f.y0) + 1)
     };
+    let bands = Bands {
+        by_columns,
+        start,
+        len,
+        shards: u64::from(shards),
+        finest: finest.zoom,
+    };
     let mut out: Vec<Shard> = (0..shards)
         .map(|index| Shard {
             index,
@@ -100,23 +107,46 @@ pub fn shard_plan(zooms: &[ZoomPlan], shards: u32) -> Result<Vec<Shard>, TilesEr
         })
         .collect();
     for p in zooms {
-        let shift = u32::from(finest.zoom - p.zoom);
+        for (owner, part) in bands.split(p) {
+            out[owner as usize].ranges.push((p.zoom, part));
+        }
+    }
+    Ok(out)
+}
+
+/// The cut of the finest zoom's range into bands.
+struct Bands {
+    by_columns: bool,
+    start: u64,
+    len: u64,
+    shards: u64,
+    finest: u8,
+}
+
+impl Bands {
+    /// The shard of position `pos` at `zoom`.
+    fn owner(&self, pos: u32, zoom: u8) -> u32 {
+        let q = u64::from(pos) << u32::from(self.finest - zoom);
+        band_of(q, self.start, self.len, self.shards)
+    }
+
+    /// Zoom `p`'s range as (shard, rectangle) runs along the cut axis.
+    fn split(&self, p: &ZoomPlan) -> Vec<(u32, TileRange)> {
         let r = p.range;
-        let (a, b) = if by_columns {
+        let (a, b) = if self.by_columns {
             (r.x0, r.x1)
         } else {
             (r.y0, r.y1)
         };
+        let mut parts = Vec::new();
         let mut pos = a;
         while pos <= b {
-            let owner = band_of(u64::from(pos) << shift, start, len, u64::from(shards));
+            let owner = self.owner(pos, p.zoom);
             let mut end = pos;
-            while end < b
-                && band_of(u64::from(end + 1) << shift, start, len, u64::from(shards)) == owner
-            {
+            while end < b && self.owner(end + 1, p.zoom) == owner {
                 end += 1;
             }
-            let part = if by_columns {
+            let part = if self.by_columns {
                 TileRange {
                     x0: pos,
                     x1: end,
@@ -129,11 +159,11 @@ pub fn shard_plan(zooms: &[ZoomPlan], shards: u32) -> Result<Vec<Shard>, TilesEr
                     ..r
                 }
             };
-            out[owner as usize].ranges.push((p.zoom, part));
+            parts.push((owner, part));
             pos = end + 1;
         }
+        parts
     }
-    Ok(out)
 }
 
 #[cfg(test)]

@@ -111,6 +111,38 @@ fn read_record(path: &Path) -> Result<Value, PyramidError> {
     })
 }
 
+/// The layer text and the tile count the records agree on, after checking
+/// that each is of the run `run` (the text of `manifest`).
+fn agreed(
+    paths: &[PathBuf],
+    records: &[Value],
+    run: &str,
+    manifest: &Path,
+) -> Result<(String, u64), PyramidError> {
+    let layer = records
+        .first()
+        .and_then(|r| r["layer"].as_str())
+        .unwrap_or_default()
+        .to_owned();
+    let mut tiles = 0;
+    for (p, r) in paths.iter().zip(records) {
+        if r["run"].as_str() != Some(run)
+            || r["layer"].as_str() != Some(layer.as_str())
+            || layer.is_empty()
+        {
+            return Err(PyramidError::Shard {
+                path: p.clone(),
+                message: format!(
+                    "expected a record of this run ({}), found one of another run or settings",
+                    manifest.display()
+                ),
+            });
+        }
+        tiles += r["tiles"].as_u64().unwrap_or(0);
+    }
+    Ok((layer, tiles))
+}
+
 /// Reads the records of the `shards` shards under `out`, checks that all
 /// are there and agree with each other and with `OUT/.cota-tiles.json`,
 /// writes `layer.json` and removes the records.
@@ -144,23 +176,7 @@ pub fn reduce_shards(out: &Path, shards: u32) -> Result<ReduceReport, PyramidErr
         .iter()
         .map(|p| read_record(p))
         .collect::<Result<Vec<_>, _>>()?;
-    let layer = records[0]["layer"].as_str().unwrap_or_default().to_owned();
-    let mut tiles = 0;
-    for (p, r) in paths.iter().zip(&records) {
-        if r["run"].as_str() != Some(run.as_str())
-            || r["layer"].as_str() != Some(layer.as_str())
-            || layer.is_empty()
-        {
-            return Err(PyramidError::Shard {
-                path: p.clone(),
-                message: format!(
-                    "expected a record of this run ({}), found one of another run or settings",
-                    manifest.display()
-                ),
-            });
-        }
-        tiles += r["tiles"].as_u64().unwrap_or(0);
-    }
+    let (layer, tiles) = agreed(&paths, &records, &run, &manifest)?;
     remove_temporaries(out)?;
     write_file_atomically(&out.join("layer.json"), layer.as_bytes())?;
     for p in &paths {
