@@ -73,6 +73,20 @@ pub struct InputArgs {
     /// Where adjacent tiles overlap and disagree: their mean, or the first file's value.
     #[arg(long, value_enum, default_value_t = Seam::Mean)]
     pub seam: Seam,
+    /// Largest disagreement in metres between adjacent tiles where they
+    /// overlap; above it the mosaic warns on stderr (or fails with --strict),
+    /// naming the two files and the worst disagreement.
+    #[arg(
+        long = "seam-tolerance",
+        value_name = "M",
+        default_value_t = 5.0,
+        allow_negative_numbers = true
+    )]
+    pub seam_tolerance_m: f64,
+    /// Fail (exit 1) instead of warning when adjacent tiles disagree by more
+    /// than --seam-tolerance.
+    #[arg(long)]
+    pub strict: bool,
     /// Largest grid one file may declare, in samples; larger files are refused
     /// before anything is allocated. Default: from the machine's memory (16
     /// bytes per sample, at most 2^30); a gzipped .hgt at most one 3601² tile.

@@ -79,16 +79,8 @@ fn to_json(input: &Input) -> Value {
         "cell_size_m": g.cell_size_m(),
         "files": input.files.iter().map(file_json).collect::<Vec<_>>(),
     });
-    if let Some(s) = &input.seams {
-        v["seams"] = json!({
-            "overlap_samples": s.overlap_samples,
-            "compared": s.compared,
-            "max_abs_diff_m": s.max_abs_diff_m,
-            "mean_abs_diff_m": s.mean_abs_diff_m,
-            "max_diff_at": s.max_diff_at.map(|p| json!({
-                "col": p.col, "row": p.row, "x": p.x, "y": p.y, "tiles": p.tiles,
-            })),
-        });
+    if input.seams.is_some() {
+        v["seams"] = crate::input::seams_json(input);
         v["hole_samples"] = json!(input.hole_samples);
     }
     v

@@ -31,6 +31,8 @@ pub struct Input {
     pub seams: Option<SeamReport>,
     /// Mosaic samples covered by no file.
     pub hole_samples: usize,
+    /// `--seam-tolerance`, metres.
+    pub seam_tolerance_m: f64,
     /// Time spent reading and mosaicking, milliseconds.
     pub read_ms: f64,
 }
@@ -82,10 +84,17 @@ fn check_options(a: &InputArgs) -> anyhow::Result<()> {
         ("--gray-scale-m", a.gray_scale_m),
         ("--gray-offset-m", a.gray_offset_m),
         ("--cell-size-m", a.cell_size_m),
+        ("--seam-tolerance", a.seam_tolerance_m),
     ] {
         if !v.is_finite() {
             anyhow::bail!("{name}: expected a finite number of metres, found {v}");
         }
+    }
+    if a.seam_tolerance_m < 0.0 {
+        anyhow::bail!(
+            "--seam-tolerance: expected a number of metres >= 0, found {}",
+            num(a.seam_tolerance_m)
+        );
     }
     let cell = a.cell_size_m;
     if cell <= 0.0 || !(cell as f32).is_normal() || !((cell * 65536.0) as f32).is_finite() {
@@ -142,6 +151,75 @@ fn warn_unpositioned(files: &[FileInfo]) {
     }
 }
 
+/// The path of input `index`, for messages.
+fn path_of(files: &[FileInfo], index: usize) -> String {
+    files
+        .get(index)
+        .map_or_else(|| format!("file {index}"), |f| f.path.display().to_string())
+}
+
+/// Warns on stderr (fails with `--strict`) when overlapping tiles disagree
+/// by more than `--seam-tolerance`, naming the two files and the worst
+/// disagreement.
+fn check_seams(
+    a: &InputArgs,
+    seams: Option<&SeamReport>,
+    files: &[FileInfo],
+) -> anyhow::Result<()> {
+    let Some(s) = seams.filter(|s| s.max_abs_diff_m > a.seam_tolerance_m) else {
+        return Ok(());
+    };
+    let (pair, at) = match s.max_diff_at {
+        Some(p) => (
+            format!(
+                "{} and {}",
+                path_of(files, p.tiles[0]),
+                path_of(files, p.tiles[1])
+            ),
+            format!(" at ({}, {})", num(p.x), num(p.y)),
+        ),
+        None => (name(files), String::new()),
+    };
+    let msg = format!(
+        "{pair} disagree by up to {} m{at} where they overlap (mean {} m over {} samples), \
+         more than --seam-tolerance {} m",
+        num(s.max_abs_diff_m),
+        num(s.mean_abs_diff_m),
+        s.compared,
+        num(a.seam_tolerance_m)
+    );
+    if a.strict {
+        anyhow::bail!("{msg} (--strict)");
+    }
+    let kept = match a.seam {
+        Seam::Mean => "their mean",
+        Seam::First => "the first file's value",
+    };
+    eprintln!("cota: warning: {msg}; {kept} is used there (--seam; --strict refuses)");
+    Ok(())
+}
+
+/// The seam report as JSON, with the files of the largest disagreement
+/// named; `null` for a single file.
+pub fn seams_json(input: &Input) -> serde_json::Value {
+    let tolerance_m = input.seam_tolerance_m;
+    let Some(s) = &input.seams else {
+        return serde_json::Value::Null;
+    };
+    serde_json::json!({
+        "overlap_samples": s.overlap_samples,
+        "compared": s.compared,
+        "max_abs_diff_m": s.max_abs_diff_m,
+        "mean_abs_diff_m": s.mean_abs_diff_m,
+        "tolerance_m": tolerance_m,
+        "within_tolerance": s.max_abs_diff_m <= tolerance_m,
+        "max_diff_at": s.max_diff_at.map(|p| serde_json::json!({
+            "col": p.col, "row": p.row, "x": p.x, "y": p.y, "tiles": p.tiles,
+            "files": [path_of(&input.files, p.tiles[0]), path_of(&input.files, p.tiles[1])],
+        })),
+    })
+}
+
 /// Reads every input (or the bundled sample) and mosaics them.
 pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
     let t0 = Instant::now();
@@ -168,12 +246,14 @@ pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
         r
     };
     warn_unpositioned(&region.files);
+    check_seams(a, region.seams.as_ref(), &region.files)?;
     check_cell_size(&region.grid, &region.files)?;
     Ok(Input {
         grid: region.grid,
         files: region.files,
         seams: region.seams,
         hole_samples: region.hole_samples,
+        seam_tolerance_m: a.seam_tolerance_m,
         read_ms: t0.elapsed().as_secs_f64() * 1e3,
     })
 }

@@ -449,6 +449,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let started = Instant::now();
     validate(a)?;
     let input = load(&a.input)?;
+    let seams = crate::input::seams_json(&input);
     let mut grid = input.grid;
     let nodata = grid.void_count();
     let t = Instant::now();
@@ -474,6 +475,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "height": grid.height(),
         "voids_filled": fill.filled,
         "nodata_count": nodata,
+        "seams": seams,
         "threshold_m": m.bound_m,
         "hierarchy": if a.hierarchy == HierarchyArg::Quadtree { "quadtree" } else { "bitree" },
         "mesh": if a.mesh == MeshKindArg::Tin { "tin" } else { "bitree" },
