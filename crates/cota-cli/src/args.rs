@@ -10,6 +10,10 @@ use cota_core::{CriterionKind, Mode};
 #[derive(Debug, Parser)]
 #[command(name = "cota", version, about, propagate_version = true)]
 pub struct Cli {
+    /// Show no progress (warnings and errors are still printed). Progress is
+    /// drawn only when stderr is a terminal.
+    #[arg(long, global = true)]
+    pub quiet: bool,
     #[command(subcommand)]
     pub command: Command,
 }

@@ -75,7 +75,9 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
         .with_quadtree(a.quadtree.iter().map(|q| q.options()).collect())
         .with_check(a.check)
         .with_strip_method(a.strip_method.method());
+    let spinner = crate::progress::spinner("comparing");
     let c = compare(&grid, &opts)?;
+    drop(spinner);
     let report = Report {
         input: name,
         crop: a.crop.as_ref().map(|c| [c.col, c.row, c.width, c.height]),

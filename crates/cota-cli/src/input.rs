@@ -50,6 +50,7 @@ pub fn fill(grid: &mut HeightGrid, voids: Voids) -> anyhow::Result<FillReport> {
         Voids::Idw => VoidPolicy::Fill(FillMethod::InverseDistance),
         Voids::Refuse => VoidPolicy::Refuse,
     };
+    let _spinner = (grid.void_count() > 0).then(|| progress::spinner("filling voids"));
     fill_voids(grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")
 }
 

@@ -30,6 +30,7 @@ fn main() -> ExitCode {
 
 fn run() -> anyhow::Result<ExitCode> {
     let cli = args::Cli::parse();
+    progress::set_quiet(cli.quiet);
     match cli.command {
         args::Command::Info(a) => info::run(&a),
         args::Command::Mesh(a) => mesh::run(&a),

@@ -398,6 +398,7 @@ fn measure_first(
         return Ok(None);
     }
     let t = Instant::now();
+    let _spinner = progress::spinner(if a.check { "checking" } else { "measuring" });
     let metrics = measure_mesh(a, grid, m, quant)?;
     Ok(Some((metrics, ms(t))))
 }
@@ -416,6 +417,12 @@ fn strip_and_write<'m>(
     quant: Option<&GlbQuantization>,
     measured: Option<(Metrics, f64)>,
 ) -> anyhow::Result<Finished<'m>> {
+    let what = match (measured.is_some(), a.output.is_some()) {
+        (true, _) => "writing",
+        (false, true) => "measuring, writing",
+        (false, false) => "measuring",
+    };
+    let _spinner = progress::spinner(what);
     let strip_then_write = || -> anyhow::Result<_> {
         let t = Instant::now();
         let strip = strip(a, grid, m)?;

@@ -1,12 +1,33 @@
-//! Progress bars on a terminal, nothing otherwise.
+//! Progress on a terminal, nothing otherwise: bars where the length is
+//! known, spinners that tick steadily where it is not. Nothing is drawn when
+//! stderr is not a terminal or with `--quiet`.
 
 use std::io::IsTerminal;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressStyle};
 
+/// `--quiet`: no progress at all.
+static QUIET: AtomicBool = AtomicBool::new(false);
+
+/// How often bars and spinners redraw, so that the elapsed time and the
+/// spinner move even while a phase reports nothing.
+const TICK: Duration = Duration::from_millis(120);
+
+/// Sets `--quiet` for the whole run.
+pub fn set_quiet(quiet: bool) {
+    QUIET.store(quiet, Ordering::Relaxed);
+}
+
+/// True when progress is drawn: stderr is a terminal and no `--quiet`.
+fn shown() -> bool {
+    !QUIET.load(Ordering::Relaxed) && std::io::stderr().is_terminal()
+}
+
 /// A bar of `len` steps on stderr when it is a terminal, hidden otherwise.
 pub fn bar(len: u64, what: &str) -> ProgressBar {
-    if !std::io::stderr().is_terminal() {
+    if !shown() {
         return ProgressBar::hidden();
     }
     let pb = ProgressBar::new(len);
@@ -14,5 +35,29 @@ pub fn bar(len: u64, what: &str) -> ProgressBar {
         pb.set_style(style.progress_chars("=> "));
     }
     pb.set_message(what.to_string());
+    pb.enable_steady_tick(TICK);
     pb
+}
+
+/// A spinner for a phase of unknown length; cleared when dropped.
+pub struct Spinner(ProgressBar);
+
+impl Drop for Spinner {
+    fn drop(&mut self) {
+        self.0.finish_and_clear();
+    }
+}
+
+/// A spinner named `what` on stderr when it is a terminal, hidden otherwise.
+pub fn spinner(what: &str) -> Spinner {
+    if !shown() {
+        return Spinner(ProgressBar::hidden());
+    }
+    let pb = ProgressBar::new_spinner();
+    if let Ok(style) = ProgressStyle::with_template("{msg:>12} {spinner} {elapsed}") {
+        pb.set_style(style);
+    }
+    pb.set_message(what.to_string());
+    pb.enable_steady_tick(TICK);
+    Spinner(pb)
 }

@@ -55,10 +55,12 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         .with_quantum_m(a.quantum_m)
         .with_max_error_m(a.max_error)
         .with_thresholds_m(a.thresholds.clone());
+    let spinner = crate::progress::spinner("encoding");
     let s = match a.mode.mode() {
         None => encode(&grid, &opts)?,
         Some(mode) => encode_marks_progressive(&grid, mode, &opts)?,
     };
+    drop(spinner);
     let encode_ms = t.elapsed().as_secs_f64() * 1e3;
     write_stream(&a.output, &s, grid.georef())?;
     let ends = step_end_offsets(&s, grid.georef());
