@@ -248,8 +248,7 @@ fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f6
     if plan.error_map_bound_m().is_some() {
         let pb = progress::bar(0, "building");
         mesher.prepare(&plan, &|done, total| {
-            pb.set_length(total as u64);
-            pb.set_position(done as u64);
+            progress::set_progress(&pb, done as u64, total as u64);
         })?;
         pb.finish_and_clear();
     } else {

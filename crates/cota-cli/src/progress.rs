@@ -25,18 +25,44 @@ fn shown() -> bool {
     !QUIET.load(Ordering::Relaxed) && std::io::stderr().is_terminal()
 }
 
+/// The style of a bar whose length is known.
+fn bar_style(pb: &ProgressBar) {
+    if let Ok(style) = ProgressStyle::with_template("{msg:>12} [{bar:30}] {pos}/{len} {elapsed}") {
+        pb.set_style(style.progress_chars("=> "));
+    }
+}
+
 /// A bar of `len` steps on stderr when it is a terminal, hidden otherwise.
+/// With `len` 0 (not known yet) it is a spinner until [`set_progress`]
+/// gives it a length.
 pub fn bar(len: u64, what: &str) -> ProgressBar {
     if !shown() {
         return ProgressBar::hidden();
     }
-    let pb = ProgressBar::new(len);
-    if let Ok(style) = ProgressStyle::with_template("{msg:>12} [{bar:30}] {pos}/{len} {elapsed}") {
-        pb.set_style(style.progress_chars("=> "));
-    }
+    let pb = if len == 0 {
+        let pb = ProgressBar::new_spinner();
+        if let Ok(style) = ProgressStyle::with_template("{msg:>12} {spinner} {elapsed}") {
+            pb.set_style(style);
+        }
+        pb
+    } else {
+        let pb = ProgressBar::new(len);
+        bar_style(&pb);
+        pb
+    };
     pb.set_message(what.to_string());
     pb.enable_steady_tick(TICK);
     pb
+}
+
+/// Moves `pb` to `done` of `total` steps; the first time a total is known,
+/// a spinner from [`bar`] becomes a bar.
+pub fn set_progress(pb: &ProgressBar, done: u64, total: u64) {
+    if total > 0 && pb.length() != Some(total) {
+        pb.set_length(total);
+        bar_style(pb);
+    }
+    pb.set_position(done);
 }
 
 /// A spinner for a phase of unknown length; cleared when dropped.
