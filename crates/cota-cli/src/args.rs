@@ -166,6 +166,16 @@ pub struct MeshArgs {
     /// Output coordinates.
     #[arg(long, value_enum, default_value_t = CoordsArg::Local)]
     pub coords: CoordsArg,
+    /// Mesh only a window of the input (after mosaicking, before the void
+    /// fill): first column, first row (row 0 is the northern row), width,
+    /// height, in samples.
+    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, conflicts_with = "bbox")]
+    pub crop: Option<Crop>,
+    /// Mesh only the samples whose centres lie in this box, in the input's
+    /// CRS units: degrees of longitude and latitude for SRTM and geographic
+    /// GeoTIFFs, the projection's units (metres) for projected ones.
+    #[arg(long, value_name = "W,S,E,N", value_parser = parse_bbox, allow_hyphen_values = true)]
+    pub bbox: Option<[f64; 4]>,
     /// STL only: close the surface into a solid with walls down to a flat base at
     /// this height in metres (for 3D printing).
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
@@ -497,6 +507,21 @@ fn parse_crop(s: &str) -> Result<Crop, String> {
         }),
         _ => Err(format!(
             "expected COL,ROW,W,H as four whole numbers, found {s:?}"
+        )),
+    }
+}
+
+/// Parses `WEST,SOUTH,EAST,NORTH`.
+fn parse_bbox(s: &str) -> Result<[f64; 4], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("expected W,S,E,N as four numbers, found {s:?} ({e})"))?;
+    match v[..] {
+        [w, s_, e, n] if v.iter().all(|c| c.is_finite()) => Ok([w, s_, e, n]),
+        _ => Err(format!(
+            "expected W,S,E,N as four finite numbers, found {s:?}"
         )),
     }
 }

@@ -16,6 +16,7 @@ mod progress;
 mod serve;
 mod stream;
 mod tiles;
+mod window;
 
 fn main() -> ExitCode {
     quiet_broken_pipe();

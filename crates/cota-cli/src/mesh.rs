@@ -456,7 +456,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     validate(a)?;
     let input = load(&a.input)?;
     let seams = crate::input::seams_json(&input);
-    let mut grid = input.grid;
+    let mut grid = crate::window::apply(input.grid, a.crop.as_ref(), a.bbox)?;
     let nodata = grid.void_count();
     let t = Instant::now();
     let files = crate::input::name(&input.files);
