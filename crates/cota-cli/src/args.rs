@@ -38,7 +38,7 @@ pub enum Command {
 }
 
 /// How to read and combine the input files.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args)]
 pub struct InputArgs {
     /// DEM files: SRTM .hgt/.hgt.zip, GeoTIFF, PNG, ESRI .asc. Several adjacent
     /// tiles are mosaicked. With none, the bundled sample S29W072.hgt.zip is used.
@@ -125,9 +125,13 @@ pub enum Voids {
 pub struct InfoArgs {
     #[command(flatten)]
     pub input: InputArgs,
-    /// Print one JSON object instead of text.
+    /// Print one JSON object instead of text (with --each, an array of them).
     #[arg(long)]
     pub json: bool,
+    /// Describe each file on its own (unrelated files), instead of
+    /// mosaicking them into one region.
+    #[arg(long)]
+    pub each: bool,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]

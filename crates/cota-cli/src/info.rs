@@ -9,11 +9,36 @@ use crate::args::InfoArgs;
 use crate::input::{load, FileInfo, Input};
 
 pub fn run(a: &InfoArgs) -> anyhow::Result<ExitCode> {
+    if a.each && a.input.files.len() > 1 {
+        return run_each(a);
+    }
     let input = load(&a.input)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&to_json(&input))?);
     } else {
         print_text(&input);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--each`: every file read and described on its own, in order; the first
+/// file that cannot be read stops the run (its error names it).
+fn run_each(a: &InfoArgs) -> anyhow::Result<ExitCode> {
+    let mut reports = Vec::new();
+    for file in &a.input.files {
+        let one = crate::args::InputArgs {
+            files: vec![file.clone()],
+            ..a.input.clone()
+        };
+        let input = load(&one)?;
+        if a.json {
+            reports.push(to_json(&input));
+        } else {
+            print_text(&input);
+        }
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&reports)?);
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -72,3 +72,32 @@ fn bad_windows_are_refused_by_name() {
     let o = cota(&["mesh", "--crop", "0,0,2,2", "--bbox", "1,2,3,4"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
+
+/// `cota info --each` (issue 23, item 7): unrelated files, each on its own.
+#[test]
+fn info_each_describes_unrelated_files_without_mosaicking_them() {
+    let (Some(a), Some(b)) = (shared("srtm/N00E010.hgt"), shared("srtm/N49E011.hgt.zip")) else {
+        return;
+    };
+    let (a, b) = (a.to_str().unwrap(), b.to_str().unwrap());
+    // Mosaicked, they are far apart: refused.
+    let o = cota(&["info", a, b]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let o = cota(&["info", "--each", "--json", a, b]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let each = v.as_array().unwrap();
+    assert_eq!(each.len(), 2);
+    for (r, f) in each.iter().zip([a, b]) {
+        assert_eq!(r["files"][0]["path"].as_str(), Some(f), "{r}");
+        assert_eq!(r["width"].as_u64(), Some(1201), "{r}");
+        assert!(r["seams"].is_null(), "{r}");
+    }
+    let o = cota(&["info", "--each", a, b]);
+    let text = stdout(&o);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        text.contains(a) && text.contains(b) && !text.contains("mosaic"),
+        "{text}"
+    );
+}
