@@ -23,7 +23,7 @@ pub enum Command {
     /// Describe DEM files: format, size, CRS, cell size, height range, voids, seams.
     Info(InfoArgs),
     /// Build a mesh with a guaranteed maximum error, or within a triangle budget.
-    Mesh(MeshArgs),
+    Mesh(Box<MeshArgs>),
     /// Regenerate paper 000's Table 1 and Table 2: bitree vs restricted quadtree.
     Compare(CompareArgs),
     /// Paper 004: the best (mesh, texture) pair under a byte budget, as a textured GLB.

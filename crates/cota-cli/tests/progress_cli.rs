@@ -2,7 +2,7 @@
 //! is not a terminal, and never with `--quiet`. The terminal runs go through
 //! a pseudo-terminal opened by python3's `pty` module (skipped, visibly, when
 //! python3 is missing).
-#![allow(clippy::unwrap_used, reason = "tests unwrap to fail loudly")]
+#![allow(clippy::unwrap_used, clippy::panic, reason = "tests fail loudly")]
 
 mod common;
 
