@@ -180,6 +180,16 @@ pub struct MeshArgs {
     /// GeoTIFFs, the projection's units (metres) for projected ones.
     #[arg(long, value_name = "W,S,E,N", value_parser = parse_bbox, allow_hyphen_values = true)]
     pub bbox: Option<[f64; 4]>,
+    /// Vertical exaggeration: the heights written (and --base-m) are
+    /// multiplied by F; the report's errors stay in true metres. Not with
+    /// --quantize.
+    #[arg(
+        long,
+        value_name = "F",
+        default_value_t = 1.0,
+        allow_negative_numbers = true
+    )]
+    pub z_scale: f64,
     /// STL only: close the surface into a solid with walls down to a flat base at
     /// this height in metres (for 3D printing).
     #[arg(long, value_name = "M", allow_negative_numbers = true)]

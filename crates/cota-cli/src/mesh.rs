@@ -100,10 +100,20 @@ fn flag_error(a: &MeshArgs, e: CriterionError) -> anyhow::Error {
     }
 }
 
-/// `--quantize` needs a .glb output, a triangle list and real heights.
+/// `--quantize` needs a .glb output, a triangle list and real heights
+/// (`--z-scale` 1).
 fn check_quantize(a: &MeshArgs) -> anyhow::Result<()> {
+    if !(a.z_scale.is_finite() && a.z_scale > 0.0) {
+        anyhow::bail!(
+            "--z-scale: expected a positive finite factor, found {}",
+            crate::input::num(a.z_scale)
+        );
+    }
     if !a.quantize {
         return Ok(());
+    }
+    if a.z_scale != 1.0 {
+        anyhow::bail!("--quantize: expected --z-scale 1 (a quantized GLB keeps true heights)");
     }
     if let Some(out) = &a.output {
         if MeshFormat::from_path(out)? != MeshFormat::Glb {
@@ -271,7 +281,7 @@ fn export_options(a: &MeshArgs) -> ExportOptions {
     };
     ExportOptions::DEFAULT
         .with_coords(coords)
-        .with_base_m(a.base_m)
+        .with_base_m(a.base_m.map(|b| b * a.z_scale))
         .with_quantize(a.quantize)
         .with_replace_read_only(a.force)
 }
@@ -345,7 +355,20 @@ fn strip<'m>(
     Ok(Some(s))
 }
 
-/// Writes the mesh (or its strip with `--strip`); returns the time taken (ms).
+/// `mesh` with its heights multiplied by `--z-scale` (borrowed when 1).
+fn scaled(mesh: &Mesh, z_scale: f64) -> std::borrow::Cow<'_, Mesh> {
+    if z_scale == 1.0 {
+        return std::borrow::Cow::Borrowed(mesh);
+    }
+    let mut m = mesh.clone();
+    for v in &mut m.vertices {
+        v.z_m = (f64::from(v.z_m) * z_scale) as f32;
+    }
+    std::borrow::Cow::Owned(m)
+}
+
+/// Writes the mesh (or its strip with `--strip`), heights times `--z-scale`;
+/// returns the time taken (ms).
 fn write(
     a: &MeshArgs,
     grid: &HeightGrid,
@@ -358,17 +381,19 @@ fn write(
     };
     let eo = export_options(a);
     let t = Instant::now();
-    if crate::pair::write_draped(&a.texture, out, grid, &m.mesh, &eo)? {
+    let mesh = scaled(&m.mesh, a.z_scale);
+    if crate::pair::write_draped(&a.texture, out, grid, &mesh, &eo)? {
         return Ok(ms(t));
     }
     match (strip, a.strip, quant) {
         (Some(s), true, _) => cota_io::export::write_atomically_forced(out, a.force, |w| {
-            cota_io::export::write_glb_strip(w, &s.mesh, &s.strip.indices, grid, &eo)
+            let sm = scaled(&s.mesh, a.z_scale);
+            cota_io::export::write_glb_strip(w, &sm, &s.strip.indices, grid, &eo)
         })?,
         (_, _, Some(q)) => cota_io::export::write_atomically_forced(out, a.force, |w| {
             cota_io::export::write_glb_quantized(w, &m.mesh, grid, &eo, q)
         })?,
-        _ => write_mesh(out, &m.mesh, grid, &eo)?,
+        _ => write_mesh(out, &mesh, grid, &eo)?,
     }
     Ok(ms(t))
 }
@@ -517,6 +542,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "strip_ms": strip.as_ref().map(|_| strip_ms),
         "output": a.output.as_ref().map(|p| p.display().to_string()),
         "quantized": a.quantize,
+        "z_scale": a.z_scale,
         "z_step_m": quant.as_ref().map(|q| q.z_step_m()),
         "written_bound_m": written_bound,
         "primitives": quant.as_ref().map(|q| q.primitives()),
@@ -604,7 +630,9 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
         f("total_ms")
     );
     if let Some(out) = r["output"].as_str() {
-        println!("wrote       {out}");
+        let z = r["z_scale"].as_f64().filter(|z| *z != 1.0);
+        let z = z.map(|z| format!(" (heights x {z})")).unwrap_or_default();
+        println!("wrote       {out}{z}");
     }
 }
 

@@ -101,3 +101,68 @@ fn info_each_describes_unrelated_files_without_mosaicking_them() {
         "{text}"
     );
 }
+
+/// The `v x y z` lines of an OBJ file.
+fn obj_vertices(path: &std::path::Path) -> Vec<[f64; 3]> {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let v: Vec<f64> = l.split_whitespace().map(|p| p.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect()
+}
+
+/// `cota mesh --z-scale` (issue 23, item 7): written heights (and the STL
+/// base) are exaggerated, the report stays in true metres.
+#[test]
+fn z_scale_multiplies_the_written_heights_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let (one, two) = (dir.path().join("one.obj"), dir.path().join("two.obj"));
+    let run = |out: &std::path::Path, z: &str| {
+        let o = cota(&[
+            "mesh",
+            "--json",
+            "--max-error",
+            "5",
+            "--z-scale",
+            z,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        serde_json::from_str::<serde_json::Value>(&stdout(&o)).unwrap()
+    };
+    let (r1, r2) = (run(&one, "1"), run(&two, "2.5"));
+    assert_eq!(r2["z_scale"].as_f64(), Some(2.5));
+    assert_eq!(
+        r1["max_error_m"], r2["max_error_m"],
+        "errors stay in true metres"
+    );
+    let (v1, v2) = (obj_vertices(&one), obj_vertices(&two));
+    assert_eq!(v1.len(), v2.len());
+    assert!(v1.iter().any(|v| v[2] > 100.0));
+    for (a, b) in v1.iter().zip(&v2) {
+        assert_eq!((a[0], a[1]), (b[0], b[1]));
+        assert!(
+            (b[2] - 2.5 * a[2]).abs() <= 1e-3 * a[2].abs().max(1.0),
+            "{a:?} {b:?}"
+        );
+    }
+    for bad in ["0", "-1", "nan", "inf"] {
+        let o = cota(&["mesh", "--z-scale", bad]);
+        assert_eq!(o.status.code(), Some(1), "{bad}");
+        assert!(stderr(&o).contains("--z-scale"), "{bad}: {}", stderr(&o));
+    }
+    let glb = dir.path().join("q.glb");
+    let o = cota(&[
+        "mesh",
+        "--quantize",
+        "--z-scale",
+        "2",
+        "-o",
+        glb.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+}
