@@ -135,6 +135,17 @@ pub struct MeshArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+    /// The mesh: the bitree's (right triangles of a hierarchy), or a TIN:
+    /// irregular triangles, fewer of them for the same guaranteed error
+    /// (decimated from the bitree's mesh; --max-error or --max-triangles,
+    /// --mode conforming, --criterion max-error, no --strip).
+    #[arg(long, value_enum, default_value_t = MeshKindArg::Bitree)]
+    pub mesh: MeshKindArg,
+    /// With --mesh tin: mesh the border from the border samples alone (each
+    /// side simplified within the bound on its own), so that tiles sharing a
+    /// side and meshed at the same bound share their vertices there exactly.
+    #[arg(long)]
+    pub lock_border: bool,
     /// The hierarchy: the bitree, or the restricted quadtree baseline (Pajarola
     /// 1998; --criterion max-error with --mode conforming only, no budget).
     #[arg(long, value_enum, default_value_t = HierarchyArg::Bitree)]
@@ -188,6 +199,15 @@ impl StripMethodArg {
             StripMethodArg::Traversal => StripMethod::Traversal,
         }
     }
+}
+
+/// The kind of mesh `cota mesh` makes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum MeshKindArg {
+    /// The bitree's conforming mesh (paper 000).
+    Bitree,
+    /// An irregular triangulation (`cota_core::tin`).
+    Tin,
 }
 
 /// The hierarchy `cota mesh` uses.

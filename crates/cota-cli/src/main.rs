@@ -1,6 +1,7 @@
 //! `cota`: terrain level of detail from real DEMs.
 //!
 //! `main` stays boring: parse flags, call [`run`], print an error once.
+#![recursion_limit = "256"]
 use std::process::ExitCode;
 
 use clap::Parser;

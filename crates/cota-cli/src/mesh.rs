@@ -17,7 +17,7 @@ use cota_core::{
 use cota_io::export::{write_mesh, Coords, ExportOptions, GlbQuantization, MeshFormat};
 use serde_json::json;
 
-use crate::args::{CoordsArg, CriterionArg, HierarchyArg, MeshArgs, StripMethodArg};
+use crate::args::{CoordsArg, CriterionArg, HierarchyArg, MeshArgs, MeshKindArg, StripMethodArg};
 use crate::input::load;
 use crate::progress;
 
@@ -146,6 +146,35 @@ fn with_written_heights<R>(
     r
 }
 
+/// Rejects the flags `--mesh tin` does not take (and `--lock-border`
+/// without it), before any long work.
+fn validate_tin(a: &MeshArgs) -> anyhow::Result<()> {
+    if a.mesh != MeshKindArg::Tin {
+        if a.lock_border {
+            anyhow::bail!(
+                "--lock-border: expected --mesh tin (the bitree's border follows its triangles)"
+            );
+        }
+        return Ok(());
+    }
+    if a.hierarchy != HierarchyArg::Bitree {
+        anyhow::bail!(
+            "--mesh tin: expected --hierarchy bitree (the TIN is decimated from the bitree's mesh)"
+        );
+    }
+    if !is_fast(a) {
+        anyhow::bail!(
+            "--mesh tin: expected --mode conforming and --criterion max-error (a vertical bound)"
+        );
+    }
+    if a.strip || a.strip_method.is_some() {
+        anyhow::bail!(
+            "--mesh tin: triangle strips follow the bitree; expected no --strip or --strip-method"
+        );
+    }
+    Ok(())
+}
+
 /// Validates the flags before any long work.
 fn validate(a: &MeshArgs) -> anyhow::Result<()> {
     if let Some(out) = &a.output {
@@ -170,6 +199,7 @@ fn validate(a: &MeshArgs) -> anyhow::Result<()> {
             .validate(a.refine.criterion.kind())
             .map_err(|e| flag_error(a, e))?;
     }
+    validate_tin(a)?;
     let quadtree = a.hierarchy == HierarchyArg::Quadtree;
     if a.strip {
         if quadtree {
@@ -202,6 +232,9 @@ fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f6
         .criterion(a.refine.criterion.kind(), &criterion_options(a))
         .map_err(|e| flag_error(a, e))?;
     let hierarchy = match a.hierarchy {
+        HierarchyArg::Bitree if a.mesh == MeshKindArg::Tin => HierarchyKind::Tin {
+            lock_border: a.lock_border,
+        },
         HierarchyArg::Bitree => HierarchyKind::Bitree,
         HierarchyArg::Quadtree => HierarchyKind::Quadtree(a.quadtree_leaves.options()),
     };
@@ -363,6 +396,8 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "nodata_count": nodata,
         "threshold_m": m.bound_m,
         "hierarchy": if a.hierarchy == HierarchyArg::Quadtree { "quadtree" } else { "bitree" },
+        "mesh": if a.mesh == MeshKindArg::Tin { "tin" } else { "bitree" },
+        "lock_border": a.lock_border,
         "mode": a.refine.mode.mode().name(),
         "criterion": m.criterion,
         "refine_rounds": m.rounds,
@@ -444,8 +479,13 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
         f("rmse_m"),
         f("mean_abs_error_m")
     );
+    let tin = match (r["mesh"].as_str(), r["lock_border"].as_bool()) {
+        (Some("tin"), Some(true)) => "tin (locked border), ",
+        (Some("tin"), _) => "tin, ",
+        _ => "",
+    };
     println!(
-        "refinement  {}, {}",
+        "refinement  {tin}{}, {}",
         r["mode"].as_str().unwrap_or(""),
         r["criterion"].as_str().unwrap_or("")
     );

@@ -21,7 +21,9 @@
 //! * [`mesh`](mod@mesh): the [`Mesh`], the exact [`measure`]s and the one
 //!   invariant checker ([`check_mesh`]);
 //! * [`strip`]: triangle strips; [`stream`]: the progressive stream;
-//!   [`compare`]: paper 000's tables.
+//!   [`compare`]: paper 000's tables;
+//! * [`tin`]: an irregular triangulation (TIN) with the same guaranteed
+//!   error and fewer triangles ([`tin::build`]).
 //!
 //! ```
 //! use cota_core::{check_mesh, GeoRef, HeightGrid, MaxVerticalError, MeshPlan, Mesher, Mode};
@@ -61,6 +63,7 @@ pub mod strip;
 #[cfg(test)]
 #[allow(clippy::unwrap_used, reason = "tests")]
 mod testing;
+pub mod tin;
 
 // The public face: the types and entry points of the pipeline, in its
 // order; everything else by its module's path.

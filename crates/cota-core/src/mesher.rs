@@ -32,6 +32,7 @@ use crate::mesh::check::CheckOptions;
 use crate::mesh::Mesh;
 use crate::quadtree::{QuadOptions, QuadTree};
 use crate::refine::{refine, Mode, RefineOptions};
+use crate::tin::TinOptions;
 
 /// Which hierarchy meshes the grid.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -43,6 +44,14 @@ pub enum HierarchyKind {
     /// The restricted quadtree (Pajarola 1998), the baseline of paper 000's
     /// comparison: conforming mode, no triangle budget.
     Quadtree(QuadOptions),
+    /// An irregular triangulation ([`crate::tin`]) decimated from the
+    /// bitree's mesh: the same guaranteed vertical bound with fewer
+    /// triangles. Conforming mode with a vertical bound (or a budget) only;
+    /// `lock_border` as [`TinOptions::lock_border`].
+    Tin {
+        /// See [`TinOptions::lock_border`].
+        lock_border: bool,
+    },
 }
 
 impl HierarchyKind {
@@ -51,6 +60,7 @@ impl HierarchyKind {
         match self {
             HierarchyKind::Bitree => "bitree",
             HierarchyKind::Quadtree(_) => "quadtree",
+            HierarchyKind::Tin { .. } => "tin",
         }
     }
 }
@@ -107,7 +117,9 @@ impl<'c> MeshPlan<'c> {
     /// ([`Criterion::vertical_bound_m`]), the fast path of the module docs.
     pub fn error_map_bound_m(&self) -> Option<f64> {
         match (self.hierarchy, self.mode) {
-            (HierarchyKind::Bitree, Mode::Conforming) => self.criterion.vertical_bound_m(),
+            (HierarchyKind::Bitree | HierarchyKind::Tin { .. }, Mode::Conforming) => {
+                self.criterion.vertical_bound_m()
+            }
             _ => None,
         }
     }
@@ -118,6 +130,12 @@ impl<'c> MeshPlan<'c> {
         if quadtree && self.mode != Mode::Conforming {
             return Err(MeshError::UnsupportedPlan(
                 "the restricted quadtree meshes in conforming mode only",
+            ));
+        }
+        let tin = matches!(self.hierarchy, HierarchyKind::Tin { .. });
+        if tin && self.error_map_bound_m().is_none() {
+            return Err(MeshError::UnsupportedPlan(
+                "a TIN needs conforming mode and a vertical bound (or a triangle budget)",
             ));
         }
         if self.max_triangles.is_some() && self.error_map_bound_m().is_none() {
@@ -214,10 +232,12 @@ impl<'g> Mesher<'g> {
     pub fn prepare(&self, plan: &MeshPlan<'_>, progress: Progress<'_>) -> Result<()> {
         match plan.hierarchy {
             HierarchyKind::Quadtree(_) => self.quadtree().map(|_| ()),
-            HierarchyKind::Bitree if plan.error_map_bound_m().is_some() => {
+            HierarchyKind::Bitree | HierarchyKind::Tin { .. }
+                if plan.error_map_bound_m().is_some() =>
+            {
                 self.bitree_with(progress).map(|_| ())
             }
-            HierarchyKind::Bitree => Ok(()),
+            HierarchyKind::Bitree | HierarchyKind::Tin { .. } => Ok(()),
         }
     }
 
@@ -279,7 +299,10 @@ impl<'g> Mesher<'g> {
         crate::par::on_pool(|| match (plan.hierarchy, plan.error_map_bound_m()) {
             (HierarchyKind::Quadtree(opts), _) => self.quadtree_mesh(plan, &opts),
             (HierarchyKind::Bitree, Some(bound_m)) => self.extract(plan, bound_m),
-            (HierarchyKind::Bitree, None) => self.refine(plan),
+            (HierarchyKind::Tin { lock_border }, Some(bound_m)) => {
+                self.tin(plan, bound_m, lock_border)
+            }
+            (HierarchyKind::Bitree | HierarchyKind::Tin { .. }, None) => self.refine(plan),
         })
     }
 
@@ -308,6 +331,30 @@ impl<'g> Mesher<'g> {
     }
 
     /// The criterion-driven refinement of the bitree in the plan's mode.
+    fn tin(&self, plan: &MeshPlan<'_>, bound_m: f64, lock_border: bool) -> Result<Meshed> {
+        let opts = match plan.max_triangles {
+            Some(n) => TinOptions::max_triangles(n),
+            None => TinOptions::max_error_m(bound_m),
+        }
+        .with_lock_border(lock_border);
+        let x = crate::tin::build_from(self.bitree()?, &opts)?;
+        let vertices = x.mesh.vertex_count();
+        Ok(Meshed {
+            mesh: x.mesh,
+            bound_m: Some(x.threshold_m),
+            criterion: MaxVerticalError {
+                max_error_m: x.threshold_m,
+            }
+            .name(),
+            transmitted_points: vertices,
+            fictitious_points: 0,
+            line_triangles: 0,
+            rounds: None,
+            check: CheckOptions::tin(x.threshold_m),
+            split_points: None,
+        })
+    }
+
     fn refine(&self, plan: &MeshPlan<'_>) -> Result<Meshed> {
         let r = refine(
             self.grid,

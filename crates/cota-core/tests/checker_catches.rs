@@ -3,6 +3,7 @@
 #![allow(clippy::unwrap_used, reason = "tests unwrap to fail loudly")]
 
 use cota_core::mesh::check::Violation;
+use cota_core::tin::{self, TinOptions};
 use cota_core::{check_mesh, Bitree, CheckOptions, ExtractOptions, GeoRef, HeightGrid, Mesh};
 
 fn setup() -> (HeightGrid, Mesh) {
@@ -135,4 +136,107 @@ fn height_tolerance_allows_moved_heights_up_to_it() {
     ));
     assert!(check_mesh(&g, &m, &strict.with_height_tolerance_m(0.25)).is_ok());
     assert!(check_mesh(&g, &m, &strict.with_height_tolerance_m(0.125)).is_err());
+}
+
+/// A TIN of the test grid at 2 m, and one of its interior edges with a
+/// sample strictly inside that is not a vertex: (triangle, corner of the
+/// edge's start, the sample).
+fn tin_setup() -> (HeightGrid, Mesh, usize, usize, (u32, u32)) {
+    let (g, _) = setup();
+    let m = tin::build(&g, &TinOptions::max_error_m(2.0)).unwrap().mesh;
+    let p = |i: u32| (m.vertices[i as usize].col, m.vertices[i as usize].row);
+    let border = |a: (u32, u32), b: (u32, u32)| {
+        (a.0 == b.0 && (a.0 == 0 || a.0 == 32)) || (a.1 == b.1 && (a.1 == 0 || a.1 == 32))
+    };
+    let (ti, e, s) = (0..m.triangles.len())
+        .find_map(|ti| {
+            let t = m.triangles[ti];
+            (0..3).find_map(|e| {
+                let (a, b) = (p(t[e]), p(t[(e + 1) % 3]));
+                let (dx, dy) = (b.0 as i64 - a.0 as i64, b.1 as i64 - a.1 as i64);
+                let g = (1..=dx.abs().max(dy.abs()))
+                    .rev()
+                    .find(|&k| dx % k == 0 && dy % k == 0)?;
+                let s = ((a.0 as i64 + dx / g) as u32, (a.1 as i64 + dy / g) as u32);
+                (g > 1 && !border(a, b) && !m.vertices.iter().any(|v| (v.col, v.row) == s))
+                    .then_some((ti, e, s))
+            })
+        })
+        .expect("a TIN at 2 m has a long interior edge");
+    (g, m, ti, e, s)
+}
+
+fn add_vertex(g: &HeightGrid, m: &mut Mesh, s: (u32, u32)) -> u32 {
+    m.vertices.push(cota_core::MeshVertex {
+        col: s.0,
+        row: s.1,
+        z_m: g.get(s.0 as usize, s.1 as usize),
+    });
+    (m.vertices.len() - 1) as u32
+}
+
+#[test]
+fn a_tin_passes_the_general_tests() {
+    let (g, m, ..) = tin_setup();
+    let r = check_mesh(&g, &m, &CheckOptions::tin(2.0)).unwrap();
+    assert!(r.metrics.max_error_m <= 2.0 && r.metrics.max_error_m > 1.0);
+}
+
+#[test]
+fn catches_a_t_junction_in_a_tin() {
+    // Split one side of an interior edge at a sample on it.
+    let (g, mut m, ti, e, s) = tin_setup();
+    let t = m.triangles[ti];
+    let (a, b, c) = (t[e], t[(e + 1) % 3], t[(e + 2) % 3]);
+    let k = add_vertex(&g, &mut m, s);
+    m.triangles[ti] = [a, k, c];
+    m.triangles.push([k, b, c]);
+    let v = first(&g, &m, CheckOptions::tin(2.0));
+    assert!(matches!(v, Violation::OpenEdge { .. }), "{v:?}");
+    // The direct test names the T-junction itself.
+    let all = check_mesh(&g, &m, &CheckOptions::tin(2.0).with_conforming(false)).unwrap_err();
+    assert!(
+        all.violations.iter().any(|v| matches!(
+            v,
+            Violation::VertexOnEdge { col, row, .. } if (*col, *row) == s
+        )),
+        "{all}"
+    );
+}
+
+#[test]
+fn catches_an_unused_vertex_on_an_edge() {
+    // A vertex inside an edge that no triangle uses: the tiling checks
+    // cannot see it, the general tests must.
+    let (g, mut m, _, _, s) = tin_setup();
+    add_vertex(&g, &mut m, s);
+    check_mesh(&g, &m, &CheckOptions::conforming(2.0)).unwrap();
+    let all = check_mesh(&g, &m, &CheckOptions::tin(2.0)).unwrap_err();
+    assert!(all
+        .violations
+        .iter()
+        .any(|v| matches!(v, Violation::VertexOnEdge { .. })));
+    assert!(all
+        .violations
+        .iter()
+        .any(|v| matches!(v, Violation::UnusedVertex { .. })));
+}
+
+#[test]
+fn catches_an_error_violation_in_a_tin() {
+    let (g, m, _, _, s) = tin_setup();
+    // A tighter bound than the TIN was made for.
+    assert!(matches!(
+        first(&g, &m, CheckOptions::tin(1.0)),
+        Violation::ErrorBound { .. }
+    ));
+    // A sample that is not a vertex moved by 3 m.
+    let mut v = g.heights().to_vec();
+    v[s.1 as usize * 33 + s.0 as usize] += 3.0;
+    let g2 = HeightGrid::new(33, 33, v, GeoRef::unreferenced(1.0)).unwrap();
+    let bad = first(&g2, &m, CheckOptions::tin(2.0));
+    assert!(
+        matches!(bad, Violation::ErrorBound { col, row, .. } if (col, row) == s),
+        "{bad:?}"
+    );
 }

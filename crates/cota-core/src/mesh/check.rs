@@ -24,6 +24,22 @@
 //! In non-conforming mode (the papers' faithful fictitious points, which leave
 //! hanging vertices on their neighbour's edge) check 3 only forbids repeated
 //! directed edges, and coverage rests on (4) plus the per-sample coverage test.
+//!
+//! Nothing above assumes the bitree's right triangles: (2)–(4) prove a tiling
+//! for any triangles with vertices on samples (the sum of the triangles'
+//! boundaries cancels on every matched interior edge, so it lies on the
+//! rectangle's border and the covering count is the same almost everywhere;
+//! the areas make it 1), and (5) scans any triangle exactly
+//! ([`crate::mesh::raster`]). For a general triangulation, such as a TIN
+//! ([`crate::tin`]), [`CheckOptions::tin`] adds two direct tests
+//! ([`CheckOptions::general`]):
+//! 6. **no vertex inside an edge**: every lattice point strictly inside every
+//!    edge is looked up, and none may be a vertex (the T-junction itself,
+//!    reported as [`Violation::VertexOnEdge`], even where another violation
+//!    would also catch it);
+//! 7. **every vertex used**: a vertex no triangle refers to is reported
+//!    ([`Violation::UnusedVertex`]); an unused vertex lying on an edge would
+//!    otherwise hide a T-junction from (3).
 
 use rayon::prelude::*;
 
@@ -50,6 +66,10 @@ pub struct CheckOptions {
     /// metres: 0 requires the sample's height bit for bit; a quantized output
     /// (heights on a step `s`) needs `s/2`. Default: 0.
     pub height_tolerance_m: f64,
+    /// Also run the direct tests for a general triangulation (module docs, 6
+    /// and 7): no vertex strictly inside any edge, every vertex used by a
+    /// triangle. Default: false.
+    pub general: bool,
 }
 
 impl CheckOptions {
@@ -59,6 +79,7 @@ impl CheckOptions {
         conforming: true,
         allow_fictitious: false,
         height_tolerance_m: 0.0,
+        general: false,
     };
 
     /// Conforming, true heights, and `|Δz| ≤ max_error_m` everywhere.
@@ -68,7 +89,15 @@ impl CheckOptions {
             conforming: true,
             allow_fictitious: false,
             height_tolerance_m: 0.0,
+            general: false,
         }
+    }
+
+    /// A general triangulation (a TIN): conforming, true heights,
+    /// `|Δz| ≤ max_error_m` everywhere, and the direct tests of
+    /// [`CheckOptions::general`].
+    pub const fn tin(max_error_m: f64) -> Self {
+        CheckOptions::conforming(max_error_m).with_general(true)
     }
 
     /// Sets [`CheckOptions::max_error_m`].
@@ -86,6 +115,12 @@ impl CheckOptions {
     /// Sets [`CheckOptions::height_tolerance_m`].
     pub const fn with_height_tolerance_m(mut self, tolerance_m: f64) -> Self {
         self.height_tolerance_m = tolerance_m;
+        self
+    }
+
+    /// Sets [`CheckOptions::general`].
+    pub const fn with_general(mut self, yes: bool) -> Self {
+        self.general = yes;
         self
     }
 
@@ -218,6 +253,32 @@ pub enum Violation {
         /// Row of the other end.
         br: u32,
     },
+    /// A vertex lies strictly inside an edge: a T-junction.
+    #[error("vertex at column {col}, row {row} lies inside the edge between ({ac},{ar}) and ({bc},{br}) (T-junction)")]
+    VertexOnEdge {
+        /// Column of the vertex.
+        col: u32,
+        /// Row of the vertex.
+        row: u32,
+        /// Column of one end of the edge.
+        ac: u32,
+        /// Row of one end of the edge.
+        ar: u32,
+        /// Column of the other end.
+        bc: u32,
+        /// Row of the other end.
+        br: u32,
+    },
+    /// A vertex that no triangle uses.
+    #[error("vertex {vertex} at column {col}, row {row} is used by no triangle")]
+    UnusedVertex {
+        /// Vertex index.
+        vertex: usize,
+        /// Column.
+        col: u32,
+        /// Row.
+        row: u32,
+    },
     /// Triangle areas do not add up to the grid's.
     #[error("triangles cover {got} half-cells, the grid has {expected}")]
     AreaMismatch {
@@ -305,9 +366,12 @@ fn check_on_pool(
         list: Vec::new(),
         total: 0,
     };
-    check_vertices(grid, mesh, opts, &mut found);
+    let owner = check_vertices(grid, mesh, opts, &mut found);
     if found.total == 0 {
         check_triangles(grid, mesh, opts, &mut found);
+    }
+    if found.total == 0 && opts.general {
+        check_general(grid, mesh, &owner, &mut found);
     }
     let metrics = measure(grid, mesh);
     if found.total == 0 {
@@ -340,7 +404,14 @@ fn check_on_pool(
     Ok(CheckReport { metrics })
 }
 
-fn check_vertices(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &mut Found) {
+/// Checks each vertex; returns the vertex at each sample (`u32::MAX` for
+/// none).
+fn check_vertices(
+    grid: &HeightGrid,
+    mesh: &Mesh,
+    opts: &CheckOptions,
+    found: &mut Found,
+) -> Vec<u32> {
     let (w, h) = (grid.width(), grid.height());
     let mut owner = vec![u32::MAX; w * h];
     for (k, v) in mesh.vertices.iter().enumerate() {
@@ -379,6 +450,59 @@ fn check_vertices(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &m
     if opts.allow_fictitious && found.total == 0 {
         check_fictitious(grid, mesh, &owner, found);
     }
+    owner
+}
+
+/// The direct tests for a general triangulation (module docs, 6 and 7).
+/// `owner` maps each sample to its vertex. Every undirected edge is walked
+/// once, lattice point by lattice point (`gcd(|dx|, |dy|) − 1` of them
+/// strictly inside).
+fn check_general(grid: &HeightGrid, mesh: &Mesh, owner: &[u32], found: &mut Found) {
+    let mut used = vec![false; mesh.vertices.len()];
+    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(3 * mesh.triangles.len());
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (i, j) = (t[k], t[(k + 1) % 3]);
+            used[i as usize] = true;
+            edges.push((i.min(j), i.max(j)));
+        }
+    }
+    edges.sort_unstable();
+    edges.dedup();
+    for &(i, j) in &edges {
+        let (a, b) = (mesh.vertices[i as usize], mesh.vertices[j as usize]);
+        let (dx, dy) = (b.col as i64 - a.col as i64, b.row as i64 - a.row as i64);
+        let g = gcd(dx.unsigned_abs(), dy.unsigned_abs()) as i64;
+        for s in 1..g {
+            let (x, y) = (a.col as i64 + dx / g * s, a.row as i64 + dy / g * s);
+            if owner[y as usize * grid.width() + x as usize] != u32::MAX {
+                found.push(Violation::VertexOnEdge {
+                    col: x as u32,
+                    row: y as u32,
+                    ac: a.col,
+                    ar: a.row,
+                    bc: b.col,
+                    br: b.row,
+                });
+            }
+        }
+    }
+    for (k, v) in mesh.vertices.iter().enumerate() {
+        if !used[k] {
+            found.push(Violation::UnusedVertex {
+                vertex: k,
+                col: v.col,
+                row: v.row,
+            });
+        }
+    }
+}
+
+fn gcd(mut a: u64, mut b: u64) -> u64 {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
 }
 
 /// A vertex whose height is not its sample's must be a fictitious point: the
