@@ -101,6 +101,9 @@ pub enum Voids {
     Idw,
     /// Refuse inputs with voids.
     Refuse,
+    /// Leave voids out: no triangle touches a void, so the mesh has holes
+    /// where the data has (`cota mesh` only; conforming bitree meshes).
+    Hole,
 }
 
 #[derive(Debug, Args)]

@@ -41,10 +41,33 @@ pub fn name(files: &[FileInfo]) -> String {
     names.join(" + ")
 }
 
-/// Applies the `--voids` policy to `grid`.
+/// Refuses `--voids hole` in a command that cannot leave holes.
+pub fn refuse_hole(voids: Voids, command: &str) -> anyhow::Result<()> {
+    if matches!(voids, Voids::Hole) {
+        anyhow::bail!(
+            "--voids hole: expected fill, idw or refuse for cota {command} (it needs a height at every sample); holes are for cota mesh"
+        );
+    }
+    Ok(())
+}
+
+/// Applies the `--voids` policy to `grid` (`hole` fills with a constant: the
+/// mesher then leaves the filled samples out, see `crate::hole`).
 pub fn fill(grid: &mut HeightGrid, voids: Voids) -> anyhow::Result<FillReport> {
+    if matches!(voids, Voids::Hole) {
+        if grid.void_count() == grid.len() {
+            anyhow::bail!("--voids hole: every sample is void, there is nothing to mesh");
+        }
+        let filled = cota_core::mesh::holes::fill_flat(grid);
+        return Ok(FillReport {
+            filled,
+            converged: true,
+            ..FillReport::default()
+        });
+    }
     let policy = match voids {
         Voids::Fill => VoidPolicy::Fill(FillMethod::Harmonic),
+        Voids::Hole => VoidPolicy::Refuse,
         Voids::Idw => VoidPolicy::Fill(FillMethod::InverseDistance),
         Voids::Refuse => VoidPolicy::Refuse,
     };
