@@ -18,7 +18,9 @@ pub mod export;
 pub mod read;
 pub mod stream_file;
 
-pub use dem::{DataType, Dem, DemSummary, Format, PngEncoding, ReadOptions};
+pub use dem::{
+    ArrayName, DataType, Dem, DemSummary, Format, PngEncoding, ReadOptions, TileRequest,
+};
 pub use error::{ReadError, ReadErrorKind, RegionError};
 pub use read::{
     read_dem, read_dem_bytes, read_region, read_region_with_progress, Region, RegionOptions,

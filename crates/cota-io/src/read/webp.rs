@@ -1,0 +1,88 @@
+//! WebP height images: terrain-RGB and Terrarium web tiles (Mapterhorn
+//! publishes Terrarium WebP tiles of 512×512), lossless or lossy.
+//!
+//! # Format facts this reader relies on
+//! * A WebP file is a RIFF container: `RIFF`, a 32-bit size, `WEBP`, then a
+//!   `VP8 ` (lossy), `VP8L` (lossless) or `VP8X` (extended) chunk. The
+//!   dimensions are in the first chunk, at most 16 383 × 16 383, so they are
+//!   checked against the sample limit before the pixels are allocated.
+//!   Decoding is `image-webp` (pure Rust).
+//! * Pixels are 8-bit RGB or RGBA and decoded with the encodings of `rgb`
+//!   ([`ReadOptions::png_encoding`]; without one, the plausible encoding).
+//!   A pixel whose alpha is 0 is a void.
+//! * Lossy WebP (VP8) changes pixel values. Terrarium puts 256 m in one step
+//!   of R and 1 m in one step of G, so a lossy tile's heights can be off by
+//!   several metres (and by 256 m where R moves); only lossless tiles decode
+//!   to the encoder's heights exactly. The reader reads both and reports
+//!   which it was in the data type ("RGB8"; the format says "WebP").
+//! * Only the first frame of an animation is read.
+//! * WebP carries no georeference: a file named `…/z/x/y.webp` is placed by
+//!   its Web-Mercator tile bounds (`tile`), any other gets
+//!   [`GeoRef::unreferenced`] with [`ReadOptions::cell_size_m`].
+
+use std::io::Cursor;
+use std::path::Path;
+
+use cota_core::grid::check_dimensions;
+use cota_core::{GeoRef, HeightGrid};
+use image_webp::WebPDecoder;
+
+use super::tile::georef_for;
+use crate::dem::{DataType, Dem, Format, PngEncoding, ReadOptions};
+use crate::error::{malformed, too_large, ReadErrorKind};
+
+/// True when `bytes` open like a WebP file.
+pub(crate) fn is_webp(bytes: &[u8]) -> bool {
+    bytes.len() >= 12 && bytes.starts_with(b"RIFF") && &bytes[8..12] == b"WEBP"
+}
+
+/// Decodes a WebP height image.
+pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
+    let (buf, w, h, channels) = decode_pixels(bytes)?;
+    let (heights, encoding) = heights(&buf, channels, opts.png_encoding)?;
+    let georef = georef_for(path, w, h).unwrap_or_else(|| GeoRef::unreferenced(opts.cell_size_m));
+    let grid = HeightGrid::new(w, h, heights, georef)?;
+    Ok(Dem {
+        grid,
+        format: Format::WebP(encoding),
+        data_type: DataType::Rgb8,
+        nodata: None,
+        path: path.to_path_buf(),
+    })
+}
+
+/// Heights of the pixels under the requested (RGB) encoding.
+fn heights(
+    buf: &[u8],
+    channels: usize,
+    wanted: Option<PngEncoding>,
+) -> Result<(Vec<f32>, PngEncoding), ReadErrorKind> {
+    if wanted == Some(PngEncoding::Gray16) {
+        return Err(ReadErrorKind::Unsupported {
+            what: "WebP encoding gray16".into(),
+            detail: "WebP holds 8-bit colour; use terrain-rgb or terrarium".into(),
+        });
+    }
+    Ok(super::rgb::decode(buf, channels, wanted))
+}
+
+/// Decodes the first frame: pixels, width, height and channels (3 or 4).
+fn decode_pixels(bytes: &[u8]) -> Result<(Vec<u8>, usize, usize, usize), ReadErrorKind> {
+    let mut dec = WebPDecoder::new(Cursor::new(bytes)).map_err(bad_webp)?;
+    let (w, h) = dec.dimensions();
+    check_dimensions(u64::from(w), u64::from(h)).map_err(too_large)?;
+    let channels = if dec.has_alpha() { 4 } else { 3 };
+    let len = dec.output_buffer_size().ok_or(ReadErrorKind::TooLarge {
+        width: u64::from(w),
+        height: u64::from(h),
+        max: cota_core::grid::MAX_SAMPLES,
+    })?;
+    let mut buf = vec![0u8; len];
+    dec.read_image(&mut buf).map_err(bad_webp)?;
+    Ok((buf, w as usize, h as usize, channels))
+}
+
+/// Wraps a decoder error.
+fn bad_webp(e: image_webp::DecodingError) -> ReadErrorKind {
+    malformed("a valid WebP image", format!("a decoding error: {e}"))
+}
