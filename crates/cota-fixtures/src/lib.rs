@@ -2,7 +2,7 @@
 //!
 //! The data cota's tests and benchmarks run on, as **plain data**: row-major
 //! `f32` heights (north row first, voids NaN) with what the file said about
-//! its place ([`Samples`]). It depends on no cota crate (only `zip`), so
+//! its place ([`Samples`]). It depends on no cota crate, so
 //! `cota-core`'s own tests can use it without a dependency cycle; each crate
 //! turns [`Samples`] into its grid type in its `tests/common`.
 //!
@@ -17,6 +17,8 @@
 //! * [`read`]: an SRTM (`.hgt`, `.hgt.zip`) or ESRI ASCII file, anywhere.
 //! * [`crop`]: a window of row-major heights.
 //! * [`rough_terrain`]: smooth hills plus seeded noise, for property tests.
+//! * [`formats`]: writers of Terrarium WebP tiles, PMTiles archives, NumPy
+//!   `.npy`/`.npz` and USGS ASCII DEMs, made from real heights in a test's set-up.
 //!
 //! The readers here are deliberately small (the formats of the bundled and
 //! shared SRTM and ASCII files, no more); `cota-io` is the real reader, and
@@ -24,6 +26,7 @@
 #![warn(missing_docs)]
 
 mod ascii;
+pub mod formats;
 mod srtm;
 
 use std::fmt;

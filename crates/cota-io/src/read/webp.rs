@@ -68,6 +68,7 @@ fn heights(
 
 /// Decodes the first frame: pixels, width, height and channels (3 or 4).
 fn decode_pixels(bytes: &[u8]) -> Result<(Vec<u8>, usize, usize, usize), ReadErrorKind> {
+    check_riff_size(bytes)?;
     let mut dec = WebPDecoder::new(Cursor::new(bytes)).map_err(bad_webp)?;
     let (w, h) = dec.dimensions();
     check_dimensions(u64::from(w), u64::from(h)).map_err(too_large)?;
@@ -80,6 +81,21 @@ fn decode_pixels(bytes: &[u8]) -> Result<(Vec<u8>, usize, usize, usize), ReadErr
     let mut buf = vec![0u8; len];
     dec.read_image(&mut buf).map_err(bad_webp)?;
     Ok((buf, w as usize, h as usize, channels))
+}
+
+/// Refuses a file shorter than its RIFF header says (a truncated download).
+fn check_riff_size(bytes: &[u8]) -> Result<(), ReadErrorKind> {
+    let declared = bytes
+        .get(4..8)
+        .map(|b| u64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])) + 8);
+    match declared {
+        Some(d) if d <= bytes.len() as u64 => Ok(()),
+        Some(d) => Err(malformed(
+            format!("a valid WebP image of {d} bytes (its RIFF header's size)"),
+            format!("{} bytes: the file is truncated", bytes.len()),
+        )),
+        None => Err(malformed("a valid WebP image", "a truncated RIFF header")),
+    }
 }
 
 /// Wraps a decoder error.
