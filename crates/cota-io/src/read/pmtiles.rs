@@ -84,7 +84,7 @@ struct Header {
 }
 
 /// True when the file at `path` opens with the PMTiles signature.
-pub(crate) fn is_pmtiles_file(path: &Path) -> bool {
+pub fn is_pmtiles_file(path: &Path) -> bool {
     let mut head = [0u8; 7];
     std::fs::File::open(path)
         .and_then(|mut f| f.read_exact(&mut head))
