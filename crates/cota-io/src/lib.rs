@@ -2,8 +2,9 @@
 //!
 //! Everything in cota that touches a file:
 //! * DEM readers ([`read_dem`]): SRTM `.hgt` and `.hgt.zip`, GeoTIFF (pure-Rust
-//!   `tiff` crate), PNG terrain encodings (terrain-RGB, Terrarium, 16-bit gray)
-//!   and ESRI ASCII grids. The format is detected from the content, the file name
+//!   `tiff` crate), PNG terrain encodings (terrain-RGB, Terrarium, 16-bit gray),
+//!   WebP terrain tiles, PMTiles v3 archives of such tiles, NumPy `.npy`/`.npz`,
+//!   USGS ASCII DEMs and ESRI ASCII grids. The format is detected from the content, the file name
 //!   only breaking ties.
 //! * [`read_region`]: several files read in parallel, joined into one grid
 //!   (`cota_core::grid::mosaic`) and their voids filled (`cota_core::grid::voids`).
