@@ -243,7 +243,7 @@ fn finish(
 
 /// The tiles of `zoom` covering `bbox`, checked against the archive and [`MAX_TILES`].
 fn requested_tiles(h: &Header, zoom: u8, bbox: [f64; 4]) -> Result<Vec<TileId>, ReadErrorKind> {
-    if zoom < h.zooms.0 || zoom > h.zooms.1 {
+    if zoom < h.zooms.0 || zoom > h.zooms.1 || zoom > super::tile::MAX_ZOOM {
         return Err(malformed(
             format!(
                 "--zoom within the archive's zooms {}..{}",
@@ -487,6 +487,29 @@ mod test {
         );
         assert_eq!(id(2, 0, 0), 5);
         assert_eq!(id(3, 7, 0), 84); // the last tile of zoom 3's curve
+    }
+
+    #[test]
+    fn absurd_zooms_are_refused() {
+        let h = Header {
+            root: (0, 0),
+            leaves: (0, 0),
+            data: (0, 0),
+            addressed: 0,
+            internal_compression: 1,
+            tile_compression: 1,
+            tile_type: 4,
+            zooms: (0, 255),
+            bounds: [0.0; 4],
+        };
+        let e = requested_tiles(&h, 200, [-1.0, -1.0, 1.0, 1.0]).unwrap_err();
+        assert!(e.to_string().contains("found 200"), "{e}");
+        assert_eq!(
+            requested_tiles(&h, 1, [-1.0, -1.0, 1.0, 1.0])
+                .unwrap()
+                .len(),
+            4
+        );
     }
 
     #[test]
