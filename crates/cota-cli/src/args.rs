@@ -22,6 +22,8 @@ pub enum Command {
     Mesh(MeshArgs),
     /// Regenerate paper 000's Table 1 and Table 2: bitree vs restricted quadtree.
     Compare(CompareArgs),
+    /// Paper 004: the best (mesh, texture) pair under a byte budget, as a textured GLB.
+    Pair(crate::pair::PairArgs),
     /// Progressive compact stream (paper 000): encode a DEM, decode any prefix.
     #[command(subcommand)]
     Stream(StreamCommand),
@@ -196,6 +198,8 @@ pub struct MeshArgs {
     pub quantize: bool,
     #[command(flatten)]
     pub refine: RefineArgs,
+    #[command(flatten)]
+    pub texture: crate::pair::TextureArgs,
 }
 
 /// How `cota mesh --strip` makes its strip (`cota_core::strip::StripMethod`).

@@ -11,6 +11,7 @@ mod compare;
 mod info;
 mod input;
 mod mesh;
+mod pair;
 mod progress;
 mod stream;
 
@@ -31,6 +32,7 @@ fn run() -> anyhow::Result<ExitCode> {
         args::Command::Info(a) => info::run(&a),
         args::Command::Mesh(a) => mesh::run(&a),
         args::Command::Compare(a) => compare::run(&a),
+        args::Command::Pair(a) => pair::run(&a),
         args::Command::Stream(c) => stream::run(&c),
     }
 }

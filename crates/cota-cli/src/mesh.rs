@@ -26,7 +26,7 @@ fn ms(t: Instant) -> f64 {
 }
 
 /// Fails early, before any long work, on output paths that cannot be written.
-fn check_output(out: &Path, base_m: Option<f64>) -> anyhow::Result<MeshFormat> {
+pub(crate) fn check_output(out: &Path, base_m: Option<f64>) -> anyhow::Result<MeshFormat> {
     let format = MeshFormat::from_path(out)?;
     if base_m.is_some() && format != MeshFormat::Stl {
         anyhow::bail!(
@@ -181,6 +181,7 @@ fn validate(a: &MeshArgs) -> anyhow::Result<()> {
         check_output(out, a.base_m)?;
     }
     check_quantize(a)?;
+    crate::pair::check_texture(&a.texture, a.output.as_deref(), a.strip, a.quantize)?;
     if let Some(e) = a.max_error {
         if e.is_nan() || e < 0.0 {
             anyhow::bail!("--max-error: expected 0 m or more, found {e} m");
@@ -354,6 +355,9 @@ fn write(
     };
     let eo = export_options(a);
     let t = Instant::now();
+    if crate::pair::write_draped(&a.texture, out, grid, &m.mesh, &eo)? {
+        return Ok(ms(t));
+    }
     match (strip, a.strip, quant) {
         (Some(s), true, _) => cota_io::export::write_atomically(out, |w| {
             cota_io::export::write_glb_strip(w, &s.mesh, &s.strip.indices, grid, &eo)

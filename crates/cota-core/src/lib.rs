@@ -22,6 +22,9 @@
 //!   invariant checker ([`check_mesh`]);
 //! * [`strip`]: triangle strips; [`stream`]: the progressive stream;
 //!   [`compare`]: paper 000's tables;
+//! * [`texture`]: imagery over the DEM and paper 004's texture quadtree;
+//!   [`pair`](mod@pair): paper 004's best (mesh, texture) pair under a
+//!   memory budget.
 //! * [`tin`]: an irregular triangulation (TIN) with the same guaranteed
 //!   error and fewer triangles ([`tin::build`]).
 //!
@@ -55,6 +58,7 @@ pub mod grid;
 pub mod hierarchy;
 pub mod mesh;
 pub mod mesher;
+pub mod pair;
 mod par;
 pub mod quadtree;
 pub mod refine;
@@ -63,6 +67,7 @@ pub mod strip;
 #[cfg(test)]
 #[allow(clippy::unwrap_used, reason = "tests")]
 mod testing;
+pub mod texture;
 pub mod tin;
 
 // The public face: the types and entry points of the pipeline, in its

@@ -8,7 +8,10 @@
 //!   only breaking ties.
 //! * [`read_region`]: several files read in parallel, joined into one grid
 //!   (`cota_core::grid::mosaic`) and their voids filled (`cota_core::grid::voids`).
-//! * Mesh writers (OBJ, PLY, STL, GLB), each written atomically.
+//! * Imagery ([`image::read_image`]): GeoTIFF (band selection), PNG and JPEG
+//!   with a world file or the DEM's extent, placed on a DEM in the same CRS.
+//! * Mesh writers (OBJ, PLY, STL, GLB, and a textured GLB), each written
+//!   atomically.
 //!
 //! Every error names the file and says what was expected and what was found.
 #![warn(missing_docs)]
@@ -16,6 +19,7 @@
 pub mod dem;
 pub mod error;
 pub mod export;
+pub mod image;
 pub mod read;
 pub mod stream_file;
 

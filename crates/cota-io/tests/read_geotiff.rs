@@ -216,11 +216,10 @@ fn olinda_float32_user_defined_utm_25s() {
         return;
     };
     let g = dem.grid.georef();
-    assert_eq!(
-        g.crs,
-        Crs::Projected("UTM Zone 25, Southern Hemisphere".into())
-    );
-    assert_eq!(g.crs.to_string(), "UTM Zone 25, Southern Hemisphere");
+    let name = "UTM Zone 25, Southern Hemisphere; GCS Name = GRS 1980(IUGG, 1980); \
+                Datum = unknown; Ellipsoid = GRS80; Primem = Greenwich";
+    assert_eq!(g.crs, Crs::Projected(name.into()));
+    assert_eq!(g.crs.to_string(), name);
     assert!(close(g.origin_x, 288_776.250_000_803_15, 1e-6));
     assert!(close(g.pixel_x, 89.994_067_349_451_16, 1e-9));
     assert_eq!(dem.grid.cell_size_m(), [g.pixel_x, -g.pixel_y]);

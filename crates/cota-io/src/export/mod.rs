@@ -87,7 +87,10 @@ use cota_core::{HeightGrid, Mesh};
 
 pub use atomic::write_atomically;
 pub use error::{ExportError, WriteError};
-pub use glb::{write_glb, write_glb_quantized, write_glb_strip};
+pub use glb::{
+    encode_png, textured_mesh_bytes, write_glb, write_glb_quantized, write_glb_strip,
+    write_glb_textured,
+};
 pub use obj::write_obj;
 pub use options::{Coords, ExportOptions, IndexWidth};
 pub use ply::write_ply;

@@ -33,7 +33,11 @@ use std::path::Path;
 
 use rayon::prelude::*;
 
+/// The band count of a TIFF, for the imagery reader (`crate::image`).
+pub(crate) use geotiff::band_count as tiff_band_count;
 pub use region::{join, Region, RegionOptions};
+/// What the first bytes of a file look like, for messages.
+pub(crate) use sniff::describe_bytes as describe;
 
 use self::sniff::{describe_bytes, name_hint, sniff, Sniffed};
 use crate::dem::{Dem, ReadOptions};

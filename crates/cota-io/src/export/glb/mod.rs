@@ -52,6 +52,9 @@ use super::quantize::GlbQuantization;
 
 mod container;
 mod quantized;
+mod textured;
+
+pub use textured::{encode_png, textured_mesh_bytes, write_glb_textured};
 
 /// Largest vertex count with u16 indices (65 535 is the primitive restart value).
 const MAX_U16_VERTICES: usize = 65_535;

@@ -178,15 +178,25 @@ impl GeoKeys {
         }
     }
 
+    /// A projected CRS: its EPSG code, or its citation followed by the
+    /// geographic CRS's citation (the datum and ellipsoid of a user-defined
+    /// projection: "UTM Zone 25, Southern Hemisphere; GCS Name = GRS
+    /// 1980(IUGG, 1980); Datum = unknown; …"), which the imagery reader's CRS
+    /// rule reads.
     fn projected_crs(&self) -> Crs {
         match epsg(self.projected_type) {
             Some(code) => Crs::Epsg(code),
-            None => Crs::Projected(
-                self.pcs_citation
+            None => {
+                let name = self
+                    .pcs_citation
                     .clone()
                     .or_else(|| self.gt_citation.clone())
-                    .unwrap_or_else(|| user_defined("projected", self.projected_type)),
-            ),
+                    .unwrap_or_else(|| user_defined("projected", self.projected_type));
+                Crs::Projected(match &self.geog_citation {
+                    Some(g) if !name.contains(g.as_str()) => format!("{name}; {g}"),
+                    _ => name,
+                })
+            }
         }
     }
 
@@ -410,7 +420,9 @@ mod tests {
         let k = parse_key_directory(&d, ascii).unwrap();
         assert_eq!(
             k.crs(),
-            Crs::Projected("UTM Zone 25, Southern Hemisphere".into())
+            Crs::Projected(
+                "UTM Zone 25, Southern Hemisphere; GCS Name = GRS 1980; Datum = unknown".into()
+            )
         );
         let d = directory(&[
             [1024, 0, 1, 2],

@@ -77,6 +77,16 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<De
     })
 }
 
+/// The number of bands (SamplesPerPixel 277) of the first image of a TIFF,
+/// for the imagery reader (`crate::image`), which then reads each band it
+/// needs with [`decode`].
+pub(crate) fn band_count(bytes: &[u8]) -> Result<u16, ReadErrorKind> {
+    check_first_directory(bytes)?;
+    let mut dec = Decoder::new(Cursor::new(bytes))
+        .map_err(|e| tiff_error(e, "reading the TIFF header and first image directory"))?;
+    Ok(Layout::read(&mut dec)?.samples)
+}
+
 /// Checks that the first image directory (IFD) lies inside the file, so that
 /// truncated and garbage files get a message with the numbers. Classic TIFF:
 /// offset u32 at byte 4, then a u16 entry count, 12 bytes per entry and a u32

@@ -1,0 +1,535 @@
+//! `cota pair`: paper 004's best (mesh, texture) pair under a byte budget,
+//! written as a textured GLB; and `cota mesh --texture`, which drapes the
+//! full image on any mesh.
+//!
+//! Flow: read the DEM (voids filled) and the image (bands), place the image
+//! on the DEM (same CRS, `cota_io::image::crs`), resample it bilinearly onto
+//! the texture raster spanning the DEM's samples; the texture list is the
+//! texture quadtree at `--texture-tolerances`, each leaf flat colour,
+//! rendered at the raster's resolution and encoded as PNG; the mesh list is
+//! the bitree and the restricted quadtree at `--mesh-tolerances-m`. The
+//! byte model is the GLB's: `C(M)` = the mesh's views, `C(T)` = the PNG,
+//! and the file is `C(M) + C(T)` plus a frame (header, chunk headers, JSON)
+//! of at most [`FRAME_RESERVE_BYTES`], so pairs are chosen within
+//! `budget − FRAME_RESERVE_BYTES` and the file is never over the budget.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use cota_core::pair::{
+    choose, mesh_list, Candidate, Choice, MeshCandidate, MeshListOptions, PairOptions,
+};
+use cota_core::quadtree::QuadOptions;
+use cota_core::texture::{drape, DrapeOptions, RgbImage, TextureQuadtree};
+use cota_core::{HeightGrid, HierarchyKind, Mesh, Mesher};
+use cota_io::export::{
+    encode_png, textured_mesh_bytes, write_atomically, write_glb_textured, ExportOptions,
+};
+use cota_io::image::{place_on, read_image, Bands, ImageOptions};
+use serde_json::{json, Value};
+
+/// Bytes kept for the GLB's frame (12-byte header, two chunk headers, the
+/// JSON padded to 4): the JSON of a textured GLB is about 1.2 KB.
+pub const FRAME_RESERVE_BYTES: u64 = 4096;
+
+/// The image options shared by `cota pair` and `cota mesh --texture`.
+#[derive(Debug, Args)]
+pub struct ImageArgs {
+    /// Bands of the image as R,G,B (1-based), e.g. 3,2,1 for Landsat true
+    /// colour, or one band as gray. Default: 1,2,3 (band 1 for 1-2 bands).
+    #[arg(long, value_name = "R,G,B")]
+    pub bands: Option<String>,
+    /// Drape even when the CRS rule cannot tell that the image's CRS is the
+    /// DEM's (cota does not reproject).
+    #[arg(long)]
+    pub assume_same_crs: bool,
+}
+
+/// `cota mesh --texture`.
+#[derive(Debug, Args)]
+#[command(next_help_heading = "Texture")]
+pub struct TextureArgs {
+    /// .glb only: drape this image (GeoTIFF, PNG or JPEG with a world file,
+    /// or stretched over the DEM) on the mesh: TEXCOORD_0, the image
+    /// resampled bilinearly onto the DEM's extent and embedded as PNG, an
+    /// unlit material.
+    #[arg(long, value_name = "IMAGE")]
+    pub texture: Option<PathBuf>,
+    #[command(flatten)]
+    pub image: ImageArgs,
+}
+
+/// Which pair `cota pair` writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Pick {
+    /// The exact optimum over the two lists.
+    Optimum,
+    /// The paper's greedy scan.
+    Greedy,
+}
+
+/// Which hierarchies make the mesh list.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Hierarchies {
+    Both,
+    Bitree,
+    Quadtree,
+}
+
+#[derive(Debug, Args)]
+pub struct PairArgs {
+    /// The DEM (any format `cota mesh` reads; voids filled harmonically).
+    pub dem: PathBuf,
+    /// The image: GeoTIFF, or PNG/JPEG with a world file or over the DEM's extent.
+    pub image: PathBuf,
+    /// The whole GLB must fit in this many bytes.
+    #[arg(long, value_name = "N")]
+    pub budget_bytes: u64,
+    /// Weight of the mesh's distortion D(M) (m2).
+    #[arg(long, value_name = "A", default_value_t = 1.0)]
+    pub alpha: f64,
+    /// Weight of the texture's distortion D(T) (levels2).
+    #[arg(long, value_name = "B", default_value_t = 1.0)]
+    pub beta: f64,
+    /// Only pairs whose mesh has no more triangles than the texture has
+    /// leaves (paper 004's advice).
+    #[arg(long)]
+    pub polygons_within_texels: bool,
+    /// Write the optimum pair, or the paper's greedy choice.
+    #[arg(long, value_enum, default_value_t = Pick::Optimum)]
+    pub pick: Pick,
+    /// Hierarchies of the mesh list.
+    #[arg(long, value_enum, default_value_t = Hierarchies::Both)]
+    pub hierarchies: Hierarchies,
+    /// Vertical bounds of the mesh list, metres. Default: the height range
+    /// halved 1 to 10 times, and 0.
+    #[arg(long, value_name = "M,...", value_delimiter = ',')]
+    pub mesh_tolerances_m: Option<Vec<f64>>,
+    /// Tolerances of the texture list: sigma_R + sigma_G + sigma_B, levels.
+    #[arg(
+        long,
+        value_name = "T,...",
+        value_delimiter = ',',
+        default_value = "0,2,4,8,12,16,24,32,48,64,96,128"
+    )]
+    pub texture_tolerances: Vec<f64>,
+    /// Output .glb (written atomically). Without it, only the report.
+    #[arg(short, long, value_name = "OUT.glb")]
+    pub output: Option<PathBuf>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub image_args: ImageArgs,
+}
+
+/// One texture of the list: its tolerance, leaves, D(T) and the PNG.
+struct TextureCandidate {
+    tolerance: f64,
+    leaves: usize,
+    quadtree_bytes: u64,
+    distortion: u64,
+    png: Vec<u8>,
+}
+
+impl TextureCandidate {
+    fn candidate(&self) -> Candidate {
+        Candidate {
+            bytes: pad4(self.png.len() as u64),
+            distortion: self.distortion as f64,
+            elements: self.leaves as u64,
+        }
+    }
+}
+
+fn pad4(n: u64) -> u64 {
+    n.div_ceil(4) * 4
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// The DEM (voids filled) and the image draped on it (the texture raster).
+fn read_pair(
+    dem: &Path,
+    image: &Path,
+    a: &ImageArgs,
+) -> anyhow::Result<(HeightGrid, RgbImage, Value)> {
+    let region = cota_io::read_region(&[dem], &cota_io::RegionOptions::DEFAULT)?;
+    let grid = region.grid;
+    let (texture, about) = drape_image(&grid, image, a)?;
+    Ok((grid, texture, about))
+}
+
+/// Reads `image`, places it on `grid` and resamples it onto the texture raster.
+pub fn drape_image(
+    grid: &HeightGrid,
+    image: &Path,
+    a: &ImageArgs,
+) -> anyhow::Result<(RgbImage, Value)> {
+    let bands = match &a.bands {
+        Some(b) => Some(Bands::parse(b).map_err(|e| anyhow::anyhow!("--bands: {e}"))?),
+        None => None,
+    };
+    let img = read_image(image, &ImageOptions::DEFAULT.with_bands(bands))?;
+    let placed = place_on(&img, grid, a.assume_same_crs)?;
+    let texture = drape(&img.rgb, &placed.placement, grid, &DrapeOptions::DEFAULT)
+        .with_context(|| format!("{}: draping on the DEM", image.display()))?;
+    let about = json!({
+        "image": image.display().to_string(),
+        "format": img.format,
+        "image_size": [img.rgb.width(), img.rgb.height()],
+        "bands": img.bands.text(),
+        "band_count": img.band_count,
+        "image_crs": img.crs.to_string(),
+        "dem_crs": grid.georef().crs.to_string(),
+        "placement": img.placement_source,
+        "crs_rule": placed.rule,
+        "resampling": "bilinear per channel onto the texture raster spanning the DEM's samples",
+        "texture_size": [texture.width(), texture.height()],
+    });
+    Ok((texture, about))
+}
+
+/// The texture list: the quadtree at each tolerance, rendered and encoded.
+fn texture_list(texture: &RgbImage, tolerances: &[f64]) -> anyhow::Result<Vec<TextureCandidate>> {
+    let tree = TextureQuadtree::build(texture);
+    let mut out: Vec<TextureCandidate> = Vec::new();
+    for &tol in tolerances {
+        if !(tol >= 0.0 && tol.is_finite()) {
+            anyhow::bail!("--texture-tolerances: expected 0 or more levels, found {tol}");
+        }
+        let x = tree.extract(tol);
+        if out
+            .iter()
+            .any(|t| t.leaves == x.leaves.len() && t.distortion == x.distortion)
+        {
+            continue;
+        }
+        out.push(TextureCandidate {
+            tolerance: tol,
+            leaves: x.leaves.len(),
+            quadtree_bytes: x.bytes(),
+            distortion: x.distortion,
+            png: encode_png(&x.render())?,
+        });
+    }
+    Ok(out)
+}
+
+/// The mesh list of the flags.
+fn meshes(a: &PairArgs, mesher: &Mesher<'_>) -> anyhow::Result<Vec<MeshCandidate>> {
+    let mut opts = MeshListOptions::for_grid(mesher);
+    if let Some(t) = &a.mesh_tolerances_m {
+        opts.tolerances_m = t.clone();
+    }
+    let quadtree = HierarchyKind::Quadtree(QuadOptions::DEFAULT);
+    opts.hierarchies = match a.hierarchies {
+        Hierarchies::Both => vec![HierarchyKind::Bitree, quadtree],
+        Hierarchies::Bitree => vec![HierarchyKind::Bitree],
+        Hierarchies::Quadtree => vec![quadtree],
+    };
+    let bytes = |m: &Mesh| textured_mesh_bytes(m.vertex_count(), m.triangle_count());
+    mesh_list(mesher, &opts, &bytes).context("the mesh list")
+}
+
+/// Every distinct pair total up to the largest, each chosen again: the
+/// optimum "for every budget" (returns the budgets and the microseconds).
+fn sweep(ms_: &[Candidate], ts: &[Candidate], opts: &PairOptions) -> (usize, f64) {
+    let mut budgets: Vec<u64> = ms_
+        .iter()
+        .flat_map(|m| ts.iter().map(move |t| m.bytes + t.bytes))
+        .collect();
+    budgets.sort_unstable();
+    budgets.dedup();
+    let t = Instant::now();
+    let found = budgets
+        .iter()
+        .filter(|&&b| choose(ms_, ts, b, opts).is_ok())
+        .count();
+    std::hint::black_box(found);
+    (budgets.len(), t.elapsed().as_secs_f64() * 1e6)
+}
+
+pub fn run(a: &PairArgs) -> anyhow::Result<ExitCode> {
+    validate(a)?;
+    let t0 = Instant::now();
+    let (grid, texture, about) = read_pair(&a.dem, &a.image, &a.image_args)?;
+    let read_ms = ms(t0);
+    let t = Instant::now();
+    let textures = texture_list(&texture, &a.texture_tolerances)?;
+    let mesher = Mesher::new(&grid);
+    let meshes = meshes(a, &mesher)?;
+    let lists_ms = ms(t);
+    let (mc, tc): (Vec<Candidate>, Vec<Candidate>) = (
+        meshes.iter().map(|m| m.candidate()).collect(),
+        textures.iter().map(|t| t.candidate()).collect(),
+    );
+    let opts = PairOptions::DEFAULT
+        .with_weights(a.alpha, a.beta)
+        .with_polygons_within_texels(a.polygons_within_texels);
+    let room = a.budget_bytes.saturating_sub(FRAME_RESERVE_BYTES);
+    let t = Instant::now();
+    let choice = choose(&mc, &tc, room, &opts).map_err(|e| budget_error(a, e))?;
+    let choose_us = t.elapsed().as_secs_f64() * 1e6;
+    let (budgets, sweep_us) = sweep(&mc, &tc, &opts);
+    let pair = match (a.pick, choice.greedy) {
+        (Pick::Greedy, Some(g)) => g,
+        (Pick::Greedy, None) => anyhow::bail!(
+            "--pick greedy: the paper's greedy scan finds no pair within {room} bytes"
+        ),
+        (Pick::Optimum, _) => choice.optimum,
+    };
+    let chosen = &meshes[pair.mesh];
+    cota_core::check_mesh(&grid, &chosen.mesh, &chosen.check)
+        .context("the invariant checker rejected the chosen mesh (this is a bug in cota)")?;
+    let t = Instant::now();
+    let written = write(a, &grid, &chosen.mesh, &textures[pair.texture].png)?;
+    let timing = json!({"read_ms": read_ms, "lists_ms": lists_ms, "choose_us": choose_us,
+        "sweep_budgets": budgets, "sweep_us": sweep_us, "write_ms": ms(t)});
+    let report = report(a, &about, &meshes, &textures, &choice, written, timing);
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_text(&report);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Flags checked before any work.
+fn validate(a: &PairArgs) -> anyhow::Result<()> {
+    if let Some(out) = &a.output {
+        check_glb_output(out, "cota pair writes a textured glTF")?;
+    }
+    for (flag, v) in [("--alpha", a.alpha), ("--beta", a.beta)] {
+        if !(v.is_finite() && v >= 0.0) {
+            anyhow::bail!("{flag}: expected a finite weight of 0 or more, found {v}");
+        }
+    }
+    if a.budget_bytes <= FRAME_RESERVE_BYTES {
+        anyhow::bail!(
+            "--budget-bytes: expected more than the {FRAME_RESERVE_BYTES} bytes kept for the GLB's header and JSON, found {}",
+            a.budget_bytes
+        );
+    }
+    Ok(())
+}
+
+/// A budget no pair fits, in the words of the flags.
+fn budget_error(a: &PairArgs, e: cota_core::pair::PairError) -> anyhow::Error {
+    match e {
+        cota_core::pair::PairError::NothingFits { smallest, .. } if smallest < u64::MAX => anyhow::anyhow!(
+            "--budget-bytes: no (mesh, texture) pair fits in {} bytes: the smallest needs {} bytes ({smallest} for the pair + {FRAME_RESERVE_BYTES} for the GLB's frame)",
+            a.budget_bytes,
+            smallest + FRAME_RESERVE_BYTES
+        ),
+        other => anyhow::anyhow!("choosing the pair: {other}"),
+    }
+}
+
+/// Encodes the GLB in memory, checks it against the budget, writes it
+/// atomically; returns its size (0 without `-o`).
+fn write(a: &PairArgs, grid: &HeightGrid, mesh: &Mesh, png: &[u8]) -> anyhow::Result<u64> {
+    let mut bytes = Vec::new();
+    write_glb_textured(&mut bytes, mesh, grid, png, &ExportOptions::DEFAULT)?;
+    if bytes.len() as u64 > a.budget_bytes {
+        anyhow::bail!(
+            "the GLB would take {} bytes, over --budget-bytes {} (its frame exceeds the {FRAME_RESERVE_BYTES} bytes kept: a bug in cota)",
+            bytes.len(),
+            a.budget_bytes
+        );
+    }
+    if let Some(out) = &a.output {
+        write_atomically(out, |w| Ok(w.write_all(&bytes)?))?;
+    }
+    Ok(bytes.len() as u64)
+}
+
+/// One chosen pair, for the report.
+fn pair_json(
+    p: &cota_core::pair::Pair,
+    meshes: &[MeshCandidate],
+    textures: &[TextureCandidate],
+) -> Value {
+    let (m, t) = (&meshes[p.mesh], &textures[p.texture]);
+    json!({
+        "mesh": p.mesh, "texture": p.texture, "bytes": p.bytes, "distortion": p.distortion,
+        "hierarchy": m.hierarchy.name(), "tolerance_m": m.tolerance_m,
+        "triangles": m.mesh.triangle_count(), "mesh_bytes": m.bytes, "d_mesh_m2": m.distortion_m2,
+        "texture_tolerance": t.tolerance, "leaves": t.leaves, "texture_bytes": pad4(t.png.len() as u64),
+        "d_texture": t.distortion,
+    })
+}
+
+/// The JSON report (also the source of the text report).
+fn report(
+    a: &PairArgs,
+    about: &Value,
+    meshes: &[MeshCandidate],
+    textures: &[TextureCandidate],
+    choice: &Choice,
+    glb_bytes: u64,
+    timing: Value,
+) -> Value {
+    let ml: Vec<Value> = meshes
+        .iter()
+        .map(|m| {
+            json!({"hierarchy": m.hierarchy.name(), "tolerance_m": m.tolerance_m,
+            "vertices": m.mesh.vertex_count(), "triangles": m.mesh.triangle_count(),
+            "d_mesh_m2": m.distortion_m2, "bytes": m.bytes})
+        })
+        .collect();
+    let tl: Vec<Value> = textures
+        .iter()
+        .map(|t| json!({"tolerance": t.tolerance, "leaves": t.leaves, "d_texture": t.distortion,
+            "bytes": pad4(t.png.len() as u64), "png_bytes": t.png.len(), "quadtree_bytes": t.quadtree_bytes}))
+        .collect();
+    let gap = choice.gap();
+    json!({
+        "dem": a.dem.display().to_string(),
+        "image": about,
+        "budget_bytes": a.budget_bytes,
+        "frame_reserve_bytes": FRAME_RESERVE_BYTES,
+        "byte_model": "GLB bytes: C(M) = positions (12/vertex) + TEXCOORD_0 (8/vertex) + indices (2 or 4 per corner), padded to 4; C(T) = the embedded PNG of the quadtree's flat-colour leaves at the texture raster's resolution, padded to 4; the file = C(M) + C(T) + its frame",
+        "alpha": a.alpha, "beta": a.beta, "polygons_within_texels": a.polygons_within_texels,
+        "meshes": ml, "textures": tl,
+        "optimum": pair_json(&choice.optimum, meshes, textures),
+        "greedy": choice.greedy.map(|g| pair_json(&g, meshes, textures)),
+        "greedy_gap": gap,
+        "greedy_gap_relative": gap.map(|g| g / choice.optimum.distortion.max(f64::MIN_POSITIVE)),
+        "checked": true,
+        "picked": if a.pick == Pick::Greedy { "greedy" } else { "optimum" },
+        "glb_bytes": glb_bytes,
+        "output": a.output.as_ref().map(|p| p.display().to_string()),
+        "timing": timing,
+    })
+}
+
+/// One pair as a line of the text report.
+fn pair_line(p: &Value) -> String {
+    format!(
+        "{} at {} m ({} triangles, D(M) {:.4e} m2, {} B) + texture at {} ({} leaves, D(T) {}, {} B) = {} B, D {:.6e}",
+        p["hierarchy"].as_str().unwrap_or(""),
+        p["tolerance_m"],
+        p["triangles"],
+        p["d_mesh_m2"].as_f64().unwrap_or(0.0),
+        p["mesh_bytes"],
+        p["texture_tolerance"],
+        p["leaves"],
+        p["d_texture"],
+        p["texture_bytes"],
+        p["bytes"],
+        p["distortion"].as_f64().unwrap_or(0.0)
+    )
+}
+
+fn print_text(r: &Value) {
+    let i = &r["image"];
+    println!(
+        "dem         {} ({})",
+        r["dem"].as_str().unwrap_or(""),
+        i["dem_crs"].as_str().unwrap_or("")
+    );
+    println!(
+        "image       {} ({}, bands {}, {}), placed by {}",
+        i["image"].as_str().unwrap_or(""),
+        i["format"].as_str().unwrap_or(""),
+        i["bands"].as_str().unwrap_or(""),
+        i["image_crs"].as_str().unwrap_or(""),
+        i["placement"].as_str().unwrap_or("")
+    );
+    println!("crs         {}", i["crs_rule"].as_str().unwrap_or(""));
+    println!(
+        "texture     {} x {} texels, bilinear per channel",
+        i["texture_size"][0], i["texture_size"][1]
+    );
+    let n = |k: &str| r[k].as_array().map_or(0, Vec::len);
+    println!(
+        "lists       {} meshes, {} textures",
+        n("meshes"),
+        n("textures")
+    );
+    println!(
+        "budget      {} bytes ({} kept for the GLB frame)",
+        r["budget_bytes"], r["frame_reserve_bytes"]
+    );
+    println!("optimum     {}", pair_line(&r["optimum"]));
+    match r["greedy"].is_null() {
+        true => println!("greedy      no pair (every fitting texture is smaller than its mesh)"),
+        false => println!(
+            "greedy      {}\ngap         {:.6e} ({:.2}% above the optimum)",
+            pair_line(&r["greedy"]),
+            r["greedy_gap"].as_f64().unwrap_or(0.0),
+            100.0 * r["greedy_gap_relative"].as_f64().unwrap_or(0.0)
+        ),
+    }
+    let t = &r["timing"];
+    println!(
+        "time        read {:.1} ms, lists {:.1} ms, choose {:.1} us, every budget ({}) {:.1} us, write {:.1} ms",
+        t["read_ms"].as_f64().unwrap_or(0.0),
+        t["lists_ms"].as_f64().unwrap_or(0.0),
+        t["choose_us"].as_f64().unwrap_or(0.0),
+        t["sweep_budgets"],
+        t["sweep_us"].as_f64().unwrap_or(0.0),
+        t["write_ms"].as_f64().unwrap_or(0.0)
+    );
+    if let Some(out) = r["output"].as_str() {
+        println!(
+            "wrote       {out} ({} bytes, {})",
+            r["glb_bytes"],
+            r["picked"].as_str().unwrap_or("")
+        );
+    }
+}
+
+/// `cota mesh --texture`: writes `mesh` as a textured GLB with the whole
+/// image draped. Returns `Ok(false)` when no texture was asked for.
+pub fn write_draped(
+    t: &TextureArgs,
+    out: &Path,
+    grid: &HeightGrid,
+    mesh: &Mesh,
+    opts: &ExportOptions,
+) -> anyhow::Result<bool> {
+    let Some(image) = &t.texture else {
+        return Ok(false);
+    };
+    let (texture, _) = drape_image(grid, image, &t.image)?;
+    let png = encode_png(&texture)?;
+    write_atomically(out, |w| {
+        write_glb_textured(w, mesh, grid, &png, opts).map(|_| ())
+    })?;
+    Ok(true)
+}
+
+/// `--texture` needs a .glb output and a plain triangle list.
+pub fn check_texture(
+    t: &TextureArgs,
+    out: Option<&Path>,
+    strip: bool,
+    quantize: bool,
+) -> anyhow::Result<()> {
+    if t.texture.is_none() {
+        return Ok(());
+    }
+    match out {
+        Some(o) => check_glb_output(o, "--texture writes a textured glTF")?,
+        None => anyhow::bail!("--texture: expected -o OUT.glb, found no output"),
+    }
+    if strip || quantize {
+        anyhow::bail!("--texture: expected a float triangle list, found --strip or --quantize");
+    }
+    Ok(())
+}
+
+/// A writable `.glb` output path (`what` says why it must be one).
+fn check_glb_output(out: &Path, what: &str) -> anyhow::Result<()> {
+    if crate::mesh::check_output(out, None)? != cota_io::export::MeshFormat::Glb {
+        anyhow::bail!("{}: {what}, expected a .glb output", out.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,148 @@
+"""Type stubs of the cota package (the extension module cota._cota)."""
+
+import os
+from typing import Literal, Sequence, TypedDict, Union
+
+import numpy as np
+import numpy.typing as npt
+
+_Path = Union[str, "os.PathLike[str]"]
+
+class Metrics(TypedDict):
+    """Exact error of a mesh against its grid, over every sample."""
+
+    max_error_m: float
+    max_error_at: tuple[int, int]  # (column, row)
+    rmse_m: float
+    mean_abs_error_m: float
+    samples: int
+    uncovered: int
+
+class GeoRef(TypedDict):
+    crs: str  # "EPSG:4326", a description, or "unknown"
+    origin_x: float
+    origin_y: float
+    pixel_x: float
+    pixel_y: float
+    pixel_is: Literal["area", "point"]
+    known: bool
+
+class CotaError(Exception):
+    """Base class of cota's errors."""
+
+class ReadError(CotaError):
+    """A DEM file could not be read or joined (the message names the file)."""
+
+class MeshError(CotaError):
+    """A grid could not be prepared or meshed."""
+
+class CheckError(CotaError):
+    """The invariant checker found a violation."""
+
+class WriteError(CotaError):
+    """A mesh file could not be written (nothing is left behind)."""
+
+def read(paths: Union[_Path, Sequence[_Path]], fill: bool = True) -> Dem:
+    """Read one DEM file or several adjacent tiles into one grid.
+
+    ``fill=True`` fills voids harmonically (as ``cota mesh``); ``fill=False``
+    leaves them NaN. Raises ReadError. Releases the GIL.
+    """
+
+class Dem:
+    """A DEM read by ``cota.read``."""
+
+    @property
+    def heights(self) -> npt.NDArray[np.float32]:
+        """Heights in metres, shape (rows, columns), row 0 north; read-only."""
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def voids(self) -> int:
+        """Void samples before any fill."""
+    @property
+    def filled(self) -> bool: ...
+    @property
+    def files(self) -> list[str]: ...
+    @property
+    def cell_size_m(self) -> tuple[float, float]: ...
+    @property
+    def georef(self) -> GeoRef: ...
+    def bitree(self) -> Bitree:
+        """The error hierarchy of this DEM (shares its grid). Raises MeshError on voids."""
+
+class Bitree:
+    """Exact errors of the right-triangle hierarchy of a grid, built once."""
+
+    def __init__(
+        self,
+        heights: npt.NDArray[Union[np.float32, np.float64, np.int16]],
+        cell_size_m: float = 30.0,
+        voids: Literal["fill", "refuse"] = "fill",
+        nodata: Union[float, None] = None,
+    ) -> None:
+        """Build from a 2-D array (rows x columns, row 0 north), any strides.
+
+        float64 is rounded to float32; int16 is exact. NaN (and values equal
+        to ``nodata``) are voids: filled harmonically with ``voids="fill"``,
+        refused (MeshError) with ``voids="refuse"``; an all-NaN array raises
+        MeshError. Wrong dtype: TypeError; wrong ndim or empty: ValueError.
+        """
+    def extract(
+        self,
+        *,
+        max_error: Union[float, None] = None,
+        max_triangles: Union[int, None] = None,
+        tin: bool = False,
+    ) -> Mesh:
+        """The coarsest conforming mesh within ``max_error`` m at every sample,
+        or the most accurate with at most ``max_triangles`` triangles.
+        ``tin=True``: cota's irregular TIN under the same exact bound (fewer
+        triangles, slower)."""
+    def check(self, mesh: Mesh, bound: float) -> Metrics:
+        """Prove coverage, no T-junction and |error| <= bound at every sample
+        (plus, for a TIN or a mesh from arrays, no vertex inside an edge and
+        every vertex used); raises CheckError."""
+    def metrics(self, mesh: Mesh) -> Metrics:
+        """Exact error of ``mesh`` over every sample."""
+    def mesh_from_arrays(self, vertices: npt.ArrayLike, triangles: npt.ArrayLike) -> Mesh:
+        """A Mesh of this grid from another mesher's arrays (vertices: integer column,
+        row in the first two columns; heights are the grid's), to measure or check it.
+        Its ``threshold_m`` is NaN. Raises ValueError for a vertex off the samples or
+        an index out of range."""
+    @property
+    def heights(self) -> npt.NDArray[np.float32]:
+        """The (filled) heights built on; read-only."""
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def voids_filled(self) -> int: ...
+
+class Mesh:
+    """A conforming mesh of a grid, every vertex on a sample."""
+
+    @property
+    def vertices(self) -> npt.NDArray[np.float64]:
+        """(n, 3): column, row (from the north), height in metres; read-only."""
+    @property
+    def triangles(self) -> npt.NDArray[np.uint32]:
+        """(m, 3) indices into ``vertices``, counter-clockwise from above; read-only."""
+    @property
+    def threshold_m(self) -> float: ...
+    @property
+    def vertex_count(self) -> int: ...
+    @property
+    def triangle_count(self) -> int: ...
+    def write(
+        self,
+        path: _Path,
+        *,
+        coords: Literal["local", "grid"] = "local",
+        quantize: bool = False,
+    ) -> None:
+        """Write .obj/.ply/.stl/.glb atomically; raises WriteError."""
+    def __len__(self) -> int: ...
