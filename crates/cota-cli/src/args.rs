@@ -43,7 +43,12 @@ pub struct InputArgs {
     #[arg(long, value_enum)]
     pub encoding: Option<Encoding>,
     /// Metres per gray level for --encoding gray16.
-    #[arg(long, default_value_t = 1.0, value_name = "M")]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "M",
+        allow_negative_numbers = true
+    )]
     pub gray_scale_m: f64,
     /// Metres added to gray levels for --encoding gray16.
     #[arg(
@@ -54,7 +59,12 @@ pub struct InputArgs {
     )]
     pub gray_offset_m: f64,
     /// Cell size in metres for inputs without georeference (PNG).
-    #[arg(long, default_value_t = 1.0, value_name = "M")]
+    #[arg(
+        long,
+        default_value_t = 1.0,
+        value_name = "M",
+        allow_negative_numbers = true
+    )]
     pub cell_size_m: f64,
     /// Band to read from a multi-band raster (1-based).
     #[arg(long, value_name = "N")]
@@ -79,6 +89,11 @@ pub struct InputArgs {
     /// Where adjacent tiles overlap and disagree: their mean, or the first file's value.
     #[arg(long, value_enum, default_value_t = Seam::Mean)]
     pub seam: Seam,
+    /// Largest grid one file may declare, in samples; larger files are refused
+    /// before anything is allocated. Default: from the machine's memory (16
+    /// bytes per sample, at most 2^30); a gzipped .hgt at most one 3601² tile.
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    pub max_samples: Option<u64>,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -135,12 +150,17 @@ pub struct MeshArgs {
     )]
     pub max_error: Option<f64>,
     /// At most this many triangles, with the smallest error that allows.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub max_triangles: Option<usize>,
     /// Output mesh: .obj, .ply, .stl or .glb (written atomically). Without it only
     /// the report is printed.
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
+    /// Replace OUT even when it is a read-only file (refused otherwise). A
+    /// symbolic link OUT is written through: its target is replaced, the
+    /// link kept.
+    #[arg(long)]
+    pub force: bool,
     /// Output coordinates.
     #[arg(long, value_enum, default_value_t = CoordsArg::Local)]
     pub coords: CoordsArg,
@@ -205,7 +225,7 @@ pub struct MeshArgs {
 /// How `cota mesh --strip` makes its strip (`cota_core::strip::StripMethod`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum StripMethodArg {
-    /// Rows of re-triangulated unit cells, the rest guided (the default).
+    /// Rows of re-triangulated unit cells, the rest guided (`mesh --strip`'s default).
     Cells,
     /// Greedy growth guided by the bitree traversal.
     Guided,
@@ -261,38 +281,73 @@ pub struct RefineArgs {
     /// Tolerance of curvature and light (1/m, accumulated curvature) and of
     /// paper003 (1/m2). Default: 1e-4 of the grid's total accumulated
     /// curvature (paper003: divided by the terrain's diagonal in metres).
-    #[arg(long, value_name = "T")]
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
     pub tolerance: Option<f64>,
     /// Observer position in metres, local frame (x east, y north, z up, origin
     /// at the south-west sample). Required by view, paper001 and paper003.
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_negative_numbers = true)]
     pub observer: Option<[f64; 3]>,
     /// View direction (view) or direction of motion (paper003).
-    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_vec3, allow_negative_numbers = true, default_value = "0,1,0")]
+    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_direction, allow_negative_numbers = true, default_value = "0,1,0")]
     pub look: [f64; 3],
     /// Vertical field of view in degrees (view).
-    #[arg(long, value_name = "DEG", default_value_t = 60.0)]
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 60.0,
+        allow_negative_numbers = true
+    )]
     pub fov_deg: f64,
     /// Viewport height in pixels (view).
-    #[arg(long, value_name = "PX", default_value_t = 1080.0)]
+    #[arg(
+        long,
+        value_name = "PX",
+        default_value_t = 1080.0,
+        allow_negative_numbers = true
+    )]
     pub viewport_px: f64,
     /// Largest projected vertical error in pixels (view).
-    #[arg(long, value_name = "PX", default_value_t = 1.0)]
+    #[arg(
+        long,
+        value_name = "PX",
+        default_value_t = 1.0,
+        allow_negative_numbers = true
+    )]
     pub max_error_px: f64,
     /// Direction towards the light (light).
-    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_vec3, allow_negative_numbers = true, default_value = "1,1,1")]
+    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_direction, allow_negative_numbers = true, default_value = "1,1,1")]
     pub light: [f64; 3],
     /// Weight of pure curvature in [0, 1] (light): accept when K·(alpha + (1 − alpha)·I) <= T.
-    #[arg(long, value_name = "A", default_value_t = 0.5)]
+    #[arg(
+        long,
+        value_name = "A",
+        default_value_t = 0.5,
+        allow_negative_numbers = true
+    )]
     pub alpha: f64,
     /// Size factor: fraction of the terrain's diagonal (size, paper001).
-    #[arg(long, value_name = "F", default_value_t = 0.01)]
+    #[arg(
+        long,
+        value_name = "F",
+        default_value_t = 0.01,
+        allow_negative_numbers = true
+    )]
     pub size_factor: f64,
     /// Distance factor: fraction of the largest distance (paper001).
-    #[arg(long, value_name = "F", default_value_t = 0.8)]
+    #[arg(
+        long,
+        value_name = "F",
+        default_value_t = 0.8,
+        allow_negative_numbers = true
+    )]
     pub distance_factor: f64,
     /// Curvature factor: fraction of the grid's accumulated curvature (paper001).
-    #[arg(long, value_name = "F", default_value_t = 0.2)]
+    #[arg(
+        long,
+        value_name = "F",
+        default_value_t = 0.2,
+        allow_negative_numbers = true
+    )]
     pub curvature_factor: f64,
 }
 
@@ -364,6 +419,17 @@ fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([*x, *y, *z]),
         _ => Err(format!("expected three finite numbers X,Y,Z, found {s:?}")),
     }
+}
+
+/// A direction: three finite numbers, not all zero.
+fn parse_direction(s: &str) -> Result<[f64; 3], String> {
+    let v = parse_vec3(s)?;
+    if v.iter().all(|c| *c == 0.0) {
+        return Err(format!(
+            "expected a direction DX,DY,DZ (not all zero), found {s:?}"
+        ));
+    }
+    Ok(v)
 }
 
 /// A bitree mode compared by `cota compare`.

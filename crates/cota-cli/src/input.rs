@@ -86,20 +86,93 @@ fn read_options(a: &InputArgs) -> anyhow::Result<ReadOptions> {
         .with_gray(a.gray_scale_m, a.gray_offset_m)
         .with_cell_size_m(a.cell_size_m)
         .with_band(a.band)
+        .with_max_samples(a.max_samples)
         .with_array(array)
         .with_tiles(tiles))
+}
+
+/// A number for a message: plain when of ordinary size, else in scientific
+/// notation (never hundreds of digits).
+pub fn num(v: f64) -> String {
+    let a = v.abs();
+    if v.is_finite() && a != 0.0 && !(1e-4..1e9).contains(&a) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// Refuses non-finite and out-of-range reading options, by name.
+fn check_options(a: &InputArgs) -> anyhow::Result<()> {
+    for (name, v) in [
+        ("--gray-scale-m", a.gray_scale_m),
+        ("--gray-offset-m", a.gray_offset_m),
+        ("--cell-size-m", a.cell_size_m),
+    ] {
+        if !v.is_finite() {
+            anyhow::bail!("{name}: expected a finite number of metres, found {v}");
+        }
+    }
+    let cell = a.cell_size_m;
+    if cell <= 0.0 || !(cell as f32).is_normal() || !((cell * 65536.0) as f32).is_finite() {
+        anyhow::bail!(
+            "--cell-size-m: expected a positive number of metres that f32 holds (about 1e-30 to 1e30), found {}",
+            num(cell)
+        );
+    }
+    Ok(())
+}
+
+/// Refuses a grid whose cell size (in metres) underflows or overflows f32,
+/// naming the files.
+fn check_cell_size(grid: &HeightGrid, files: &[FileInfo]) -> anyhow::Result<()> {
+    let [cx, cy] = grid.cell_size_m();
+    for c in [cx, cy] {
+        if !(c as f32).is_normal()
+            || !((c * grid.width().max(grid.height()) as f64) as f32).is_finite()
+        {
+            anyhow::bail!(
+                "{}: expected a cell size f32 holds (about 1e-30 to 1e30 m), found {} m",
+                name(files),
+                num(c)
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The cell size assumed for an input without georeference (PNG, a `.hgt`
+/// without a position in its name), if any.
+pub fn assumed_cell_m(files: &[FileInfo]) -> Option<f64> {
+    files
+        .iter()
+        .find(|f| !f.georef.known)
+        .map(|f| f.cell_size_m[0])
+}
+
+/// Warns (stderr) for each SRTM tile whose name gave no position.
+fn warn_unpositioned(files: &[FileInfo]) {
+    for f in files {
+        let srtm = matches!(
+            f.format,
+            cota_io::Format::SrtmHgt | cota_io::Format::SrtmHgtZip
+        );
+        if srtm && !f.georef.known {
+            eprintln!(
+                "cota: warning: {}: no position in the name (expected [NS]dd[EW]ddd, e.g. N45E006.hgt): \
+                 read without georeference, at an assumed {} m cell",
+                f.path.display(),
+                num(f.cell_size_m[0])
+            );
+        }
+    }
 }
 
 /// Reads every input (or the bundled sample) and mosaics them.
 pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
     let t0 = Instant::now();
     let opts = read_options(a)?;
-    if a.cell_size_m.is_nan() || a.cell_size_m <= 0.0 {
-        anyhow::bail!(
-            "--cell-size-m: expected a positive number of metres, found {}",
-            a.cell_size_m
-        );
-    }
+    check_options(a)?;
     let policy = match a.seam {
         Seam::Mean => SeamPolicy::Mean,
         Seam::First => SeamPolicy::First,
@@ -120,6 +193,8 @@ pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
         pb.finish_and_clear();
         r
     };
+    warn_unpositioned(&region.files);
+    check_cell_size(&region.grid, &region.files)?;
     Ok(Input {
         grid: region.grid,
         files: region.files,

@@ -184,11 +184,11 @@ fn validate(a: &MeshArgs) -> anyhow::Result<()> {
     crate::pair::check_texture(&a.texture, a.output.as_deref(), a.strip, a.quantize)?;
     if let Some(e) = a.max_error {
         if e.is_nan() || e < 0.0 {
-            anyhow::bail!("--max-error: expected 0 m or more, found {e} m");
+            anyhow::bail!(
+                "--max-error: expected 0 m or more, found {} m",
+                crate::input::num(e)
+            );
         }
-    }
-    if a.max_triangles == Some(0) {
-        anyhow::bail!("--max-triangles: expected at least 2 triangles, found 0");
     }
     if !is_fast(a) {
         if a.max_triangles.is_some() {
@@ -257,7 +257,10 @@ fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f6
     }
     let build_ms = ms(t);
     let t = Instant::now();
-    let meshed = mesher.mesh(&plan)?;
+    let meshed = mesher.mesh(&plan).map_err(|e| match e {
+        cota_core::MeshError::BudgetTooSmall { .. } => anyhow::anyhow!("--max-triangles: {e}"),
+        e => e.into(),
+    })?;
     Ok((meshed, build_ms, criterion_ms + ms(t)))
 }
 
@@ -271,6 +274,7 @@ fn export_options(a: &MeshArgs) -> ExportOptions {
         .with_coords(coords)
         .with_base_m(a.base_m)
         .with_quantize(a.quantize)
+        .with_replace_read_only(a.force)
 }
 
 /// With `--quantize`, the plan of the quantized GLB (planning the file
@@ -359,10 +363,10 @@ fn write(
         return Ok(ms(t));
     }
     match (strip, a.strip, quant) {
-        (Some(s), true, _) => cota_io::export::write_atomically(out, |w| {
+        (Some(s), true, _) => cota_io::export::write_atomically_forced(out, a.force, |w| {
             cota_io::export::write_glb_strip(w, &s.mesh, &s.strip.indices, grid, &eo)
         })?,
-        (_, _, Some(q)) => cota_io::export::write_atomically(out, |w| {
+        (_, _, Some(q)) => cota_io::export::write_atomically_forced(out, a.force, |w| {
             cota_io::export::write_glb_quantized(w, &m.mesh, grid, &eo, q)
         })?,
         _ => write_mesh(out, &m.mesh, grid, &eo)?,
@@ -370,23 +374,94 @@ fn write(
     Ok(ms(t))
 }
 
+/// What [`strip_and_write`] made, and how long each step took (ms).
+struct Finished<'m> {
+    metrics: Metrics,
+    strip: Option<MeshStrip<'m>>,
+    measure_ms: f64,
+    strip_ms: f64,
+    write_ms: f64,
+}
+
+/// The metrics and their time (ms) when they must be taken before the
+/// output is written (see [`strip_and_write`]): with `--check` (the output is
+/// written only after the checker passed) and with `--quantize` (the metrics
+/// are taken on the written heights, which swaps them into the mesh for the
+/// while). `None` otherwise.
+fn measure_first(
+    a: &MeshArgs,
+    grid: &HeightGrid,
+    m: &mut Meshed,
+    quant: Option<&GlbQuantization>,
+) -> anyhow::Result<Option<(Metrics, f64)>> {
+    if !a.check && quant.is_none() {
+        return Ok(None);
+    }
+    let t = Instant::now();
+    let metrics = measure_mesh(a, grid, m, quant)?;
+    Ok(Some((metrics, ms(t))))
+}
+
+/// Strips the mesh (when asked) and writes it; measures it at the same time
+/// unless [`measure_first`] already did.
+///
+/// The default report's metrics are computed while the output is written:
+/// the writer runs on a thread of its own (its encoding shares rayon's pool,
+/// and its `fsync` waits on the disk while the pool measures). The figures and
+/// the bytes written are the same as in sequence.
+fn strip_and_write<'m>(
+    a: &MeshArgs,
+    grid: &HeightGrid,
+    m: &'m Meshed,
+    quant: Option<&GlbQuantization>,
+    measured: Option<(Metrics, f64)>,
+) -> anyhow::Result<Finished<'m>> {
+    let strip_then_write = || -> anyhow::Result<_> {
+        let t = Instant::now();
+        let strip = strip(a, grid, m)?;
+        let strip_ms = ms(t);
+        let write_ms = write(a, grid, m, strip.as_ref(), quant)?;
+        Ok((strip, strip_ms, write_ms))
+    };
+    let ((metrics, measure_ms), (strip, strip_ms, write_ms)) = match measured {
+        Some(done) => (done, strip_then_write()?),
+        None => std::thread::scope(|s| -> anyhow::Result<_> {
+            let writer = s.spawn(strip_then_write);
+            let t = Instant::now();
+            let metrics = measure(grid, &m.mesh);
+            let measure_ms = ms(t);
+            let written = writer
+                .join()
+                .map_err(|_| anyhow::anyhow!("the writer thread stopped (a bug in cota)"))??;
+            Ok(((metrics, measure_ms), written))
+        })?,
+    };
+    Ok(Finished {
+        metrics,
+        strip,
+        measure_ms,
+        strip_ms,
+        write_ms,
+    })
+}
+
 pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
+    let started = Instant::now();
     validate(a)?;
     let input = load(&a.input)?;
     let mut grid = input.grid;
     let nodata = grid.void_count();
     let t = Instant::now();
-    let fill = crate::input::fill(&mut grid, a.voids)?;
+    let files = crate::input::name(&input.files);
+    let fill = crate::input::fill(&mut grid, a.voids).with_context(|| files.clone())?;
     let fill_ms = ms(t);
-    let (mut m, build_ms, extract_ms) = mesh_grid(a, &grid)?;
+    let (mut m, build_ms, extract_ms) = mesh_grid(a, &grid).with_context(|| files.clone())?;
     let (quant, quantize_ms) = quantization(a, &grid, &m)?;
-    let t = Instant::now();
-    let metrics = measure_mesh(a, &grid, &mut m, quant.as_ref())?;
-    let measure_ms = ms(t);
-    let t = Instant::now();
-    let strip = strip(a, &grid, &m)?;
-    let strip_ms = ms(t);
-    let write_ms = write(a, &grid, &m, strip.as_ref(), quant.as_ref())? + quantize_ms;
+    let measured = measure_first(a, &grid, &mut m, quant.as_ref())?;
+    let done = strip_and_write(a, &grid, &m, quant.as_ref(), measured)?;
+    let (metrics, strip, measure_ms, strip_ms) =
+        (done.metrics, done.strip, done.measure_ms, done.strip_ms);
+    let write_ms = done.write_ms + quantize_ms;
     let written_bound = m
         .bound_m
         .zip(quant.as_ref())
@@ -394,6 +469,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let mesh = &m.mesh;
     let report = json!({
         "input": crate::input::name(&input.files),
+        "assumed_cell_size_m": crate::input::assumed_cell_m(&input.files),
         "width": grid.width(),
         "height": grid.height(),
         "voids_filled": fill.filled,
@@ -423,6 +499,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "extract_ms": extract_ms,
         "measure_ms": measure_ms,
         "write_ms": write_ms,
+        "total_ms": ms(started),
         "strip_method": strip.as_ref().map(|s| s.method.name()),
         "strip_refs": strip.as_ref().map(|s| s.strip.refs()),
         "strip_refs_per_triangle": strip.as_ref().map(|s| s.strip.refs_per_triangle()),
@@ -452,6 +529,12 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
         r["width"],
         r["height"]
     );
+    if let Some(c) = r["assumed_cell_size_m"].as_f64() {
+        println!(
+            "cell        assumed {} m: the input has no georeference (set it with --cell-size-m)",
+            crate::input::num(c)
+        );
+    }
     if let Some(s) = seams {
         println!(
             "seams       largest difference {} m over {} samples",
@@ -503,13 +586,14 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
     );
     print_strip_and_check(r);
     println!(
-        "time        read {:.1} ms, fill {:.1} ms, build {:.1} ms, extract {:.2} ms, measure {:.1} ms, write {:.1} ms",
+        "time        read {:.1} ms, fill {:.1} ms, build {:.1} ms, extract {:.2} ms, measure {:.1} ms, write {:.1} ms, total {:.1} ms",
         f("read_ms"),
         f("fill_ms"),
         f("build_ms"),
         f("extract_ms"),
         f("measure_ms"),
-        f("write_ms")
+        f("write_ms"),
+        f("total_ms")
     );
     if let Some(out) = r["output"].as_str() {
         println!("wrote       {out}");

@@ -42,6 +42,47 @@ fn default_run_meshes_the_bundled_sample_within_bound() {
     assert_eq!(&bytes[..4], b"glTF");
 }
 
+/// The default report measures while it writes (the writer on its own
+/// thread); `--check` measures first, then writes. Both must give the same
+/// bytes and the same figures, with and without a strip.
+#[test]
+fn measuring_while_writing_changes_neither_bytes_nor_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, extra) in [("m.glb", None), ("s.glb", Some("--strip")), ("m.ply", None)] {
+        let run = |check: bool| {
+            let out = dir.path().join(format!("{check}-{name}"));
+            let mut args = vec![
+                "mesh",
+                "--max-error",
+                "5",
+                "--json",
+                "-o",
+                out.to_str().unwrap(),
+            ];
+            args.extend(extra);
+            if check {
+                args.push("--check");
+            }
+            (json(&cota(&args)), std::fs::read(&out).unwrap())
+        };
+        let ((overlapped, a), (sequential, b)) = (run(false), run(true));
+        assert!(a == b, "{name}: the bytes differ");
+        for k in [
+            "max_error_m",
+            "rmse_m",
+            "mean_abs_error_m",
+            "sse_m2",
+            "volume_m3",
+        ] {
+            assert_eq!(overlapped[k], sequential[k], "{name}: {k}");
+        }
+        assert_eq!(overlapped["checked"], false);
+        let total = overlapped["total_ms"].as_f64().unwrap();
+        assert!(total >= overlapped["write_ms"].as_f64().unwrap());
+        assert!(total >= overlapped["measure_ms"].as_f64().unwrap());
+    }
+}
+
 #[test]
 fn budget_mode_uses_most_of_the_budget() {
     let o = cota(&["mesh", "--max-triangles", "50000", "--json"]);

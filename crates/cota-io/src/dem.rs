@@ -55,6 +55,13 @@ pub struct ReadOptions {
     /// Which tiles to read from a tile archive (PMTiles): a zoom and a box.
     /// `None` refuses an archive (naming its zooms and bounds). Default: `None`.
     pub tiles: Option<TileRequest>,
+    /// Largest grid, in samples, one file may declare; larger headers are
+    /// refused before anything is allocated, and compressed inputs stop
+    /// decompressing beyond it. `None`: the machine's default
+    /// ([`crate::limits::default_max_samples`]; a gzipped `.hgt` then at most
+    /// one 3601² tile). Never above [`cota_core::grid::MAX_SAMPLES`].
+    /// Default: `None`.
+    pub max_samples: Option<u64>,
 }
 
 /// The name of an array in a NumPy `.npz` archive (at most
@@ -121,6 +128,7 @@ impl ReadOptions {
         band: None,
         array: None,
         tiles: None,
+        max_samples: None,
     };
 
     /// Sets [`ReadOptions::png_encoding`].
@@ -151,6 +159,12 @@ impl ReadOptions {
     /// Sets [`ReadOptions::tiles`].
     pub const fn with_tiles(mut self, tiles: Option<TileRequest>) -> Self {
         self.tiles = tiles;
+        self
+    }
+
+    /// Sets [`ReadOptions::max_samples`].
+    pub const fn with_max_samples(mut self, max_samples: Option<u64>) -> Self {
+        self.max_samples = max_samples;
         self
     }
 

@@ -57,8 +57,13 @@ pub enum ReadErrorKind {
         /// Which value and what is supported instead.
         detail: String,
     },
-    /// The header promises a grid too large to allocate.
-    #[error("expected at most {max} samples, found a header of {width}x{height}")]
+    /// The header promises a grid over the sample limit
+    /// ([`ReadOptions::max_samples`](crate::ReadOptions::max_samples)).
+    #[error(
+        "too large: a header of {width}x{height} ({} samples), over the limit of {max} samples \
+         (raise it with --max-samples)",
+        u128::from(*width) * u128::from(*height)
+    )]
     TooLarge {
         /// Width from the header.
         width: u64,
@@ -66,6 +71,25 @@ pub enum ReadErrorKind {
         height: u64,
         /// The limit.
         max: u64,
+    },
+    /// Memory for the grid could not be allocated.
+    #[error("too large: cannot allocate {bytes} bytes for {what}")]
+    OutOfMemory {
+        /// What was being allocated.
+        what: String,
+        /// The bytes asked for.
+        bytes: u64,
+    },
+    /// A compressed input expands beyond what its content may be.
+    #[error(
+        "too large: {what} expands past {limit} bytes (the most its content may be within \
+         the sample limit; a decompression bomb, or raise the limit with --max-samples)"
+    )]
+    Expands {
+        /// The compressed input (e.g. "the gzip stream").
+        what: String,
+        /// The byte limit.
+        limit: u64,
     },
     /// The grid could not be built from what was read.
     #[error(transparent)]

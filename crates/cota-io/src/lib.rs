@@ -20,6 +20,7 @@ pub mod dem;
 pub mod error;
 pub mod export;
 pub mod image;
+pub mod limits;
 pub mod read;
 pub mod stream_file;
 

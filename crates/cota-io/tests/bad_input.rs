@@ -198,12 +198,16 @@ fn asc_with_absurd_dimensions() {
     assert!(matches!(kind, ReadErrorKind::TooLarge { .. }), "{msg}");
     assert_contains(
         &msg,
-        &["expected at most 2147483648 samples", "100000000x100000000"],
+        &["too large", "over the limit of", "100000000x100000000"],
     );
     // Within the limit but far beyond the file: counted, not allocated.
     let text = format!("ncols 40000\nnrows 40000\n{tail}");
     let p = write_file(dir.path(), "big.asc", text.as_bytes());
-    assert_contains(&error(&p), &["expected 1600000000 values", "found 3"]);
+    let all = ReadOptions::DEFAULT.with_max_samples(Some(cota_core::grid::MAX_SAMPLES));
+    assert_contains(
+        &error_of(&p, &all).0,
+        &["expected 1600000000 values", "found 3"],
+    );
 }
 
 /// A CRC-32 (ISO-HDLC), for hand-made PNG chunks.
@@ -247,13 +251,11 @@ fn png_with_absurd_dimensions() {
     let p = write_file(dir.path(), "huge.png", &png_header_only(100_000, 100_000));
     let (msg, kind) = error_of(&p, &ReadOptions::DEFAULT);
     assert!(matches!(kind, ReadErrorKind::TooLarge { .. }), "{msg}");
-    assert_contains(
-        &msg,
-        &["expected at most 2147483648 samples", "100000x100000"],
-    );
+    assert_contains(&msg, &["too large", "over the limit of", "100000x100000"]);
     let p = write_file(dir.path(), "big.png", &png_header_only(40_000, 40_000));
+    let all = ReadOptions::DEFAULT.with_max_samples(Some(cota_core::grid::MAX_SAMPLES));
     assert_contains(
-        &error(&p),
+        &error_of(&p, &all).0,
         &["40000x40000 pixels", "found a file of 45 bytes"],
     );
 }
@@ -362,6 +364,11 @@ fn zips_with_forged_sizes() {
     let p = write_file(dir.path(), "bomb.hgt.zip", &z);
     assert_contains(
         &error(&p),
+        &["too large", "46000x46000", "over the limit of"],
+    );
+    let all = ReadOptions::DEFAULT.with_max_samples(Some(cota_core::grid::MAX_SAMPLES));
+    assert_contains(
+        &error_of(&p, &all).0,
         &["expected at most", "found 4232000000 bytes declared"],
     );
     // Declared a 5×5 tile, holding a 3×3 one.

@@ -1120,3 +1120,54 @@ fn write_speed() {
         }
     }
 }
+
+/// A symbolic link is written through (issue 23): the file it points to gets
+/// the new content, atomically next to it, and the link stays a link.
+#[cfg(unix)]
+#[test]
+fn writing_through_a_symlink_keeps_the_link() {
+    use cota_io::export::write_atomically;
+    let dir = tempfile::tempdir().unwrap();
+    let real_dir = dir.path().join("real");
+    std::fs::create_dir(&real_dir).unwrap();
+    let target = real_dir.join("mesh.obj");
+    std::fs::write(&target, b"old").unwrap();
+    let link = dir.path().join("link.obj");
+    std::os::unix::fs::symlink("real/mesh.obj", &link).unwrap();
+    write_atomically(&link, |w| Ok(w.write_all(b"new")?)).unwrap();
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(std::fs::read(&target).unwrap(), b"new");
+    // No temporary file left in either directory.
+    let names = |d: &Path| std::fs::read_dir(d).unwrap().count();
+    assert_eq!((names(dir.path()), names(&real_dir)), (2, 1));
+    // A dangling link creates its target.
+    let dangling = dir.path().join("dangling.obj");
+    std::os::unix::fs::symlink("real/new.obj", &dangling).unwrap();
+    write_atomically(&dangling, |w| Ok(w.write_all(b"made")?)).unwrap();
+    assert_eq!(std::fs::read(real_dir.join("new.obj")).unwrap(), b"made");
+}
+
+/// A read-only existing file is refused, naming it, unless forced (issue 23).
+#[test]
+fn read_only_targets_need_force() {
+    use cota_io::export::{write_atomically, write_atomically_forced};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("kept.obj");
+    std::fs::write(&path, b"old").unwrap();
+    let mut perms = std::fs::metadata(&path).unwrap().permissions();
+    perms.set_readonly(true);
+    std::fs::set_permissions(&path, perms).unwrap();
+    let err = write_atomically(&path, |w| Ok(w.write_all(b"new")?)).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("kept.obj") && msg.contains("read-only"),
+        "{msg}"
+    );
+    assert!(msg.contains("--force"), "{msg}");
+    assert_eq!(std::fs::read(&path).unwrap(), b"old");
+    write_atomically_forced(&path, true, |w| Ok(w.write_all(b"new")?)).unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), b"new");
+}

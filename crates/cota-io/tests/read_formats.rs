@@ -361,7 +361,7 @@ fn npy_bad_input() {
         (
             "huge.npy",
             formats::npy("<f4", false, &[1 << 20, 1 << 20], &[0; 8]),
-            &["at most"],
+            &["too large"],
         ),
         (
             "trunc.npy",

@@ -172,8 +172,10 @@ impl Bitree<'_> {
         };
         // The coarsest mesh: only the splits the border forces.
         let top = INFINITE - 2;
-        let min = count(top);
-        if min > n {
+        if count(top) > n {
+            // Counted in full (not stopped past `n`), so the error states the true minimum.
+            let rule = SplitRule::at_code(top);
+            let min = count_tasks(self, &rule, &self.tasks(&rule), usize::MAX);
             let g = self.grid();
             return Err(MeshError::BudgetTooSmall {
                 got: n,

@@ -10,9 +10,12 @@
 //! (best effort: some file systems refuse it), so the rename itself survives a
 //! crash.
 //!
-//! The rename replaces the directory entry: when the target is a symbolic
-//! link, the link itself is replaced by the new file (its old destination is
-//! left alone).
+//! Symbolic links are written through: when the target is a link (or a chain
+//! of them, dangling or not), the file it points to is written, atomically, by
+//! a temporary file next to *that* file, and the link is kept. An existing
+//! read-only target (the file the link points to, for a link) is refused
+//! unless the caller asks to replace it ([`write_atomically_forced`]; the
+//! CLI's `--force`): the rename itself would replace it silently.
 //!
 //! The temporary file is created with mode `0o666` less the process umask, the
 //! permissions an ordinary `File::create` would give, rather than the `0o600`
@@ -51,11 +54,33 @@ pub fn write_atomically<F>(path: &Path, encode: F) -> Result<(), WriteError>
 where
     F: FnOnce(&mut (dyn Write + Send)) -> Result<(), ExportError>,
 {
-    if path.is_dir() {
+    write_atomically_forced(path, false, encode)
+}
+
+/// [`write_atomically`], replacing an existing read-only target when
+/// `replace_read_only` (else that is an error naming the file).
+///
+/// # Errors
+/// As [`write_atomically`], and [`WriteError::Io`] (permission denied) for a
+/// read-only target unless `replace_read_only`.
+pub fn write_atomically_forced<F>(
+    path: &Path,
+    replace_read_only: bool,
+    encode: F,
+) -> Result<(), WriteError>
+where
+    F: FnOnce(&mut (dyn Write + Send)) -> Result<(), ExportError>,
+{
+    let resolved = resolve_links(path).map_err(|e| WriteError::io(path, e))?;
+    let target = resolved.as_path();
+    if target.is_dir() {
         return Err(WriteError::io(path, is_a_directory()));
     }
-    let dir = parent_dir(path);
-    let mut tmp = create_temp(path, dir)?;
+    if !replace_read_only && is_read_only(target) {
+        return Err(WriteError::io(path, read_only(path, target)));
+    }
+    let dir = parent_dir(target);
+    let mut tmp = create_temp(target, dir)?;
     {
         let mut w = BufWriter::with_capacity(BUFFER_BYTES, tmp.as_file_mut());
         encode(&mut w).map_err(|e| WriteError::export(path, e))?;
@@ -64,10 +89,49 @@ where
     tmp.as_file()
         .sync_all()
         .map_err(|e| WriteError::io(path, e))?;
-    tmp.persist(path)
+    tmp.persist(target)
         .map_err(|e| WriteError::io(path, e.error))?;
     sync_dir(dir);
     Ok(())
+}
+
+/// Most links followed before giving up (as Linux's `MAXSYMLINKS`).
+const MAX_LINKS: usize = 40;
+
+/// The file `path` names once symbolic links are followed (the path itself
+/// when it is no link); a dangling link gives the path it points to.
+fn resolve_links(path: &Path) -> io::Result<std::path::PathBuf> {
+    let mut p = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        match std::fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let to = std::fs::read_link(&p)?;
+                p = parent_dir(&p).join(to);
+            }
+            _ => return Ok(p),
+        }
+    }
+    Err(io::Error::other(format!(
+        "more than {MAX_LINKS} symbolic links to follow (a loop?)"
+    )))
+}
+
+/// True when `path` exists and its permissions forbid writing.
+fn is_read_only(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| m.permissions().readonly())
+}
+
+/// The error for a read-only target.
+fn read_only(path: &Path, target: &Path) -> io::Error {
+    let through = if target == path {
+        String::new()
+    } else {
+        format!(" (the link's target {})", target.display())
+    };
+    io::Error::new(
+        io::ErrorKind::PermissionDenied,
+        format!("the existing file{through} is read-only; use --force to replace it"),
+    )
 }
 
 /// The directory that holds `path` (`.` for a bare file name).

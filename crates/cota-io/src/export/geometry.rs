@@ -128,47 +128,89 @@ pub(crate) fn vertex_normals(mesh: &Mesh, frame: &Frame) -> Vec<[f32; 3]> {
 /// triangle order. `out` has one entry per vertex.
 ///
 /// In parallel and bit-identical to the sequential loop: the vertices are cut
-/// into one contiguous range per thread, and each thread walks every
-/// triangle in order, adding the face normals of those with a corner in its
-/// range. So each vertex sees the same additions in the same order (f64
-/// addition does not commute bit for bit), at the cost of each thread reading
-/// the whole index list.
+/// into a few contiguous parts per thread, and each part walks the triangles
+/// in order, adding the face normals of those with a corner in its range, so
+/// each vertex sees the same additions in the same order (f64 addition does
+/// not commute bit for bit). The triangles are first bounded by runs of
+/// [`RUN`] (the least and greatest vertex index of each run, one parallel
+/// pass), so that a part skips the runs that miss its range and walks those
+/// inside it without a test per corner: cota's meshes are numbered row by
+/// row and their triangles come in spatial order, so almost every run lies
+/// in one part, and each face normal is computed about once.
 pub(crate) fn for_each_normal_sum<T, F>(mesh: &Mesh, frame: &Frame, out: &mut [T], finish: F)
 where
     T: Send,
     F: Fn([f64; 3]) -> T + Sync,
 {
-    let parts = rayon::current_num_threads().clamp(1, 64);
+    let runs = run_bounds(&mesh.triangles);
+    let parts = (PARTS_PER_THREAD * rayon::current_num_threads()).clamp(1, 256);
     let per_part = out.len().div_ceil(parts).max(MIN_VERTICES_PER_PART);
     out.par_chunks_mut(per_part)
         .enumerate()
         .for_each(|(k, out)| {
-            let v0 = k * per_part;
-            let range = v0 as u64..(v0 + out.len()) as u64;
             let mut sum = vec![[0.0f64; 3]; out.len()];
-            for &t in &mesh.triangles {
-                if !t.iter().any(|&i| range.contains(&u64::from(i))) {
-                    continue;
-                }
-                let t = frame.orient(t);
-                let n = face_normal(triangle_points(mesh, frame, t));
-                for i in t {
-                    if range.contains(&u64::from(i)) {
-                        let s = &mut sum[i as usize - v0];
-                        s[0] += n[0];
-                        s[1] += n[1];
-                        s[2] += n[2];
-                    }
-                }
-            }
+            part_sums(mesh, frame, &runs, k * per_part, &mut sum);
             for (o, s) in out.iter_mut().zip(sum) {
                 *o = finish(s);
             }
         });
 }
 
-/// Fewest vertices worth a thread of their own in [`for_each_normal_sum`]
-/// (each part reads every triangle).
+/// Adds into `sum` (the vertices `v0..v0 + sum.len()`) the face normals of
+/// the triangles with a corner there, in triangle order.
+fn part_sums(mesh: &Mesh, frame: &Frame, runs: &[(u32, u32)], v0: usize, sum: &mut [[f64; 3]]) {
+    let (lo, hi) = (v0 as u64, (v0 + sum.len()) as u64);
+    let mut add = |i: u32, n: [f64; 3]| {
+        if let Some(s) = (i as usize).checked_sub(v0).and_then(|j| sum.get_mut(j)) {
+            s[0] += n[0];
+            s[1] += n[1];
+            s[2] += n[2];
+        }
+    };
+    for (r, &(a, b)) in runs.iter().enumerate() {
+        let (a, b) = (u64::from(a), u64::from(b));
+        if b < lo || a >= hi {
+            continue;
+        }
+        let inside = a >= lo && b < hi;
+        let end = ((r + 1) * RUN).min(mesh.triangles.len());
+        for &t in &mesh.triangles[r * RUN..end] {
+            if !inside && !t.iter().any(|&i| (lo..hi).contains(&u64::from(i))) {
+                continue;
+            }
+            let t = frame.orient(t);
+            let n = face_normal(triangle_points(mesh, frame, t));
+            for i in t {
+                add(i, n);
+            }
+        }
+    }
+}
+
+/// Triangles per run of [`run_bounds`].
+const RUN: usize = 256;
+
+/// The least and greatest vertex index of each run of [`RUN`] triangles
+/// (`(u32::MAX, 0)` for none).
+fn run_bounds(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
+    triangles
+        .par_chunks(RUN)
+        .map(|run| {
+            run.iter().fold((u32::MAX, 0), |(lo, hi), t| {
+                (
+                    lo.min(t[0].min(t[1]).min(t[2])),
+                    hi.max(t[0].max(t[1]).max(t[2])),
+                )
+            })
+        })
+        .collect()
+}
+
+/// Vertex parts per thread in [`for_each_normal_sum`]: work for a thread
+/// that finishes early, few enough that runs across parts stay rare.
+const PARTS_PER_THREAD: usize = 4;
+
+/// Fewest vertices worth a part of their own in [`for_each_normal_sum`].
 const MIN_VERTICES_PER_PART: usize = 1 << 15;
 
 /// Appends little-endian f32s to `buf`.

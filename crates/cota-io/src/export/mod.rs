@@ -85,7 +85,7 @@ use std::path::Path;
 
 use cota_core::{HeightGrid, Mesh};
 
-pub use atomic::write_atomically;
+pub use atomic::{write_atomically, write_atomically_forced};
 pub use error::{ExportError, WriteError};
 pub use glb::{
     encode_png, textured_mesh_bytes, write_glb, write_glb_quantized, write_glb_strip,
@@ -182,7 +182,9 @@ pub fn write_mesh_as(
     grid: &HeightGrid,
     opts: &ExportOptions,
 ) -> Result<(), WriteError> {
-    write_atomically(path, |w| write_mesh_to(w, format, mesh, grid, opts))
+    write_atomically_forced(path, opts.replace_read_only, |w| {
+        write_mesh_to(w, format, mesh, grid, opts)
+    })
 }
 
 /// Encodes `mesh` in `format` to `w`. Buffer `w` when it is a file.

@@ -85,6 +85,9 @@ pub struct ExportOptions {
     /// reports. Ignored by the other formats; [`ExportOptions::index_width`]
     /// does not apply. Default: `false`.
     pub quantize: bool,
+    /// Replace an existing read-only file (the CLI's `--force`); otherwise
+    /// that is an error. Default: `false`.
+    pub replace_read_only: bool,
 }
 
 impl ExportOptions {
@@ -95,7 +98,14 @@ impl ExportOptions {
         index_width: IndexWidth::Auto,
         normals: false,
         quantize: false,
+        replace_read_only: false,
     };
+
+    /// Sets [`ExportOptions::replace_read_only`].
+    pub const fn with_replace_read_only(mut self, replace: bool) -> Self {
+        self.replace_read_only = replace;
+        self
+    }
 
     /// Sets [`ExportOptions::coords`].
     pub const fn with_coords(mut self, coords: Coords) -> Self {

@@ -102,6 +102,52 @@ where
     Ok(())
 }
 
+/// [`write_chunks`] for records of `N` bytes each: `encode(index, record,
+/// bytes)` fills one record's bytes (`index` is its position in
+/// `records`). A chunk's buffer is sized once and filled in place, which
+/// the compiler turns into plain stores (no capacity check per value).
+///
+/// # Errors
+/// [`ExportError::Io`] from `w`.
+pub(crate) fn write_fixed<const N: usize, T, W, F>(
+    w: &mut W,
+    records: &[T],
+    encode: F,
+) -> Result<(), ExportError>
+where
+    T: Sync,
+    W: Write + Send + ?Sized,
+    F: Fn(usize, &T, &mut [u8; N]) + Sync,
+{
+    write_chunks(w, records, N, |first, chunk, buf| {
+        let start = buf.len();
+        buf.resize(start + N * chunk.len(), 0);
+        let (out, _) = buf[start..].as_chunks_mut::<N>();
+        for (k, (o, r)) in out.iter_mut().zip(chunk).enumerate() {
+            encode(first + k, r, o);
+        }
+        Ok(())
+    })
+}
+
+/// Writes the little-endian bytes of `v` into `out` (which holds `4·v.len()`
+/// bytes).
+#[inline]
+pub(crate) fn put_f32s(out: &mut [u8], v: &[f32]) {
+    for (o, x) in out.chunks_exact_mut(4).zip(v) {
+        o.copy_from_slice(&x.to_le_bytes());
+    }
+}
+
+/// Writes the little-endian bytes of `v` into `out` (which holds `4·v.len()`
+/// bytes).
+#[inline]
+pub(crate) fn put_u32s(out: &mut [u8], v: &[u32]) {
+    for (o, x) in out.chunks_exact_mut(4).zip(v) {
+        o.copy_from_slice(&x.to_le_bytes());
+    }
+}
+
 /// Runs `f` on a rayon worker thread, so that the writer's parallel sections
 /// start from inside the pool: a section entered from outside hands its work
 /// to the pool and waits to be woken, once per batch (tens of µs each, far

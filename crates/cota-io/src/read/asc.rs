@@ -28,19 +28,17 @@
 
 use std::path::Path;
 
-use cota_core::grid::check_dimensions;
 use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
 
 use crate::dem::{DataType, Dem, Format, ReadOptions};
-use crate::error::{malformed, too_large, ReadErrorKind};
+use crate::error::{malformed, ReadErrorKind};
 
 /// Decodes an ESRI ASCII grid.
 pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
-    let _ = opts; // Nothing to configure.
     let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes); // UTF-8 BOM
     let mut tokens = Tokens::new(bytes);
     let header = read_header(&mut tokens)?;
-    let (width, height) = header.dimensions()?;
+    let (width, height) = header.dimensions(opts)?;
     let georef = header.georef()?;
     let (heights, all_int) = read_values(&mut tokens, &header, width, height)?;
     let grid = HeightGrid::new(width, height, heights, georef)?;
@@ -278,10 +276,10 @@ impl Header {
     }
 
     /// ncols and nrows, checked against the sample limit.
-    fn dimensions(&self) -> Result<(usize, usize), ReadErrorKind> {
+    fn dimensions(&self, opts: &ReadOptions) -> Result<(usize, usize), ReadErrorKind> {
         let w = self.count(Key::NCols)?;
         let h = self.count(Key::NRows)?;
-        check_dimensions(w, h).map_err(too_large)?;
+        crate::limits::check(w, h, opts)?;
         let w = usize::try_from(w).map_err(|_| malformed("a smaller ncols", w))?;
         let h = usize::try_from(h).map_err(|_| malformed("a smaller nrows", h))?;
         Ok((w, h))
@@ -376,7 +374,7 @@ fn read_values(
     // Each value takes at least two bytes (a digit and a separator), so the
     // input bounds the allocation whatever the header claims.
     let capacity = expected.min(tokens.rest.len() / 2 + 1);
-    let mut heights = Vec::with_capacity(capacity);
+    let mut heights = crate::limits::try_vec(capacity, &format!("{width}x{height} heights"))?;
     let mut all_int = true;
     let nodata = header.nodata.map(|(v, _)| v);
     for token in tokens.by_ref().take(expected) {

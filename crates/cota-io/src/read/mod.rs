@@ -119,24 +119,44 @@ pub(crate) fn decode_bytes(
 /// Largest expansion of DEFLATE, used to refuse gzip bombs early.
 const MAX_GZIP_RATIO: u64 = 1032;
 
+/// Bytes decompressed before the content is sniffed to choose the cap.
+const GZIP_SNIFF_BYTES: u64 = 1 << 16;
+
 /// Decompresses a gzip file (one level) and decodes its content under the
-/// name without `.gz`. The output is capped at what the sample limit allows
-/// (8 bytes per sample at most) and at DEFLATE's largest ratio.
+/// name without `.gz`. Decompression stops as soon as the output exceeds what
+/// the content may be ([`crate::limits`]): a `.hgt` (by name, or content
+/// without magic) one 3601² tile unless the limit is set, anything else 8
+/// bytes per sample of the limit; and never more than DEFLATE's largest ratio.
 fn gunzip_and_decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
     use std::io::Read;
-    let cap = (cota_core::grid::MAX_SAMPLES * 8).min(bytes.len() as u64 * MAX_GZIP_RATIO);
+    let name = match path.extension() {
+        Some(e) if e.eq_ignore_ascii_case("gz") => path.with_extension(""),
+        _ => path.to_path_buf(),
+    };
+    let broken = |e: std::io::Error| {
+        crate::error::malformed("a complete gzip stream", format!("a broken one ({e})"))
+    };
+    let mut decoder = flate2::read::GzDecoder::new(bytes);
     let mut inner = Vec::new();
-    flate2::read::GzDecoder::new(bytes)
-        .take(cap + 1)
+    (&mut decoder)
+        .take(GZIP_SNIFF_BYTES)
         .read_to_end(&mut inner)
-        .map_err(|e| {
-            crate::error::malformed("a complete gzip stream", format!("a broken one ({e})"))
-        })?;
+        .map_err(broken)?;
+    let named_hgt = name
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("hgt"));
+    let hgt = named_hgt || sniff(&inner) == Sniffed::Unknown;
+    let cap = crate::limits::gzip_cap(hgt, opts).min(bytes.len() as u64 * MAX_GZIP_RATIO);
+    let rest = (cap + 1).saturating_sub(inner.len() as u64);
+    decoder.take(rest).read_to_end(&mut inner).map_err(broken)?;
     if inner.len() as u64 > cap {
-        return Err(crate::error::malformed(
-            format!("a gzip stream of at most {cap} bytes once decompressed"),
-            "more (a gzip bomb or a grid beyond the sample limit)",
-        ));
+        return Err(ReadErrorKind::Expands {
+            what: format!(
+                "the gzip stream (holding {})",
+                if hgt { "a .hgt" } else { "a DEM" }
+            ),
+            limit: cap,
+        });
     }
     if inner.is_empty() {
         return Err(crate::error::malformed(
@@ -150,10 +170,6 @@ fn gunzip_and_decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<De
             detail: "a gzip stream inside a gzip stream; decompress the outer one first".into(),
         });
     }
-    let name = match path.extension() {
-        Some(e) if e.eq_ignore_ascii_case("gz") => path.with_extension(""),
-        _ => path.to_path_buf(),
-    };
     let mut dem = decode_bytes(&inner, &name, opts)?;
     dem.path = path.to_path_buf();
     Ok(dem)

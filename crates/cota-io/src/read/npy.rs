@@ -26,12 +26,11 @@
 use std::io::{Cursor, Read};
 use std::path::Path;
 
-use cota_core::grid::check_dimensions;
 use cota_core::{GeoRef, HeightGrid, PixelIs};
 use zip::ZipArchive;
 
 use crate::dem::{DataType, Dem, Format, ReadOptions};
-use crate::error::{malformed, too_large, ReadErrorKind};
+use crate::error::{malformed, ReadErrorKind};
 
 /// Largest expansion ratio of DEFLATE.
 const MAX_DEFLATE_RATIO: u64 = 1032;
@@ -67,7 +66,7 @@ pub(crate) fn decode_npy(
     path: &Path,
     opts: &ReadOptions,
 ) -> Result<Dem, ReadErrorKind> {
-    let (grid, dt) = array_grid(bytes, GeoRef::unreferenced(opts.cell_size_m), "")?;
+    let (grid, dt) = array_grid(bytes, GeoRef::unreferenced(opts.cell_size_m), "", opts)?;
     Ok(dem(grid, dt, Format::Npy, path))
 }
 
@@ -104,7 +103,7 @@ pub(crate) fn decode_npz(
     let georef = companion_georef(&mut zip, &names, bytes.len(), opts)?;
     let data = member(&mut zip, &chosen, bytes.len(), None)?;
     let what = format!(" in array {chosen:?}");
-    let (grid, dt) = array_grid(&data, georef, &what)?;
+    let (grid, dt) = array_grid(&data, georef, &what, opts)?;
     Ok(dem(grid, dt, Format::Npz, path))
 }
 
@@ -333,6 +332,7 @@ fn array_grid(
     bytes: &[u8],
     georef: GeoRef,
     what: &str,
+    opts: &ReadOptions,
 ) -> Result<(HeightGrid, DataType), ReadErrorKind> {
     let h = parse_header(bytes)?;
     let [rows, cols] = h.shape[..] else {
@@ -341,7 +341,7 @@ fn array_grid(
             detail: format!("{:?}{what}; a DEM is a 2-D array (rows, cols)", h.shape),
         });
     };
-    check_dimensions(cols, rows).map_err(too_large)?;
+    crate::limits::check(cols, rows, opts)?;
     let need = rows * cols * h.size as u64;
     let data = &bytes[h.data_offset.min(bytes.len())..];
     if data.len() as u64 != need {
@@ -451,6 +451,7 @@ mod test {
             &npy("<i2", false, "(2, 3)", &le),
             GeoRef::unreferenced(1.0),
             "",
+            &ReadOptions::DEFAULT,
         )
         .unwrap();
         assert_eq!((g.width(), g.height(), dt), (3, 2, DataType::I16));
@@ -460,6 +461,7 @@ mod test {
             &npy("<i2", true, "(2, 3)", &le),
             GeoRef::unreferenced(1.0),
             "",
+            &ReadOptions::DEFAULT,
         )
         .unwrap();
         assert_eq!(g.heights(), &[1.0, 3.0, 5.0, 2.0, 4.0, 6.0]);
@@ -471,6 +473,7 @@ mod test {
             &npy(">f8", false, "(1, 2)", &be),
             GeoRef::unreferenced(1.0),
             "",
+            &ReadOptions::DEFAULT,
         )
         .unwrap();
         assert_eq!(g.get(0, 0), 1.5);
@@ -485,6 +488,7 @@ mod test {
             &npy("<f4", false, "(2, 2, 2)", &[0; 32]),
             GeoRef::unreferenced(1.0),
             "",
+            &ReadOptions::DEFAULT,
         )
         .unwrap_err();
         assert!(e.to_string().contains("2-D"), "{e}");
@@ -492,6 +496,7 @@ mod test {
             &npy("<f4", false, "(2, 2)", &[0; 12]),
             GeoRef::unreferenced(1.0),
             "",
+            &ReadOptions::DEFAULT,
         )
         .unwrap_err();
         assert!(e.to_string().contains("16 bytes"), "{e}");

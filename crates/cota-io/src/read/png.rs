@@ -30,14 +30,14 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use cota_core::grid::{check_dimensions, MAX_SAMPLES};
+use cota_core::grid::MAX_SAMPLES;
 use cota_core::{GeoRef, HeightGrid};
 use png::{BitDepth, ColorType, Transformations};
 
 use super::rgb::{plausible, terrain_rgb, terrarium};
 use super::tile::georef_for;
 use crate::dem::{DataType, Dem, Format, PngEncoding, ReadOptions};
-use crate::error::{malformed, too_large, ReadErrorKind};
+use crate::error::{malformed, ReadErrorKind};
 
 /// Largest expansion ratio of DEFLATE.
 const MAX_DEFLATE_RATIO: u64 = 1032;
@@ -50,13 +50,21 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<De
     let info = decoder.read_header_info().map_err(bad_png)?;
     let (width, height) = (info.width, info.height);
     check_layout(info.color_type, info.bit_depth)?;
-    check_size(width, height, info.color_type, info.bit_depth, bytes.len())?;
+    check_size(
+        width,
+        height,
+        info.color_type,
+        info.bit_depth,
+        bytes.len(),
+        opts,
+    )?;
     let encoding = choose_encoding(opts.png_encoding, info.color_type, info.bit_depth)?;
     let mut reader = decoder.read_info().map_err(bad_png)?;
     let len = reader
         .output_buffer_size()
         .ok_or_else(|| too_large_png(width, height))?;
-    let mut buf = vec![0u8; len];
+    let mut buf = crate::limits::try_vec(len, &format!("the {width}x{height} image's pixels"))?;
+    buf.resize(len, 0u8);
     let out = reader.next_frame(&mut buf).map_err(bad_png)?;
     let used = buf.get(..out.buffer_size()).unwrap_or(&buf);
     let mut encoding = encoding;
@@ -134,8 +142,9 @@ fn check_size(
     color: ColorType,
     depth: BitDepth,
     file_len: usize,
+    opts: &ReadOptions,
 ) -> Result<(), ReadErrorKind> {
-    check_dimensions(u64::from(width), u64::from(height)).map_err(too_large)?;
+    crate::limits::check(u64::from(width), u64::from(height), opts)?;
     let bits_per_pixel = color.samples() as u64 * depth as u64;
     let row = 1 + (u64::from(width) * bits_per_pixel).div_ceil(8);
     let raw = row.saturating_mul(u64::from(height));
@@ -247,10 +256,34 @@ mod test {
 
     #[test]
     fn size_guard() {
-        let e = check_size(40_000, 40_000, ColorType::Rgba, BitDepth::Eight, 100).unwrap_err();
+        let e = check_size(
+            40_000,
+            40_000,
+            ColorType::Rgba,
+            BitDepth::Eight,
+            100,
+            &ReadOptions::DEFAULT.with_max_samples(Some(MAX_SAMPLES)),
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("a file of 100 bytes"), "{e}");
-        assert!(check_size(256, 256, ColorType::Rgb, BitDepth::Eight, 200).is_ok());
-        let e = check_size(u32::MAX, u32::MAX, ColorType::Rgb, BitDepth::Eight, 100).unwrap_err();
+        assert!(check_size(
+            256,
+            256,
+            ColorType::Rgb,
+            BitDepth::Eight,
+            200,
+            &ReadOptions::DEFAULT
+        )
+        .is_ok());
+        let e = check_size(
+            u32::MAX,
+            u32::MAX,
+            ColorType::Rgb,
+            BitDepth::Eight,
+            100,
+            &ReadOptions::DEFAULT,
+        )
+        .unwrap_err();
         assert!(matches!(e, ReadErrorKind::TooLarge { .. }), "{e}");
     }
 }

@@ -29,13 +29,12 @@ use std::borrow::Cow;
 use std::io::{Cursor, Read};
 use std::path::Path;
 
-use cota_core::grid::check_dimensions;
 use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
 use zip::ZipArchive;
 
 use super::sniff::{sniff, Sniffed};
 use crate::dem::{DataType, Dem, Format, ReadOptions};
-use crate::error::{malformed, too_large, ReadErrorKind};
+use crate::error::{malformed, ReadErrorKind};
 
 /// The SRTM void value.
 const VOID: i16 = i16::MIN;
@@ -49,12 +48,11 @@ const MAX_DEFLATE_RATIO: u64 = 1032;
 
 /// Decodes a raw `.hgt` or a `.hgt.zip`. `path` supplies the tile's position.
 pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
-    let _ = opts; // SRTM has nothing to configure.
     let name = file_name(path);
     if sniff(bytes) == Sniffed::Zip {
-        decode_zip(bytes, path, &name)
+        decode_zip(bytes, path, &name, opts)
     } else {
-        let grid = decode_raw(bytes, &[&name], "")?;
+        let grid = decode_raw(bytes, &[&name], "", opts)?;
         Ok(dem(grid, Format::SrtmHgt, path))
     }
 }
@@ -99,11 +97,16 @@ fn side_for_len(len: u64) -> Option<u64> {
 
 /// Decodes raw tile bytes. `names` are tried in order for the position;
 /// `what` qualifies the data in error messages (e.g. " in member X").
-fn decode_raw(data: &[u8], names: &[&str], what: &str) -> Result<HeightGrid, ReadErrorKind> {
+fn decode_raw(
+    data: &[u8],
+    names: &[&str],
+    what: &str,
+    opts: &ReadOptions,
+) -> Result<HeightGrid, ReadErrorKind> {
     let len = data.len() as u64;
     let n = side_for_len(len).ok_or_else(|| size_error(len, what))?;
-    check_dimensions(n, n).map_err(too_large)?;
-    let heights = be_i16_to_heights(data);
+    crate::limits::check(n, n, opts)?;
+    let heights = be_i16_to_heights(data)?;
     let n = n as usize;
     let georef = names
         .iter()
@@ -113,15 +116,14 @@ fn decode_raw(data: &[u8], names: &[&str], what: &str) -> Result<HeightGrid, Rea
 }
 
 /// Converts big-endian int16 samples to metres, voids to NaN.
-fn be_i16_to_heights(data: &[u8]) -> Vec<f32> {
+fn be_i16_to_heights(data: &[u8]) -> Result<Vec<f32>, ReadErrorKind> {
     let (pairs, _) = data.as_chunks::<2>();
-    pairs
-        .iter()
-        .map(|&pair| match i16::from_be_bytes(pair) {
-            VOID => f32::NAN,
-            v => f32::from(v),
-        })
-        .collect()
+    let mut heights = crate::limits::try_vec(pairs.len(), "the tile's heights")?;
+    heights.extend(pairs.iter().map(|&pair| match i16::from_be_bytes(pair) {
+        VOID => f32::NAN,
+        v => f32::from(v),
+    }));
+    Ok(heights)
 }
 
 /// The error for a byte count that is not 2·n².
@@ -189,7 +191,12 @@ fn unpositioned_georef(n: usize) -> GeoRef {
 }
 
 /// Decodes a ZIP holding one `.hgt` member.
-fn decode_zip(bytes: &[u8], path: &Path, outer_name: &str) -> Result<Dem, ReadErrorKind> {
+fn decode_zip(
+    bytes: &[u8],
+    path: &Path,
+    outer_name: &str,
+    opts: &ReadOptions,
+) -> Result<Dem, ReadErrorKind> {
     let mut archive = ZipArchive::new(Cursor::new(bytes)).map_err(|e| {
         malformed(
             "a ZIP archive holding one SRTM .hgt tile",
@@ -197,10 +204,10 @@ fn decode_zip(bytes: &[u8], path: &Path, outer_name: &str) -> Result<Dem, ReadEr
         )
     })?;
     let (index, member_name) = single_hgt_member(&archive)?;
-    let data = read_member(&mut archive, index, &member_name, bytes.len() as u64)?;
+    let data = read_member(&mut archive, index, &member_name, bytes.len() as u64, opts)?;
     let inner_name = member_name.rsplit('/').next().unwrap_or(&member_name);
     let what = format!(" in ZIP member {member_name}");
-    let grid = decode_raw(&data, &[outer_name, inner_name], &what)?;
+    let grid = decode_raw(&data, &[outer_name, inner_name], &what, opts)?;
     Ok(dem(grid, Format::SrtmHgtZip, path))
 }
 
@@ -258,6 +265,7 @@ fn read_member<R: Read + std::io::Seek>(
     index: usize,
     name: &str,
     archive_len: u64,
+    opts: &ReadOptions,
 ) -> Result<Vec<u8>, ReadErrorKind> {
     let unreadable = |e: &dyn std::fmt::Display| {
         malformed(
@@ -269,7 +277,7 @@ fn read_member<R: Read + std::io::Seek>(
     let declared = member.size();
     let what = format!(" declared for ZIP member {name}");
     let n = side_for_len(declared).ok_or_else(|| size_error(declared, &what))?;
-    check_dimensions(n, n).map_err(too_large)?;
+    crate::limits::check(n, n, opts)?;
     let possible = archive_len.saturating_mul(MAX_DEFLATE_RATIO);
     if declared > possible {
         return Err(malformed(
@@ -278,7 +286,7 @@ fn read_member<R: Read + std::io::Seek>(
         ));
     }
     let capacity = usize::try_from(declared).map_err(|_| size_error(declared, &what))?;
-    let mut data = Vec::with_capacity(capacity);
+    let mut data = crate::limits::try_vec(capacity, &format!("ZIP member {name}"))?;
     (&mut member)
         .take(declared.saturating_add(1))
         .read_to_end(&mut data)
@@ -328,7 +336,7 @@ mod test {
 
     #[test]
     fn voids_and_sign() {
-        let h = be_i16_to_heights(&[0x80, 0x00, 0xff, 0xfe, 0x01, 0x00]);
+        let h = be_i16_to_heights(&[0x80, 0x00, 0xff, 0xfe, 0x01, 0x00]).unwrap();
         assert!(h[0].is_nan());
         assert_eq!(&h[1..], &[-2.0, 256.0]);
     }

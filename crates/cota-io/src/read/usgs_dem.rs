@@ -29,11 +29,10 @@
 
 use std::path::Path;
 
-use cota_core::grid::check_dimensions;
 use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
 
 use crate::dem::{DataType, Dem, Format, ReadOptions};
-use crate::error::{malformed, too_large, ReadErrorKind};
+use crate::error::{malformed, ReadErrorKind};
 
 /// The USGS void value (and everything below it).
 const VOID: f64 = -32767.0;
@@ -120,7 +119,6 @@ fn header(bytes: &[u8]) -> Result<HeaderA, ReadErrorKind> {
 
 /// Decodes a USGS ASCII DEM.
 pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
-    let _ = opts; // the file says everything.
     let a = header(bytes)?;
     if !(a.res[0] > 0.0 && a.res[1] > 0.0 && a.res[2] > 0.0) {
         return Err(malformed(
@@ -130,7 +128,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<De
     }
     let crs = crs(&a)?;
     let profiles = read_profiles(&bytes[1024.min(bytes.len())..], &a)?;
-    let grid = to_grid(&profiles, &a, crs)?;
+    let grid = to_grid(&profiles, &a, crs, opts)?;
     Ok(Dem {
         grid,
         format: Format::UsgsDem,
@@ -275,7 +273,12 @@ fn read_profile(t: &mut Tokens, p: u64, a: &HeaderA) -> Result<Option<Profile>, 
 }
 
 /// The grid of the profiles: their bounding box, voids where none reaches.
-fn to_grid(profiles: &[Profile], a: &HeaderA, crs: Crs) -> Result<HeightGrid, ReadErrorKind> {
+fn to_grid(
+    profiles: &[Profile],
+    a: &HeaderA,
+    crs: Crs,
+    opts: &ReadOptions,
+) -> Result<HeightGrid, ReadErrorKind> {
     let [dx, dy, _] = a.res;
     let y0 = profiles.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
     let start_row = |p: &Profile| ((p.y - y0) / dy).round() as u64;
@@ -285,7 +288,7 @@ fn to_grid(profiles: &[Profile], a: &HeaderA, crs: Crs) -> Result<HeightGrid, Re
         .max()
         .unwrap_or(1);
     let cols = profiles.len();
-    check_dimensions(cols as u64, rows).map_err(too_large)?;
+    crate::limits::check(cols as u64, rows, opts)?;
     let (rows, x0) = (rows as usize, profiles.first().map_or(0.0, |p| p.x));
     let mut heights = vec![f32::NAN; rows * cols];
     for (c, p) in profiles.iter().enumerate() {

@@ -25,13 +25,12 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use cota_core::grid::check_dimensions;
 use cota_core::{GeoRef, HeightGrid};
 use image_webp::WebPDecoder;
 
 use super::tile::georef_for;
 use crate::dem::{DataType, Dem, Format, PngEncoding, ReadOptions};
-use crate::error::{malformed, too_large, ReadErrorKind};
+use crate::error::{malformed, ReadErrorKind};
 
 /// True when `bytes` open like a WebP file.
 pub(crate) fn is_webp(bytes: &[u8]) -> bool {
@@ -40,7 +39,7 @@ pub(crate) fn is_webp(bytes: &[u8]) -> bool {
 
 /// Decodes a WebP height image.
 pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
-    let (buf, w, h, channels) = decode_pixels(bytes)?;
+    let (buf, w, h, channels) = decode_pixels(bytes, opts)?;
     let (heights, encoding) = heights(&buf, channels, opts.png_encoding)?;
     let georef = georef_for(path, w, h).unwrap_or_else(|| GeoRef::unreferenced(opts.cell_size_m));
     let grid = HeightGrid::new(w, h, heights, georef)?;
@@ -69,11 +68,14 @@ fn heights(
 }
 
 /// Decodes the first frame: pixels, width, height and channels (3 or 4).
-fn decode_pixels(bytes: &[u8]) -> Result<(Vec<u8>, usize, usize, usize), ReadErrorKind> {
+fn decode_pixels(
+    bytes: &[u8],
+    opts: &ReadOptions,
+) -> Result<(Vec<u8>, usize, usize, usize), ReadErrorKind> {
     check_riff_size(bytes)?;
     let mut dec = WebPDecoder::new(Cursor::new(bytes)).map_err(bad_webp)?;
     let (w, h) = dec.dimensions();
-    check_dimensions(u64::from(w), u64::from(h)).map_err(too_large)?;
+    crate::limits::check(u64::from(w), u64::from(h), opts)?;
     let channels = if dec.has_alpha() { 4 } else { 3 };
     let len = dec.output_buffer_size().ok_or(ReadErrorKind::TooLarge {
         width: u64::from(w),

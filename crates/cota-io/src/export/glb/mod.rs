@@ -45,9 +45,9 @@ use self::container::{
 };
 use super::coords::{Frame, GeoInfo};
 use super::error::ExportError;
-use super::geometry::{check_mesh, push_f32s, to_f32, vertex_normals};
+use super::geometry::{check_mesh, to_f32, vertex_normals};
 use super::options::{ExportOptions, IndexWidth};
-use super::par::{on_pool, write_chunks};
+use super::par::{on_pool, put_f32s, put_u32s, write_fixed};
 use super::quantize::GlbQuantization;
 
 mod container;
@@ -173,11 +173,6 @@ fn write_glb_primitive<W: Write + Send>(
 ) -> Result<(), ExportError> {
     check_mesh(mesh)?;
     let frame = Frame::new(grid, opts.coords);
-    let positions: Vec<[f32; 3]> = mesh
-        .vertices
-        .par_iter()
-        .map(|v| to_f32(frame.vertex(v)))
-        .collect();
     let normals = vertex_normals(mesh, &frame);
     let strip: Option<Vec<u32>> = match strip {
         None => None,
@@ -213,17 +208,10 @@ fn write_glb_primitive<W: Write + Send>(
         index_count,
         index_type(mesh.vertices.len(), opts.index_width)?,
     );
-    let root = build_root(&positions, &layout, mode, &GeoInfo::new(grid, opts.coords))?;
+    let bounds = bounds(&mesh.vertices, |v| to_f32(frame.vertex(v)));
+    let root = build_root(bounds, &layout, mode, &GeoInfo::new(grid, opts.coords))?;
     write_container(&mut w, &root, layout.buffer_bytes, |w| {
-        write_bin(
-            w,
-            mesh,
-            strip.as_deref(),
-            &frame,
-            &positions,
-            &normals,
-            layout.index,
-        )
+        write_bin(w, mesh, strip.as_deref(), &frame, &normals, layout.index)
     })
 }
 
@@ -283,12 +271,11 @@ impl Layout {
 
 /// The glTF JSON document.
 fn build_root(
-    positions: &[[f32; 3]],
+    (min, max): ([f32; 3], [f32; 3]),
     layout: &Layout,
     mode: Mode,
     info: &GeoInfo,
 ) -> Result<json::Root, ExportError> {
-    let (min, max) = bounds(positions);
     let view = |offset: u64, bytes: u64, target: Target| view(offset, bytes, None, target);
     let mut attributes = BTreeMap::new();
     attributes.insert(Checked::Valid(Semantic::Positions), Index::new(0));
@@ -341,56 +328,56 @@ fn build_root(
     })
 }
 
-/// Component-wise minimum and maximum (the mesh has at least one vertex; no
-/// value is NaN, so the order of the reduction does not matter).
-fn bounds(positions: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
+/// Component-wise minimum and maximum of the written (f32) positions,
+/// `position(item)` for each of `items` (at least one; no value is NaN, so
+/// the order of the reduction does not matter).
+fn bounds<T: Sync>(items: &[T], position: impl Fn(&T) -> [f32; 3] + Sync) -> ([f32; 3], [f32; 3]) {
     let init = || ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    let widen = |(mut lo, mut hi): ([f32; 3], [f32; 3]), p: &[f32; 3]| {
+    let widen = |(mut lo, mut hi): ([f32; 3], [f32; 3]), p: [f32; 3]| {
         for k in 0..3 {
             lo[k] = lo[k].min(p[k]);
             hi[k] = hi[k].max(p[k]);
         }
         (lo, hi)
     };
-    positions
+    items
         .par_iter()
-        .fold(init, widen)
-        .reduce(init, |a, b| widen(widen(a, &b.0), &b.1))
+        .fold(init, |b, v| widen(b, position(v)))
+        .reduce(init, |a, b| widen(widen(a, b.0), b.1))
 }
 
-/// The BIN chunk's content: positions, normals, indices (each section
-/// encoded in parallel chunks, written in order).
+/// The BIN chunk's content: positions (converted as they are encoded),
+/// normals, indices (each section encoded in parallel chunks, written in
+/// order).
 fn write_bin<W: Write + Send>(
     w: &mut W,
     mesh: &Mesh,
     strip: Option<&[u32]>,
     frame: &Frame,
-    positions: &[[f32; 3]],
     normals: &[[f32; 3]],
     index: ComponentType,
 ) -> Result<(), ExportError> {
-    for section in [positions, normals] {
-        write_chunks(w, section, 12, |_, chunk, buf| {
-            push_f32s(buf, chunk.as_flattened());
-            Ok(())
-        })?;
-    }
+    write_fixed::<12, _, _, _>(w, &mesh.vertices, |_, v, out| {
+        put_f32s(out, &to_f32(frame.vertex(v)));
+    })?;
+    write_fixed::<12, _, _, _>(w, normals, |_, n, out| put_f32s(out, n))?;
     // Fits: index_type allowed u16 only for at most 65 535 vertices.
-    let push_index = |buf: &mut Vec<u8>, i: u32| match index {
-        ComponentType::U16 => buf.extend_from_slice(&(i as u16).to_le_bytes()),
-        _ => buf.extend_from_slice(&i.to_le_bytes()),
-    };
-    match strip {
+    match (strip, index) {
         // The chunk's padding follows (write_glb_primitive).
-        Some(s) => write_chunks(w, s, 4, |_, chunk, buf| {
-            chunk.iter().for_each(|&i| push_index(buf, i));
-            Ok(())
+        (Some(s), ComponentType::U16) => write_fixed::<2, _, _, _>(w, s, |_, &i, out| {
+            *out = (i as u16).to_le_bytes();
         }),
-        None => write_chunks(w, &mesh.triangles, 12, |_, chunk, buf| {
-            for &t in chunk {
-                frame.orient(t).into_iter().for_each(|i| push_index(buf, i));
-            }
-            Ok(())
+        (Some(s), _) => write_fixed::<4, _, _, _>(w, s, |_, &i, out| *out = i.to_le_bytes()),
+        (None, ComponentType::U16) => {
+            write_fixed::<6, _, _, _>(w, &mesh.triangles, |_, &t, out| {
+                let t = frame.orient(t);
+                for (o, i) in out.chunks_exact_mut(2).zip(t) {
+                    o.copy_from_slice(&(i as u16).to_le_bytes());
+                }
+            })
+        }
+        (None, _) => write_fixed::<12, _, _, _>(w, &mesh.triangles, |_, &t, out| {
+            put_u32s(out, &frame.orient(t));
         }),
     }
 }

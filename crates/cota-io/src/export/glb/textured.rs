@@ -224,7 +224,7 @@ fn build_root(
     l: &Layout,
     info: &GeoInfo,
 ) -> Result<json::Root, ExportError> {
-    let (min, max) = bounds(positions);
+    let (min, max) = bounds(positions, |p| *p);
     let mut attributes = BTreeMap::new();
     attributes.insert(Checked::Valid(Semantic::Positions), Index::new(0));
     attributes.insert(Checked::Valid(Semantic::TexCoords(0)), Index::new(1));

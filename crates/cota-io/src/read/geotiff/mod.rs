@@ -55,6 +55,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<De
     let mut dec = Decoder::new(Cursor::new(bytes))
         .map_err(|e| tiff_error(e, "reading the TIFF header and first image directory"))?;
     let layout = Layout::read(&mut dec)?;
+    crate::limits::check(layout.width as u64, layout.height as u64, opts)?;
     let band = select_band(layout.samples, opts.band)?;
     let nodata = read_nodata(&mut dec)?;
     let geo = geokeys::geo_info(&read_geo_tags(&mut dec)?)?;
@@ -600,14 +601,8 @@ fn chunk_limits() -> Limits {
 
 /// The height buffer, all void, allocated without aborting on failure.
 fn alloc_heights(width: usize, height: usize) -> Result<Vec<f32>, ReadErrorKind> {
-    let n = width * height; // checked against MAX_SAMPLES by Layout::read
-    let mut v = Vec::new();
-    v.try_reserve_exact(n).map_err(|e| {
-        ReadErrorKind::Io(io::Error::new(
-            io::ErrorKind::OutOfMemory,
-            format!("cannot allocate {width}x{height} heights: {e}"),
-        ))
-    })?;
+    let n = width * height; // checked against the sample limit by `decode`
+    let mut v = crate::limits::try_vec(n, &format!("{width}x{height} heights"))?;
     v.resize(n, f32::NAN);
     Ok(v)
 }
