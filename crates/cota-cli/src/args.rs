@@ -27,6 +27,10 @@ pub enum Command {
     /// Progressive compact stream (paper 000): encode a DEM, decode any prefix.
     #[command(subcommand)]
     Stream(StreamCommand),
+    /// Cesium quantized-mesh-1.0 tile pyramid: error bound per zoom, no seams.
+    Tiles(crate::tiles::TilesArgs),
+    /// Serve the terrain over HTTP: browser viewer, CesiumJS page, stream, tiles.
+    Serve(crate::serve::ServeArgs),
 }
 
 /// How to read and combine the input files.

@@ -13,7 +13,9 @@ mod input;
 mod mesh;
 mod pair;
 mod progress;
+mod serve;
 mod stream;
+mod tiles;
 
 fn main() -> ExitCode {
     quiet_broken_pipe();
@@ -34,6 +36,8 @@ fn run() -> anyhow::Result<ExitCode> {
         args::Command::Compare(a) => compare::run(&a),
         args::Command::Pair(a) => pair::run(&a),
         args::Command::Stream(c) => stream::run(&c),
+        args::Command::Tiles(a) => tiles::run(&a),
+        args::Command::Serve(a) => serve::run(&a),
     }
 }
 

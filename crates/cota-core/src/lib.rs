@@ -26,7 +26,9 @@
 //!   [`pair`](mod@pair): paper 004's best (mesh, texture) pair under a
 //!   memory budget.
 //! * [`tin`]: an irregular triangulation (TIN) with the same guaranteed
-//!   error and fewer triangles ([`tin::build`]).
+//!   error and fewer triangles ([`tin::build`]);
+//! * [`tiles`]: web-map tile pyramids cut from one hierarchy over the
+//!   tiling's lattice, each tile within its zoom's bound.
 //!
 //! ```
 //! use cota_core::{check_mesh, GeoRef, HeightGrid, MaxVerticalError, MeshPlan, Mesher, Mode};
@@ -68,6 +70,7 @@ pub mod strip;
 #[allow(clippy::unwrap_used, reason = "tests")]
 mod testing;
 pub mod texture;
+pub mod tiles;
 pub mod tin;
 
 // The public face: the types and entry points of the pipeline, in its

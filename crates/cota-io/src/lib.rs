@@ -12,6 +12,7 @@
 //!   with a world file or the DEM's extent, placed on a DEM in the same CRS.
 //! * Mesh writers (OBJ, PLY, STL, GLB, and a textured GLB), each written
 //!   atomically.
+//! * Cesium quantized-mesh-1.0 terrain pyramids ([`tiles`]).
 //!
 //! Every error names the file and says what was expected and what was found.
 #![warn(missing_docs)]
@@ -23,6 +24,7 @@ pub mod image;
 pub mod limits;
 pub mod read;
 pub mod stream_file;
+pub mod tiles;
 
 pub use dem::{
     ArrayName, DataType, Dem, DemSummary, Format, PngEncoding, ReadOptions, TileRequest,

@@ -11,12 +11,11 @@
 //! 1. the mesh `M = Bitree::extract(E)`;
 //! 2. cota: the whole progressive stream from the coarse mesh down to `E`
 //!    (every step, framing and checksums included), quantum 1 m;
-//! 3. quantized-mesh-1.0 of `M` ([`quantized_mesh`]), raw and gzipped (best);
+//! 3. quantized-mesh-1.0 of `M` (`cota_io::tiles::encode`, the whole grid as
+//!    one tile over its sample rectangle), raw and gzipped (best);
 //! 4. meshopt: vertex-cache and vertex-fetch optimised, vertices as four
 //!    `u16` (column, row, height − min, 0), `encode_vertex_buffer` +
 //!    `encode_index_buffer`, then deflate (best).
-
-mod quantized_mesh;
 
 use std::error::Error;
 use std::io::Write;
@@ -101,7 +100,7 @@ fn main() -> Result<(), Box<dyn Error>> {
             let mesh = tree.extract(&ExtractOptions::max_error_m(e))?.mesh;
             let s = encode(&grid, &StreamOptions::default().with_max_error_m(e))?;
             let cota = stream_bytes(&s, grid.georef()).len();
-            let qm = quantized_mesh::encode(&mesh, &grid);
+            let qm = quantized_mesh(&mesh, &grid)?;
             let qmz = gzip(&qm)?;
             let mo = meshopt_bytes(&mesh)?;
             let t = mesh.triangle_count() as f64;
@@ -135,4 +134,22 @@ fn main() -> Result<(), Box<dyn Error>> {
         println!("{}", serde_json::to_string_pretty(&rows)?);
     }
     Ok(())
+}
+
+/// The quantized-mesh-1.0 bytes of `mesh` with the whole grid as one tile
+/// over its sample rectangle (no extensions).
+fn quantized_mesh(mesh: &Mesh, grid: &HeightGrid) -> Result<Vec<u8>, Box<dyn Error>> {
+    let (w, h) = (grid.width() as f64 - 1.0, grid.height() as f64 - 1.0);
+    let g = grid.georef();
+    let (x0, y0) = g.sample_xy(0.0, 0.0);
+    let (x1, y1) = g.sample_xy(w, h);
+    let frame = cota_io::tiles::TileFrame {
+        cells: [w as u64, h as u64],
+        rect_deg: [x0.min(x1), y0.min(y1), x0.max(x1), y0.max(y1)],
+    };
+    Ok(cota_io::tiles::encode(
+        mesh,
+        &frame,
+        &cota_io::tiles::Extensions::default(),
+    )?)
 }

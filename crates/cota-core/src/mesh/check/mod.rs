@@ -18,7 +18,7 @@
 //!    winding number is 1 everywhere inside: the triangles tile the rectangle
 //!    exactly. Every sample is also checked to be covered.
 //! 5. **the error bound**: the true |Δz| at **every** sample is at most the bound
-//!    ([`super::metrics::measure`]), with a slack of `1e-9·max(1, |h|max)` for
+//!    ([`crate::mesh::metrics::measure`]), with a slack of `1e-9·max(1, |h|max)` for
 //!    floating-point rounding only.
 //!
 //! In non-conforming mode (the papers' faithful fictitious points, which leave
@@ -41,12 +41,16 @@
 //!    ([`Violation::UnusedVertex`]); an unused vertex lying on an edge would
 //!    otherwise hide a T-junction from (3).
 
+pub mod placed;
+
+pub use placed::{check_placed_mesh, PlacedMesh, PlacedVertex, Region};
+
 use rayon::prelude::*;
 
-use super::metrics::{measure, Metrics};
-use super::{Mesh, MeshVertex};
 use crate::grid::HeightGrid;
 use crate::hierarchy::{diagonal_of, Hierarchy};
+use crate::mesh::metrics::{measure, Metrics};
+use crate::mesh::{Mesh, MeshVertex};
 
 /// What [`check_mesh`] requires.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,0 +1,242 @@
+//! The coarse levels of the global hierarchy, above the window's bitree.
+//!
+//! Paper `000_ebf7e3a88dffd361.txt` §2 (the bitree) over the whole world's
+//! lattice. The window's [`Bitree`] holds the exact, monotone error of every
+//! split point up to `A(T_a)` (the halves of alignment-zoom tiles): its
+//! hierarchy is the global one there (see [`super::lattice`]), and outside the
+//! window the terrain is 0 m, so a split point on the window's border has the
+//! same error in both. Tiles coarser than the alignment zoom need the levels
+//! above, `B(2·T_a)` up to `A(T_0)` (the centres of the root tiles). Only
+//! split points near the window (within two squares of their level, see
+//! `add_level`) can have a non-zero error; for those, level by level from
+//! fine to coarse:
+//!
+//! 1. each diamond triangle's own error `e(T)`: the largest |plane − h| over
+//!    its samples, those in the window read one by one, those beyond it
+//!    (where `h = 0`) bounded by the ends of each row's span, since the plane
+//!    is linear along a row;
+//! 2. the code is the maximum of those and of the children's split points'
+//!    errors (the window bitree's codes, decoded to their upper bound, for
+//!    the level just above it), so it stays monotone and diamond-shared, and
+//!    a split decided on it is conforming across the bitree/cap boundary.
+//!
+//! # Runtime
+//! `O(window samples)` per level, two passes (sides and halves of each
+//! square), in parallel; a few dozen coarse levels at most.
+
+use std::collections::HashMap;
+
+use rayon::prelude::*;
+
+use super::lattice::Lattice;
+use crate::bitree::error_code;
+use crate::bitree::{round_up_f32, Bitree};
+use crate::hierarchy::{Pt, RowSpans, Tri};
+use crate::mesh::raster::Plane;
+
+/// The errors of the coarse split points (absent: 0).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Cap {
+    errors: HashMap<u64, f32>,
+}
+
+/// The map key of a global lattice position.
+#[inline]
+fn key(p: Pt) -> u64 {
+    (u64::from(p[0]) << 32) | u64::from(p[1])
+}
+
+impl Cap {
+    /// The error of the coarse split point `m` (0 when it was not stored).
+    pub(crate) fn error(&self, m: Pt) -> f32 {
+        self.errors.get(&key(m)).copied().unwrap_or(0.0)
+    }
+
+    /// Number of stored split points.
+    pub(crate) fn len(&self) -> usize {
+        self.errors.len()
+    }
+
+    /// The coarse levels of `lattice`, whose window bitree is `tree`.
+    pub(crate) fn build(lattice: &Lattice, tree: &Bitree<'_>) -> Cap {
+        let s = lattice.scheme();
+        let top = s.cells_at(lattice.align_zoom());
+        let mut cap = Cap::default();
+        let mut size = 2 * top;
+        while size <= s.root_cells() {
+            cap.add_level(lattice, tree, size, top);
+            size *= 2;
+        }
+        cap
+    }
+
+    /// The error of the split point `m` of a triangle whose square has side
+    /// `size`: from the window's bitree up to `top`, from the cap above.
+    fn child_error(&self, lattice: &Lattice, tree: &Bitree<'_>, m: Pt, size: u64, top: u64) -> f32 {
+        if size > top {
+            return self.error(m);
+        }
+        let [x0, y0, x1, y1] = lattice.window();
+        let (x, y) = (u64::from(m[0]), u64::from(m[1]));
+        if x < x0 || x > x1 || y < y0 || y > y1 {
+            return 0.0;
+        }
+        let w = lattice.grid().width();
+        let i = (y - y0) as usize * w + (x - x0) as usize;
+        error_code::decode(tree.error_codes()[i])
+    }
+
+    /// Adds the `B(size)` then the `A(size)` split points whose squares meet
+    /// the window's interior.
+    fn add_level(&mut self, lattice: &Lattice, tree: &Bitree<'_>, size: u64, top: u64) {
+        let s = lattice.scheme();
+        let [x0, y0, x1, y1] = lattice.window();
+        let (nx, ny) = (2 * s.root_cells() / size, s.root_cells() / size);
+        // Every square within two squares of the window: a split point
+        // outside it inherits errors through the closure from split points
+        // nearer the window, up to `s/2 + s/4 + … < s` away at level `s`
+        // per level above (none at the bitree's levels, see
+        // `lattice::zero_band`), so beyond two squares every error is 0.
+        let first = |v: u64| (v / size).saturating_sub(2);
+        let squares: Vec<[u64; 2]> = (first(y0)..=(y1 / size + 2).min(ny - 1))
+            .flat_map(|j| (first(x0)..=(x1 / size + 2).min(nx - 1)).map(move |i| [i, j]))
+            .collect();
+        // Sides: the four triangles with a side as hypotenuse and the centre as apex.
+        let sides: Vec<(Pt, f32)> = squares
+            .par_iter()
+            .flat_map_iter(|&[i, j]| {
+                square_tris(i, j, size).0.map(|t| {
+                    let (c0, c1) = t.children();
+                    let e = own_error(lattice, &t)
+                        .max(self.child_error(lattice, tree, c0.mid(), size / 2, top))
+                        .max(self.child_error(lattice, tree, c1.mid(), size / 2, top));
+                    (t.mid(), e)
+                })
+            })
+            .collect();
+        for (m, e) in sides {
+            let slot = self.errors.entry(key(m)).or_insert(0.0);
+            *slot = slot.max(e);
+        }
+        // Halves: the two triangles with the diagonal as hypotenuse.
+        let halves: Vec<(Pt, f32)> = squares
+            .par_iter()
+            .map(|&[i, j]| {
+                let tris = square_tris(i, j, size).1;
+                let mut e = 0f32;
+                for t in tris {
+                    let (c0, c1) = t.children();
+                    e = e
+                        .max(own_error(lattice, &t))
+                        .max(self.error(c0.mid()))
+                        .max(self.error(c1.mid()));
+                }
+                (tris[0].mid(), e)
+            })
+            .collect();
+        for (m, e) in halves {
+            if e > 0.0 {
+                self.errors.insert(key(m), e);
+            }
+        }
+        self.errors.retain(|_, e| *e > 0.0);
+    }
+}
+
+/// The square `(i, j)` of side `size`: its four side triangles (hypotenuse a
+/// side, apex the centre) and its two halves, cut along `\` when `i + j` is
+/// even and `/` when odd (the hierarchy's diagonals).
+fn square_tris(i: u64, j: u64, size: u64) -> ([Tri; 4], [Tri; 2]) {
+    let (x0, y0) = ((i * size) as u32, (j * size) as u32);
+    let s = size as u32;
+    let (nw, ne, sw, se) = ([x0, y0], [x0 + s, y0], [x0, y0 + s], [x0 + s, y0 + s]);
+    let c = [x0 + s / 2, y0 + s / 2];
+    let side = |a: Pt, b: Pt| Tri { a, b, c };
+    let sides = [side(nw, ne), side(ne, se), side(se, sw), side(sw, nw)];
+    let halves = if (i + j).is_multiple_of(2) {
+        [
+            Tri {
+                a: nw,
+                b: se,
+                c: ne,
+            },
+            Tri {
+                a: se,
+                b: nw,
+                c: sw,
+            },
+        ]
+    } else {
+        [
+            Tri {
+                a: ne,
+                b: sw,
+                c: se,
+            },
+            Tri {
+                a: sw,
+                b: ne,
+                c: nw,
+            },
+        ]
+    };
+    (sides, halves)
+}
+
+/// The own error `e(T)` of a global triangle over the lattice (window
+/// samples one by one, the 0 m beyond by the ends of each row's span),
+/// rounded up to `f32`.
+pub(crate) fn own_error(lattice: &Lattice, t: &Tri) -> f32 {
+    let [x0, y0, x1, y1] = lattice.window();
+    let p = [t.a, t.b, t.c];
+    let lo = [p.iter().map(|q| q[0]).min(), p.iter().map(|q| q[1]).min()];
+    let hi = [p.iter().map(|q| q[0]).max(), p.iter().map(|q| q[1]).max()];
+    let (Some(lx), Some(ly), Some(hx), Some(hy)) = (lo[0], lo[1], hi[0], hi[1]) else {
+        return 0.0;
+    };
+    // Entirely on the 0 m outside the window's interior: the plane is 0 too.
+    if u64::from(hx) <= x0 || u64::from(lx) >= x1 || u64::from(hy) <= y0 || u64::from(ly) >= y1 {
+        return 0.0;
+    }
+    let z = p.map(|q| f64::from(lattice.height_at(u64::from(q[0]), u64::from(q[1]))));
+    let Some(plane) = Plane::new(p, z) else {
+        return 0.0;
+    };
+    let spans = RowSpans::new(p.map(|q| [i64::from(q[0]), i64::from(q[1])]));
+    let (ya, yb) = spans.rows();
+    let row_error = |y: i64| -> f64 {
+        let (l, r) = spans.at(y);
+        if l > r {
+            return 0.0;
+        }
+        let bg = |x: i64| plane.at(x as f64, y as f64).abs();
+        let (wx0, wx1) = (x0 as i64, x1 as i64);
+        if y < y0 as i64 || y > y1 as i64 || r < wx0 || l > wx1 {
+            return bg(l).max(bg(r));
+        }
+        let (a, b) = (l.max(wx0), r.min(wx1));
+        let mut e = 0f64;
+        if l < a {
+            e = e.max(bg(l)).max(bg(a - 1));
+        }
+        if r > b {
+            e = e.max(bg(b + 1)).max(bg(r));
+        }
+        let g = lattice.grid();
+        let row = &g.heights()[(y - y0 as i64) as usize * g.width()..];
+        for x in a..=b {
+            let d = (plane.at(x as f64, y as f64) - row[(x - wx0) as usize] as f64).abs();
+            e = e.max(d);
+        }
+        e
+    };
+    let e = if yb - ya > 256 {
+        (ya..=yb)
+            .into_par_iter()
+            .map(row_error)
+            .reduce(|| 0.0, f64::max)
+    } else {
+        (ya..=yb).map(row_error).fold(0.0, f64::max)
+    };
+    round_up_f32(e)
+}

@@ -1,0 +1,334 @@
+//! One tile: the subtree of the global hierarchy inside the tile's square.
+//!
+//! Paper `000_ebf7e3a88dffd361.txt` §2: a triangle splits at the midpoint of
+//! its hypotenuse; both triangles of a diamond read the same error, so a
+//! decision per split point is crack-free. Paper `001_49f2c365e8c41172.txt`:
+//! the frontier of the tree is the mesh.
+//!
+//! The tile's roots are the two halves of its square (every triangle larger
+//! than the tile is split). A triangle splits when its split point's error
+//! (the window's [`Bitree`] up to the alignment zoom's squares, the
+//! [`super::cap`] above) exceeds the zoom's threshold. Each leaf then meets
+//! `e(T) ≤ threshold` at every lattice sample it covers; a leaf outside the
+//! window lies on 0 m and never splits.
+//!
+//! Also per vertex, on request: a normal from the lattice's slope at the
+//! tile's own scale (a central difference over `T_z / 64` cells, so two
+//! tiles that share a vertex give it the same normal), and a 256×256 water
+//! mask (samples at or below 0 m: sea level in SRTM, and the 0 m beyond the
+//! source; a heuristic, not a coastline).
+
+use std::collections::HashMap;
+
+use super::cap::Cap;
+use super::error::TilesError;
+use super::lattice::Lattice;
+use super::plan::{children_in, plan, TileRange, TilerOptions, ZoomPlan};
+use super::scheme::TileId;
+use crate::bitree::error_code::SplitRule;
+use crate::bitree::Bitree;
+use crate::grid::metres_per_degree;
+use crate::hierarchy::{orient_up, Pt, Tri};
+use crate::mesh::check::Region;
+use crate::mesh::{Mesh, MeshVertex};
+
+/// A tile's water mask: quantized-mesh's extension 2.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum WaterMask {
+    /// All land (0) or all water (255).
+    Uniform(u8),
+    /// 256×256 values, north to south, west to east; 0 land, 255 water.
+    Grid(Vec<u8>),
+}
+
+/// A tile's mesh and what its encoding needs.
+#[derive(Debug, Clone)]
+pub struct TileMesh {
+    /// The tile.
+    pub tile: TileId,
+    /// Lattice cells across the tile (`T_z`).
+    pub cells: u64,
+    /// `[west, south, east, north]`, degrees.
+    pub rect_deg: [f64; 4],
+    /// Vertices on the tile's lattice samples (column from its west edge,
+    /// row from its north edge, `0..=cells`), triangles counter-clockwise
+    /// seen from above.
+    pub mesh: Mesh,
+    /// The bound the tile meets after quantization, metres.
+    pub max_error_m: f64,
+    /// The threshold it was extracted at, metres.
+    pub threshold_m: f64,
+    /// Unit normals per vertex in east, north, up components (on request).
+    pub normals_enu: Option<Vec<[f32; 3]>>,
+    /// The water mask (on request).
+    pub water_mask: Option<WaterMask>,
+    /// The tile's children that the pyramid makes, if any.
+    pub children: Option<TileRange>,
+}
+
+/// A lattice with its global hierarchy, ready to cut any tile.
+///
+/// ```
+/// use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
+/// use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
+/// let n = 61;
+/// let heights = (0..n * n).map(|i| 300.0 + ((i % n) as f32 * 0.2).sin() * 40.0).collect();
+/// let georef = GeoRef { crs: Crs::WGS84, origin_x: 10.0, origin_y: 1.0, pixel_x: 0.01,
+///     pixel_y: -0.01, pixel_is: PixelIs::Point, known: true };
+/// let source = HeightGrid::new(n, n, heights, georef).unwrap();
+/// let lattice = Lattice::resample(&source, &LatticeOptions::DEFAULT).unwrap();
+/// let prepared = Prepared::new(&lattice, &TilerOptions::DEFAULT).unwrap();
+/// let root = prepared.cut(TileId { z: 0, x: 1, y: 0 }, false, false).unwrap();
+/// assert!(root.mesh.triangle_count() >= 2);
+/// ```
+#[derive(Debug)]
+pub struct Prepared<'l> {
+    lattice: &'l Lattice,
+    tree: Bitree<'l>,
+    cap: Cap,
+    zooms: Vec<ZoomPlan>,
+}
+
+impl<'l> Prepared<'l> {
+    /// Builds the window's bitree and the coarse levels above it.
+    ///
+    /// # Errors
+    /// [`TilesError::BadOptions`], [`TilesError::BelowQuantization`],
+    /// [`TilesError::Mesh`].
+    ///
+    /// # Runtime
+    /// The window's [`Bitree::build`] (`O(n log n)`) plus `O(n)` per coarse
+    /// level, for `n` window samples.
+    pub fn new(lattice: &'l Lattice, opts: &TilerOptions) -> Result<Self, TilesError> {
+        let zooms = plan(lattice, opts)?;
+        let tree = Bitree::build(lattice.grid())?;
+        let cap = Cap::build(lattice, &tree);
+        Ok(Prepared {
+            lattice,
+            tree,
+            cap,
+            zooms,
+        })
+    }
+
+    /// The lattice.
+    pub fn lattice(&self) -> &'l Lattice {
+        self.lattice
+    }
+
+    /// The plan of every zoom made, coarse to fine.
+    pub fn zooms(&self) -> &[ZoomPlan] {
+        &self.zooms
+    }
+
+    /// The plan of zoom `z`, if it is made.
+    pub fn zoom(&self, z: u8) -> Option<&ZoomPlan> {
+        self.zooms.iter().find(|p| p.zoom == z)
+    }
+
+    /// Coarse split points stored above the window's bitree.
+    pub fn cap_points(&self) -> usize {
+        self.cap.len()
+    }
+
+    /// Every tile of the pyramid, zoom by zoom.
+    pub fn tiles(&self) -> impl Iterator<Item = TileId> + '_ {
+        self.zooms.iter().flat_map(|p| {
+            let r = p.range;
+            (r.y0..=r.y1).flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z: p.zoom, x, y }))
+        })
+    }
+
+    /// Number of tiles in the pyramid.
+    pub fn tile_count(&self) -> u64 {
+        self.zooms.iter().map(|p| p.range.count()).sum()
+    }
+
+    /// The samples tile `t` is checked against: its square of the lattice.
+    pub fn region(&self, t: TileId) -> Region<'l> {
+        let [gx, gy] = self.lattice.scheme().tile_origin(t);
+        let [ox, oy] = self.lattice.origin();
+        let n = self.lattice.scheme().cells_at(t.z) + 1;
+        Region {
+            grid: self.lattice.grid(),
+            origin: [ox as i64 - gx as i64, oy as i64 - gy as i64],
+            size: [n, n],
+            background_m: 0.0,
+        }
+    }
+
+    /// Cuts tile `t`, with per-vertex normals and a water mask on request.
+    ///
+    /// # Errors
+    /// [`TilesError::NoSuchTile`] for a tile outside the pyramid.
+    ///
+    /// # Runtime
+    /// Proportional to the tile's triangles (plus 256² lattice reads for the
+    /// water mask).
+    pub fn cut(&self, t: TileId, normals: bool, water: bool) -> Result<TileMesh, TilesError> {
+        let plan = self
+            .zoom(t.z)
+            .filter(|p| p.range.contains(t.x, t.y))
+            .ok_or(TilesError::NoSuchTile {
+                tile: t,
+                min_zoom: self.zooms.first().map_or(0, |p| p.zoom),
+                max_zoom: self.lattice.scheme().max_zoom,
+            })?;
+        let s = self.lattice.scheme();
+        let cells = s.cells_at(t.z);
+        let origin = s.tile_origin(t);
+        let leaves = self.walk(origin, cells, plan.threshold_m);
+        let mesh = self.mesh_of(&leaves, origin);
+        Ok(TileMesh {
+            tile: t,
+            cells,
+            rect_deg: s.tile_rect_deg(t),
+            normals_enu: normals.then(|| self.normals(&mesh, origin, cells)),
+            water_mask: water.then(|| self.water(origin, cells)),
+            mesh,
+            max_error_m: plan.max_error_m,
+            threshold_m: plan.threshold_m,
+            children: children_in(t, self.zoom(t.z + 1)),
+        })
+    }
+
+    /// The leaves under the tile's square (north-west corner `o`, side
+    /// `cells`) at threshold `thr`, depth-first.
+    fn walk(&self, o: [u64; 2], cells: u64, thr: f64) -> Vec<Tri> {
+        let rule = SplitRule::new(thr);
+        let (x0, y0, s) = (o[0] as u32, o[1] as u32, cells as u32);
+        let (nw, ne, sw, se) = ([x0, y0], [x0 + s, y0], [x0, y0 + s], [x0 + s, y0 + s]);
+        let even = (u64::from(x0) / cells + u64::from(y0) / cells).is_multiple_of(2);
+        let roots = if even {
+            [
+                Tri {
+                    a: nw,
+                    b: se,
+                    c: ne,
+                },
+                Tri {
+                    a: se,
+                    b: nw,
+                    c: sw,
+                },
+            ]
+        } else {
+            [
+                Tri {
+                    a: ne,
+                    b: sw,
+                    c: se,
+                },
+                Tri {
+                    a: sw,
+                    b: ne,
+                    c: nw,
+                },
+            ]
+        };
+        let mut stack: Vec<Tri> = roots.iter().rev().copied().collect();
+        let mut out = Vec::new();
+        while let Some(t) = stack.pop() {
+            if !t.is_unit() && self.splits(&t, &rule) {
+                let (c0, c1) = t.children();
+                stack.push(c1);
+                stack.push(c0);
+            } else {
+                out.push(t);
+            }
+        }
+        out
+    }
+
+    /// Whether `t` splits under `rule`: the window's bitree up to the
+    /// alignment zoom's squares, the cap above.
+    #[inline]
+    fn splits(&self, t: &Tri, rule: &SplitRule) -> bool {
+        let m = t.mid();
+        let size = t.a[0].abs_diff(t.b[0]).max(t.a[1].abs_diff(t.b[1]));
+        let top = self.lattice.scheme().cells_at(self.lattice.align_zoom());
+        if u64::from(size) > top {
+            return f64::from(self.cap.error(m)) > f64::from(rule.threshold);
+        }
+        let [x0, y0, x1, y1] = self.lattice.window();
+        let (x, y) = (u64::from(m[0]), u64::from(m[1]));
+        if x < x0 || x > x1 || y < y0 || y > y1 {
+            return false;
+        }
+        let w = self.lattice.grid().width();
+        self.tree
+            .splits_index((y - y0) as usize * w + (x - x0) as usize, rule)
+    }
+
+    /// The leaves as a mesh in tile coordinates, vertices in first-use order.
+    fn mesh_of(&self, leaves: &[Tri], o: [u64; 2]) -> Mesh {
+        let mut ids: HashMap<Pt, u32> = HashMap::with_capacity(leaves.len());
+        let mut mesh = Mesh {
+            vertices: Vec::with_capacity(leaves.len() / 2 + 4),
+            triangles: Vec::with_capacity(leaves.len()),
+        };
+        for t in leaves {
+            let mut tri = [t.a, t.b, t.c];
+            if orient_up(tri[0], tri[1], tri[2]) < 0 {
+                tri.swap(1, 2);
+            }
+            let idx = tri.map(|p| {
+                *ids.entry(p).or_insert_with(|| {
+                    mesh.vertices.push(MeshVertex {
+                        col: (u64::from(p[0]) - o[0]) as u32,
+                        row: (u64::from(p[1]) - o[1]) as u32,
+                        z_m: self.lattice.height_at(u64::from(p[0]), u64::from(p[1])),
+                    });
+                    (mesh.vertices.len() - 1) as u32
+                })
+            });
+            mesh.triangles.push(idx);
+        }
+        mesh
+    }
+
+    /// Per-vertex unit normals (east, north, up) from the lattice's slope
+    /// over `max(1, cells / 64)` cells on each side of the vertex.
+    fn normals(&self, mesh: &Mesh, o: [u64; 2], cells: u64) -> Vec<[f32; 3]> {
+        let s = self.lattice.scheme();
+        let k = (cells / 64).max(1);
+        let (wmax, hmax) = (2 * s.root_cells(), s.root_cells());
+        let d = s.cell_deg();
+        mesh.vertices
+            .iter()
+            .map(|v| {
+                let (x, y) = (o[0] + u64::from(v.col), o[1] + u64::from(v.row));
+                let h = |x: u64, y: u64| f64::from(self.lattice.height_at(x, y));
+                let (xa, xb) = (x.saturating_sub(k), (x + k).min(wmax));
+                let (ya, yb) = (y.saturating_sub(k), (y + k).min(hmax));
+                let [mx, my] = metres_per_degree(s.lat_of(y as f64));
+                let dx = (h(xb, y) - h(xa, y)) / (((xb - xa) as f64) * d * mx).max(1e-9);
+                // Rows run south: the slope to the north is minus the slope down the rows.
+                let dn = -(h(x, yb) - h(x, ya)) / (((yb - ya) as f64) * d * my).max(1e-9);
+                let n = [-dx, -dn, 1.0];
+                let len = (n[0] * n[0] + n[1] * n[1] + 1.0).sqrt();
+                n.map(|c| (c / len) as f32)
+            })
+            .collect()
+    }
+
+    /// The water mask: 256×256 nearest lattice samples, water at or below 0 m.
+    fn water(&self, o: [u64; 2], cells: u64) -> WaterMask {
+        let mut grid = Vec::with_capacity(256 * 256);
+        for j in 0..256u64 {
+            let y = o[1] + (j * cells + 127) / 255;
+            for i in 0..256u64 {
+                let x = o[0] + (i * cells + 127) / 255;
+                grid.push(if self.lattice.height_at(x, y) <= 0.0 {
+                    255u8
+                } else {
+                    0
+                });
+            }
+        }
+        match grid.first() {
+            Some(&v) if grid.iter().all(|&g| g == v) => WaterMask::Uniform(v),
+            _ => WaterMask::Grid(grid),
+        }
+    }
+}

@@ -1,0 +1,216 @@
+//! The pyramid's plan: which tiles exist at each zoom, their error bound, and
+//! the margin that quantization may cost.
+//!
+//! Reference: the quantized-mesh-1.0 specification (CesiumGS/quantized-mesh):
+//! `u`, `v` and heights are integers in `0..=32767` across the tile and its
+//! height range. A tile at zoom `z` spans `T_z` lattice cells, so a vertex
+//! moves by at most `δ = T_z / (2·32767)` cells along each axis and its
+//! height by at most half a height step `Δh / (2·32767)`.
+//!
+//! # The margin
+//! Let `S` be a tile's mesh on the lattice (vertices on samples) and `Ŝ` the
+//! decoded one. At a lattice sample `p` in decoded triangle `t̂` (the image of
+//! `t`, vertices `P_i + δ_i`, heights `z_i + η_i`), with `λ` the barycentric
+//! weights of `p` in `t̂` and `q = Σ λ_i P_i ∈ t`:
+//! `Ŝ(p) − S(p) = Σ λ_i η_i + S(q) − S(p)`, since the plane of `t` takes
+//! `Σ λ_i z_i` at `q`. Every plane of the hierarchy has `|∂h/∂col|` and
+//! `|∂h/∂row|` at most `G = max|Δ_col h| + max|Δ_row h|` over the lattice (its
+//! legs are axis-aligned or diagonal, and a leg's slope is a mean of the
+//! lattice's steps), and `|q − p| ≤ δ` on each axis, so
+//! `|Ŝ(p) − S(p)| ≤ Δh/(2·32767) + 2·G·δ`. Extracting at
+//! `e_z − margin_z`, with `margin_z` that bound (plus rounding slack), keeps
+//! the decoded tile within `e_z` at every sample; the checker then verifies
+//! it on the decoded tile itself. The margin is the same for every tile of a
+//! zoom, so that neighbours decide their shared border alike.
+
+use rayon::prelude::*;
+
+use super::error::TilesError;
+use super::lattice::Lattice;
+use super::scheme::{ErrorSchedule, GeographicScheme, TileId};
+use super::QUANTIZED_MAX;
+
+/// Options for [`super::Prepared::new`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct TilerOptions {
+    /// The coarsest zoom made. Default: 0 (the two root tiles).
+    pub min_zoom: u8,
+    /// The error bound per zoom. Default: [`ErrorSchedule::DEFAULT`].
+    pub error: ErrorSchedule,
+}
+
+impl TilerOptions {
+    /// The defaults, as documented on each field.
+    pub const DEFAULT: TilerOptions = TilerOptions {
+        min_zoom: 0,
+        error: ErrorSchedule::DEFAULT,
+    };
+
+    /// Sets [`TilerOptions::min_zoom`].
+    pub const fn with_min_zoom(mut self, z: u8) -> Self {
+        self.min_zoom = z;
+        self
+    }
+
+    /// Sets [`TilerOptions::error`].
+    pub const fn with_error(mut self, e: ErrorSchedule) -> Self {
+        self.error = e;
+        self
+    }
+}
+
+impl Default for TilerOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The tiles of one zoom: columns `x0..=x1`, TMS rows `y0..=y1`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TileRange {
+    /// First column.
+    pub x0: u32,
+    /// Last column.
+    pub x1: u32,
+    /// First row (south).
+    pub y0: u32,
+    /// Last row (north).
+    pub y1: u32,
+}
+
+impl TileRange {
+    /// Number of tiles.
+    pub fn count(&self) -> u64 {
+        u64::from(self.x1 - self.x0 + 1) * u64::from(self.y1 - self.y0 + 1)
+    }
+
+    /// True when `(x, y)` is in the range.
+    pub fn contains(&self, x: u32, y: u32) -> bool {
+        (self.x0..=self.x1).contains(&x) && (self.y0..=self.y1).contains(&y)
+    }
+}
+
+/// One zoom of the pyramid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ZoomPlan {
+    /// The zoom.
+    pub zoom: u8,
+    /// The tiles made at this zoom.
+    pub range: TileRange,
+    /// The bound every tile meets after quantization, metres.
+    pub max_error_m: f64,
+    /// What quantization may cost (see the module docs), metres.
+    pub margin_m: f64,
+    /// The extraction threshold `max_error_m − margin_m`, metres.
+    pub threshold_m: f64,
+}
+
+/// The tiles at zoom `z` that meet the window's interior (both root tiles
+/// at zoom 0, so that a client always finds them).
+pub fn range_at(s: &GeographicScheme, window: [u64; 4], z: u8) -> TileRange {
+    if z == 0 {
+        return TileRange {
+            x0: 0,
+            x1: 1,
+            y0: 0,
+            y1: 0,
+        };
+    }
+    let t = s.cells_at(z);
+    let [nx, ny] = GeographicScheme::tiles_at(z);
+    let (c0, c1) = ((window[0] / t) as u32, ((window[2] - 1) / t) as u32);
+    let (r0, r1) = ((window[1] / t) as u32, ((window[3] - 1) / t) as u32);
+    TileRange {
+        x0: c0.min(nx - 1),
+        x1: c1.min(nx - 1),
+        y0: ny - 1 - r1.min(ny - 1),
+        y1: ny - 1 - r0.min(ny - 1),
+    }
+}
+
+/// `G` of the module docs: the largest height step along a row plus the
+/// largest along a column, metres per lattice cell (0 m beyond the window
+/// and on its border, so no step crosses it).
+pub fn max_step_m(lattice: &Lattice) -> f64 {
+    let g = lattice.grid();
+    let (w, h) = (g.width(), g.height());
+    let hs = g.heights();
+    let (gx, gy) = (0..h)
+        .into_par_iter()
+        .map(|r| {
+            let row = &hs[r * w..(r + 1) * w];
+            let gx = row
+                .windows(2)
+                .map(|p| (p[1] as f64 - p[0] as f64).abs())
+                .fold(0.0, f64::max);
+            let gy = if r + 1 < h {
+                let next = &hs[(r + 1) * w..(r + 2) * w];
+                row.iter()
+                    .zip(next)
+                    .map(|(a, b)| (*b as f64 - *a as f64).abs())
+                    .fold(0.0, f64::max)
+            } else {
+                0.0
+            };
+            (gx, gy)
+        })
+        .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)));
+    gx + gy
+}
+
+/// The plan of every zoom from `opts.min_zoom` to the lattice's maximum.
+pub fn plan(lattice: &Lattice, opts: &TilerOptions) -> Result<Vec<ZoomPlan>, TilesError> {
+    let s = *lattice.scheme();
+    if opts.min_zoom > s.max_zoom {
+        return Err(TilesError::BadOptions(format!(
+            "expected a minimum zoom of at most the maximum zoom {}, found {}",
+            s.max_zoom, opts.min_zoom
+        )));
+    }
+    if !opts.error.is_valid() {
+        return Err(TilesError::BadOptions(format!(
+            "expected a positive, finite error factor or bound, found {:?}",
+            opts.error
+        )));
+    }
+    let (lo, hi) = lattice.grid().valid_range().unwrap_or((0.0, 0.0));
+    let range_m = f64::from(hi.max(0.0)) - f64::from(lo.min(0.0));
+    let q = f64::from(QUANTIZED_MAX);
+    let step = max_step_m(lattice);
+    let slack = 1e-6 * f64::from(hi.abs().max(lo.abs())).max(1.0);
+    (opts.min_zoom..=s.max_zoom)
+        .map(|z| {
+            let max_error_m = opts.error.max_error_m(z, s.max_zoom);
+            let delta = s.cells_at(z) as f64 / (2.0 * q);
+            let margin_m = range_m / (2.0 * q) + 2.0 * step * delta + slack;
+            if margin_m >= max_error_m {
+                return Err(TilesError::BelowQuantization {
+                    zoom: z,
+                    max_error_m,
+                    margin_m,
+                });
+            }
+            Ok(ZoomPlan {
+                zoom: z,
+                range: range_at(&s, lattice.window(), z),
+                max_error_m,
+                margin_m,
+                threshold_m: max_error_m - margin_m,
+            })
+        })
+        .collect()
+}
+
+/// The children of `t` at zoom `t.z + 1` that the plan makes, as a range
+/// (`None` when there are none).
+pub fn children_in(t: TileId, next: Option<&ZoomPlan>) -> Option<TileRange> {
+    let r = next?.range;
+    let c = TileRange {
+        x0: (2 * t.x).max(r.x0),
+        x1: (2 * t.x + 1).min(r.x1),
+        y0: (2 * t.y).max(r.y0),
+        y1: (2 * t.y + 1).min(r.y1),
+    };
+    (c.x0 <= c.x1 && c.y0 <= c.y1).then_some(c)
+}

@@ -1,0 +1,44 @@
+//! Cesium quantized-mesh-1.0 terrain pyramids: the encoder, an independent
+//! decoder, `layer.json`, and the writer of a whole pyramid as a directory
+//! tree `OUT/layer.json` + `OUT/{z}/{x}/{y}.terrain`.
+//!
+//! The tiles themselves are cut by [`cota_core::tiles`]; this module turns
+//! them into bytes, decodes the bytes back, checks the decoded tile against
+//! its error bound at every sample of its lattice (after quantization), and
+//! writes it atomically.
+//!
+//! ```
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
+//! use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
+//! use cota_io::tiles::{write_pyramid, PyramidOptions};
+//! let n = 61;
+//! let heights = (0..n * n).map(|i| 300.0 + ((i % n) as f32 * 0.2).sin() * 40.0).collect();
+//! let georef = GeoRef { crs: Crs::WGS84, origin_x: 10.0, origin_y: 1.0, pixel_x: 0.01,
+//!     pixel_y: -0.01, pixel_is: PixelIs::Point, known: true };
+//! let source = HeightGrid::new(n, n, heights, georef)?;
+//! let lattice = Lattice::resample(&source, &LatticeOptions::DEFAULT)?;
+//! let prepared = Prepared::new(&lattice, &TilerOptions::DEFAULT)?;
+//! let out = tempfile::tempdir()?;
+//! let report = write_pyramid(&prepared, out.path(), &PyramidOptions::DEFAULT, &|_| {})?;
+//! assert_eq!(report.written(), prepared.tile_count());
+//! assert!(out.path().join("layer.json").is_file());
+//! # Ok(())
+//! # }
+//! ```
+
+pub mod decode;
+pub mod ellipsoid;
+pub mod layer;
+pub mod pyramid;
+pub mod quantized_mesh;
+pub mod seams;
+
+pub use decode::{decode, DecodeError, DecodedTile, Header};
+pub use layer::layer_json;
+pub use pyramid::{
+    make_tile, tile_path, write_pyramid, MadeTile, PyramidError, PyramidOptions, PyramidReport,
+    ZoomReport,
+};
+pub use quantized_mesh::{encode, encode_tile, EncodeError, Extensions, TileExtensions, TileFrame};
+pub use seams::{compare_border, edge_lists_match, BorderCheck, Neighbour};

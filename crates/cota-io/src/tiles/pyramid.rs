@@ -1,0 +1,410 @@
+//! Writing a pyramid: `OUT/layer.json` and `OUT/{z}/{x}/{y}.terrain`, every
+//! tile cut and encoded, and with [`PyramidOptions::check`] (the default)
+//! decoded again and checked before it is written.
+//!
+//! * **Parallel**: all tiles of all zooms go to the rayon pool at once; each
+//!   is independent (the prepared hierarchy is shared, read-only).
+//! * **Bounded memory**: a tile lives from its cut to its write; nothing of
+//!   the pyramid is kept but per-zoom counters.
+//! * **Atomic**: a tile is written to a temporary file in its directory and
+//!   renamed over its name, so an interrupted run leaves complete tiles or
+//!   none (not `fsync`ed: a power cut may lose recent tiles, never mix them).
+//!   `layer.json` is written last.
+//! * **Resumable, shardable**: `OUT/.cota-tiles.json` records what decides
+//!   the tiles' content; a run into a directory whose manifest matches skips
+//!   the tiles already there (`force` redoes them), one whose manifest
+//!   differs is refused unless `force`. Runs over disjoint sets of tiles can
+//!   share a directory.
+//! * **Verified** (with [`PyramidOptions::check`]): [`make_tile`] decodes the
+//!   bytes with the independent decoder and checks the decoded tile with
+//!   [`cota_core::mesh::check::check_placed_mesh`] against its zoom's bound at
+//!   every sample of its square of the lattice, and its edge lists.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use cota_core::mesh::check::{check_placed_mesh, CheckError};
+use cota_core::tiles::{Prepared, TileId, TilesError};
+use rayon::prelude::*;
+
+use super::decode::{decode, DecodeError};
+use super::layer::{layer_json, run_manifest};
+use super::quantized_mesh::{encode_tile, EncodeError, TileExtensions};
+use super::seams::edge_lists_match;
+
+/// Why a pyramid or a tile could not be made.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PyramidError {
+    /// A file or directory could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The path.
+        path: PathBuf,
+        /// The error.
+        source: std::io::Error,
+    },
+    /// The tiling could not be prepared or cut.
+    #[error(transparent)]
+    Tiles(#[from] TilesError),
+    /// A tile could not be encoded.
+    #[error("tile {tile}: {source}")]
+    Encode {
+        /// The tile.
+        tile: TileId,
+        /// The error.
+        source: EncodeError,
+    },
+    /// A tile's bytes did not decode: an encoder bug.
+    #[error("tile {tile} does not decode: {source}")]
+    Decode {
+        /// The tile.
+        tile: TileId,
+        /// The error.
+        source: DecodeError,
+    },
+    /// A decoded tile broke an invariant: a bug, reported rather than written.
+    #[error("tile {tile} fails its check after quantization: {source}")]
+    Check {
+        /// The tile.
+        tile: TileId,
+        /// The violations.
+        source: CheckError,
+    },
+    /// The output holds tiles made with other settings.
+    #[error("{path} was made with other settings (found {found}, expected {expected}); use --force to redo every tile, or another directory")]
+    Changed {
+        /// The manifest.
+        path: PathBuf,
+        /// Its content.
+        found: String,
+        /// This run's.
+        expected: String,
+    },
+}
+
+/// How to write a pyramid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub struct PyramidOptions {
+    /// Extensions to write. Default: none.
+    pub extensions: TileExtensions,
+    /// Gzip each tile (the server then sends `Content-Encoding: gzip`). Default: false.
+    pub gzip: bool,
+    /// Redo tiles that exist, and ignore another run's manifest. Default: false.
+    pub force: bool,
+    /// Decode every tile again and check it (the one checker's placed mode,
+    /// every lattice sample of its square, and its edge lists) before it is
+    /// written. Default: true (`cota tiles` turns it on with `--check`).
+    pub check: bool,
+}
+
+impl PyramidOptions {
+    /// The defaults, as documented on each field.
+    pub const DEFAULT: PyramidOptions = PyramidOptions {
+        extensions: TileExtensions::NONE,
+        gzip: false,
+        force: false,
+        check: true,
+    };
+
+    /// Sets [`PyramidOptions::extensions`].
+    pub const fn with_extensions(mut self, e: TileExtensions) -> Self {
+        self.extensions = e;
+        self
+    }
+
+    /// Sets [`PyramidOptions::gzip`].
+    pub const fn with_gzip(mut self, yes: bool) -> Self {
+        self.gzip = yes;
+        self
+    }
+
+    /// Sets [`PyramidOptions::force`].
+    pub const fn with_force(mut self, yes: bool) -> Self {
+        self.force = yes;
+        self
+    }
+
+    /// Sets [`PyramidOptions::check`].
+    pub const fn with_check(mut self, yes: bool) -> Self {
+        self.check = yes;
+        self
+    }
+}
+
+/// One tile, encoded and verified.
+#[derive(Debug, Clone)]
+pub struct MadeTile {
+    /// The tile.
+    pub tile: TileId,
+    /// Its bytes, gzipped when asked.
+    pub bytes: Vec<u8>,
+    /// Triangles.
+    pub triangles: usize,
+    /// Vertices.
+    pub vertices: usize,
+    /// The bound it meets, metres.
+    pub max_error_m: f64,
+    /// The largest error measured on the decoded tile, metres; NaN when
+    /// [`PyramidOptions::check`] is off.
+    pub measured_error_m: f64,
+}
+
+/// Cuts, encodes and (with [`PyramidOptions::check`]) verifies one tile: the
+/// entry point for making tiles on demand from a prepared hierarchy.
+///
+/// # Errors
+/// [`PyramidError::Tiles`] for a tile outside the pyramid, and
+/// [`PyramidError::Encode`], [`PyramidError::Decode`] or
+/// [`PyramidError::Check`] when the tile is wrong (a bug: never written).
+pub fn make_tile(
+    prep: &Prepared<'_>,
+    t: TileId,
+    opts: &PyramidOptions,
+) -> Result<MadeTile, PyramidError> {
+    let ext = opts.extensions;
+    let tile = prep.cut(t, ext.normals, ext.watermask)?;
+    let raw =
+        encode_tile(&tile, &ext).map_err(|source| PyramidError::Encode { tile: t, source })?;
+    let bytes = if opts.gzip { gzip(&raw) } else { raw };
+    if !opts.check {
+        return Ok(MadeTile {
+            tile: t,
+            bytes,
+            triangles: tile.mesh.triangles.len(),
+            vertices: tile.mesh.vertices.len(),
+            max_error_m: tile.max_error_m,
+            measured_error_m: f64::NAN,
+        });
+    }
+    let decoded = decode(&bytes).map_err(|source| PyramidError::Decode { tile: t, source })?;
+    let report = check_placed_mesh(
+        &prep.region(t),
+        &decoded.to_placed(tile.cells),
+        Some(tile.max_error_m),
+    )
+    .map_err(|source| PyramidError::Check { tile: t, source })?;
+    if !edge_lists_match(&decoded) {
+        return Err(PyramidError::Decode {
+            tile: t,
+            source: DecodeError::Invalid("the edge lists do not hold the edges' vertices".into()),
+        });
+    }
+    Ok(MadeTile {
+        tile: t,
+        bytes,
+        triangles: decoded.triangles.len(),
+        vertices: decoded.u.len(),
+        max_error_m: tile.max_error_m,
+        measured_error_m: report.metrics.max_error_m,
+    })
+}
+
+fn gzip(raw: &[u8]) -> Vec<u8> {
+    let mut e = flate2::write::GzEncoder::new(
+        Vec::with_capacity(raw.len() / 2),
+        flate2::Compression::default(),
+    );
+    // Writing to a Vec cannot fail.
+    let _ = e.write_all(raw);
+    e.finish().unwrap_or_default()
+}
+
+/// What one zoom of a written pyramid holds.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
+pub struct ZoomReport {
+    /// The zoom.
+    pub zoom: u8,
+    /// Tiles written.
+    pub written: u64,
+    /// Tiles kept from a previous run.
+    pub skipped: u64,
+    /// Bytes written.
+    pub bytes: u64,
+    /// Triangles written.
+    pub triangles: u64,
+    /// Vertices written.
+    pub vertices: u64,
+    /// The zoom's bound, metres.
+    pub max_error_m: f64,
+    /// The margin left for quantization, metres.
+    pub margin_m: f64,
+    /// The largest error measured over its written tiles, metres; NaN when
+    /// they were not checked ([`PyramidOptions::check`] off).
+    pub measured_error_m: f64,
+}
+
+/// What [`write_pyramid`] did.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+pub struct PyramidReport {
+    /// Per zoom, coarse to fine.
+    pub zooms: Vec<ZoomReport>,
+    /// Seconds the tiles took (cut, encode, verify, write, in parallel).
+    pub seconds: f64,
+}
+
+impl PyramidReport {
+    /// Tiles written.
+    pub fn written(&self) -> u64 {
+        self.zooms.iter().map(|z| z.written).sum()
+    }
+
+    /// Tiles skipped.
+    pub fn skipped(&self) -> u64 {
+        self.zooms.iter().map(|z| z.skipped).sum()
+    }
+
+    /// Bytes written.
+    pub fn bytes(&self) -> u64 {
+        self.zooms.iter().map(|z| z.bytes).sum()
+    }
+}
+
+fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> PyramidError + '_ {
+    move |source| PyramidError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file beside it, renamed.
+///
+/// # Errors
+/// [`PyramidError::Io`] naming the path.
+pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), PyramidError> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let done = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
+    if let Err(e) = done {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io_err(path)(e));
+    }
+    Ok(())
+}
+
+/// The path of a tile under `out`.
+pub fn tile_path(out: &Path, t: TileId) -> PathBuf {
+    out.join(t.z.to_string())
+        .join(t.x.to_string())
+        .join(format!("{}.terrain", t.y))
+}
+
+/// Checks or writes the run manifest.
+fn manifest(prep: &Prepared<'_>, out: &Path, opts: &PyramidOptions) -> Result<(), PyramidError> {
+    std::fs::create_dir_all(out).map_err(io_err(out))?;
+    let path = out.join(".cota-tiles.json");
+    let want = run_manifest(prep, &opts.extensions, opts.gzip);
+    if !opts.force && path.exists() {
+        let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
+        let found: serde_json::Value = serde_json::from_str(&text).unwrap_or_default();
+        if found != want {
+            return Err(PyramidError::Changed {
+                path,
+                found: text,
+                expected: want.to_string(),
+            });
+        }
+        return Ok(());
+    }
+    write_file_atomically(&path, want.to_string().as_bytes())
+}
+
+/// Per-tile outcome folded into the report.
+#[derive(Debug, Clone, Copy, Default)]
+struct Outcome {
+    zoom: u8,
+    written: bool,
+    bytes: u64,
+    triangles: u64,
+    vertices: u64,
+    measured: f64,
+}
+
+/// Writes every tile of `prep` under `out`, then `layer.json`;
+/// `progress(done)` after each tile.
+///
+/// # Errors
+/// [`PyramidError`]: the first tile that failed, an unwritable output, or
+/// an output made with other settings.
+pub fn write_pyramid(
+    prep: &Prepared<'_>,
+    out: &Path,
+    opts: &PyramidOptions,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<PyramidReport, PyramidError> {
+    let t0 = Instant::now();
+    manifest(prep, out, opts)?;
+    let tiles: Vec<TileId> = prep.tiles().collect();
+    let done = AtomicU64::new(0);
+    let outcomes: Vec<Outcome> = tiles
+        .par_iter()
+        .map(|&t| {
+            let path = tile_path(out, t);
+            let o = if !opts.force && path.is_file() {
+                Outcome {
+                    zoom: t.z,
+                    ..Outcome::default()
+                }
+            } else {
+                let m = make_tile(prep, t, opts)?;
+                write_file_atomically(&path, &m.bytes)?;
+                Outcome {
+                    zoom: t.z,
+                    written: true,
+                    bytes: m.bytes.len() as u64,
+                    triangles: m.triangles as u64,
+                    vertices: m.vertices as u64,
+                    measured: m.measured_error_m,
+                }
+            };
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+            Ok(o)
+        })
+        .collect::<Result<_, PyramidError>>()?;
+    let layer = layer_json(prep, &opts.extensions);
+    write_file_atomically(&out.join("layer.json"), format!("{layer:#}\n").as_bytes())?;
+    Ok(PyramidReport {
+        zooms: fold(prep, &outcomes),
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The per-zoom report of the tiles' outcomes.
+fn fold(prep: &Prepared<'_>, outcomes: &[Outcome]) -> Vec<ZoomReport> {
+    prep.zooms()
+        .iter()
+        .map(|p| {
+            let mut r = ZoomReport {
+                zoom: p.zoom,
+                max_error_m: p.max_error_m,
+                margin_m: p.margin_m,
+                ..ZoomReport::default()
+            };
+            for o in outcomes.iter().filter(|o| o.zoom == p.zoom) {
+                if o.written {
+                    r.written += 1;
+                    r.bytes += o.bytes;
+                    r.triangles += o.triangles;
+                    r.vertices += o.vertices;
+                    // NaN (not checked) stays NaN: `f64::max` would drop it.
+                    r.measured_error_m = if o.measured.is_nan() {
+                        f64::NAN
+                    } else {
+                        r.measured_error_m.max(o.measured)
+                    };
+                } else {
+                    r.skipped += 1;
+                }
+            }
+            r
+        })
+        .collect()
+}

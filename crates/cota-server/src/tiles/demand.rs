@@ -1,0 +1,161 @@
+//! [`DemandTileSource`]: quantized-mesh tiles made on demand from one
+//! prepared hierarchy in memory, each made once and kept.
+//!
+//! The pyramid is the one `cota tiles` writes (issue 17's design,
+//! `ARCHITECTURE.md`): the source resampled onto the tiling's lattice, one
+//! bitree over it ([`Prepared`], built once at start), and each requested
+//! tile cut from it and encoded by [`make_tile`] (quantized-mesh-1.0,
+//! CesiumGS/quantized-mesh), so a tile made here is byte for byte the file
+//! `cota tiles` writes with the same options, and same-zoom neighbours share
+//! their borders whichever order they are asked in.
+//!
+//! Concurrent requests for one tile make it once: the first caller makes it,
+//! the others wait for its result. Tiles are kept up to [`CACHE_BYTES`];
+//! beyond that they are made again when asked.
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex, OnceLock};
+
+use axum::body::Bytes;
+use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
+use cota_core::HeightGrid;
+use cota_io::tiles::{layer_json, make_tile, PyramidOptions};
+
+use super::{check_in_world, etag_of, Tile, TileId, TileSource, CACHE_BYTES};
+use crate::error::{Result, ServeError};
+
+self_cell::self_cell!(
+    /// The lattice and the hierarchy prepared over it (which borrows it).
+    struct Pyramid {
+        owner: Lattice,
+        #[covariant]
+        dependent: Prepared,
+    }
+    impl {Debug}
+);
+
+/// A tile being made or made: its bytes, or why it could not be made.
+type Slot = Arc<OnceLock<std::result::Result<Tile, String>>>;
+
+/// Tiles made on demand from a prepared hierarchy (see the module docs).
+#[derive(Debug)]
+pub struct DemandTileSource {
+    pyramid: Pyramid,
+    options: PyramidOptions,
+    layer: Bytes,
+    slots: Mutex<HashMap<TileId, Slot>>,
+    kept_bytes: AtomicUsize,
+}
+
+impl DemandTileSource {
+    /// Resamples `grid` onto the tiling's lattice and prepares its hierarchy
+    /// (`cota tiles`' first steps); tiles are then encoded with `options`.
+    ///
+    /// # Errors
+    /// [`ServeError::Tiling`]: a source that is not geographic, has voids or
+    /// lies outside the world, options out of range, a lattice too large.
+    ///
+    /// # Runtime
+    /// The lattice's resampling and its bitree: `O(n log n)` for `n` lattice
+    /// samples (about a second for two SRTM 3" tiles on two cores).
+    pub fn new(
+        grid: &HeightGrid,
+        lattice: &LatticeOptions,
+        tiler: &TilerOptions,
+        options: PyramidOptions,
+    ) -> Result<Self> {
+        let lattice = Lattice::resample(grid, lattice)?;
+        let pyramid = Pyramid::try_new(lattice, |l| Prepared::new(l, tiler))?;
+        let layer = layer_json(pyramid.borrow_dependent(), &options.extensions);
+        Ok(DemandTileSource {
+            layer: Bytes::from(format!("{layer:#}\n")),
+            pyramid,
+            options,
+            slots: Mutex::new(HashMap::new()),
+            kept_bytes: AtomicUsize::new(0),
+        })
+    }
+
+    /// The prepared hierarchy the tiles are cut from.
+    pub fn prepared(&self) -> &Prepared<'_> {
+        self.pyramid.borrow_dependent()
+    }
+
+    /// The core's name of tile `id`, when the pyramid has it.
+    fn find(&self, id: TileId) -> Result<cota_core::tiles::TileId> {
+        check_in_world(id, true)?;
+        let prep = self.prepared();
+        let t = u8::try_from(id.z)
+            .ok()
+            .filter(|&z| prep.zoom(z).is_some_and(|p| p.range.contains(id.x, id.y)))
+            .map(|z| cota_core::tiles::TileId {
+                z,
+                x: id.x,
+                y: id.y,
+            });
+        t.ok_or_else(|| {
+            ServeError::NotFound(format!(
+                "tile {}/{}/{} is not in the layer",
+                id.z, id.x, id.y
+            ))
+        })
+    }
+
+    /// Makes tile `t` (cut, encoded, gzipped as the options say).
+    fn make(&self, t: cota_core::tiles::TileId) -> std::result::Result<Tile, String> {
+        let m = make_tile(self.prepared(), t, &self.options).map_err(|e| e.to_string())?;
+        Ok(Tile {
+            gzip: self.options.gzip,
+            etag: etag_of(&m.bytes),
+            bytes: Bytes::from(m.bytes),
+        })
+    }
+
+    /// The slot of tile `id`, new and empty if it was not asked for before.
+    fn slot(&self, id: TileId) -> Slot {
+        let mut slots = self.slots.lock().unwrap_or_else(|p| p.into_inner());
+        slots.entry(id).or_default().clone()
+    }
+
+    /// Forgets tile `id` (made again when next asked).
+    fn forget(&self, id: TileId) {
+        let mut slots = self.slots.lock().unwrap_or_else(|p| p.into_inner());
+        slots.remove(&id);
+    }
+}
+
+impl TileSource for DemandTileSource {
+    fn layer_json(&self) -> &Bytes {
+        &self.layer
+    }
+
+    fn cached(&self, id: TileId) -> Option<Tile> {
+        let slots = self.slots.lock().ok()?;
+        match slots.get(&id)?.get()? {
+            Ok(t) => Some(t.clone()),
+            Err(_) => None,
+        }
+    }
+
+    fn tile(&self, id: TileId) -> Result<Tile> {
+        let t = self.find(id)?;
+        let slot = self.slot(id);
+        let mut made = false;
+        let r = slot.get_or_init(|| {
+            made = true;
+            self.make(t)
+        });
+        match r {
+            Ok(tile) => {
+                let n = tile.bytes.len();
+                if made && self.kept_bytes.fetch_add(n, Ordering::Relaxed) + n > CACHE_BYTES {
+                    self.kept_bytes.fetch_sub(n, Ordering::Relaxed);
+                    self.forget(id);
+                }
+                Ok(tile.clone())
+            }
+            Err(e) => Err(ServeError::Internal(format!("tile {t}: {e}"))),
+        }
+    }
+}

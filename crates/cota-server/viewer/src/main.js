@@ -1,0 +1,417 @@
+// cota's browser viewer: the progressive stream decoded in a Web Worker
+// (worker.js), remeshed every frame by screen-space error (lod.js), drawn by
+// three.js with a hillshade, a wireframe toggle and an overlay of what it
+// costs. Positions are metres relative to the grid's centre (x east, y north,
+// z up), so float32 vertices stay exact to a centimetre.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { Lod } from './lod.js';
+
+/* global __COTA_WORKER__ */
+const overlay = document.getElementById('overlay');
+const state = {
+  scripted: false,
+  fly: false,
+  wire: false,
+  targetPx: Number(new URLSearchParams(location.search).get('px')) || 1,
+  received: 0,
+  total: 0,
+  steps: 0,
+  stepsAnnounced: 0,
+  lastEndOffset: 0,
+  decodeMs: 0,
+  done: false,
+  firstDraw: null,
+  refineMs: [],
+  triangles: [],
+  maxError: { sent: 0, all: 0 },
+  t0: performance.now(),
+};
+const api = {
+  ready: false,
+  error: null,
+  state,
+  stats: () => stats(),
+  screenError: () => (lod ? lod.maxScreenError() : null),
+  setView: (eye, target) => setView(eye, target),
+  release: () => {
+    state.scripted = false;
+  },
+  frames: (n = 1) => new Promise((resolve) => waiters.push({ frame: frameNo + n, resolve })),
+  pixels: () => pixels(),
+  ground: (x, y) => groundZ(x, y),
+};
+window.cota = api;
+const waiters = [];
+let frameNo = 0;
+let lod = null;
+let meta = null;
+let heights = null;
+let stepOf = null;
+
+function fail(msg) {
+  api.error = msg;
+  document.getElementById('error').textContent = msg;
+  console.error(msg);
+}
+
+// ---- scene -----------------------------------------------------------------
+
+const renderer = new THREE.WebGLRenderer({ antialias: true });
+renderer.setPixelRatio(1);
+renderer.setSize(window.innerWidth, window.innerHeight);
+document.body.prepend(renderer.domElement);
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x9fb8cc);
+const camera = new THREE.PerspectiveCamera(60, window.innerWidth / window.innerHeight, 1, 1e6);
+camera.up.set(0, 0, 1);
+
+const uniforms = {
+  uFrame: { value: 0 },
+  uMorphFrames: { value: 8 },
+  uSun: { value: new THREE.Vector3(-1, 1, 1.2).normalize() },
+  uZRange: { value: new THREE.Vector2(0, 1000) },
+  uWire: { value: 0 },
+};
+const vertexShader = `
+in vec2 morph;
+uniform float uFrame;
+uniform float uMorphFrames;
+out vec3 vWorld;
+void main() {
+  float k = clamp((uFrame - morph.y) / uMorphFrames, 0.0, 1.0);
+  vec3 p = vec3(position.xy, mix(morph.x, position.z, k));
+  vWorld = p;
+  gl_Position = projectionMatrix * modelViewMatrix * vec4(p, 1.0);
+}`;
+const fragmentShader = `
+layout(location = 0) out highp vec4 fragColor;
+uniform vec3 uSun;
+uniform vec2 uZRange;
+uniform float uWire;
+in vec3 vWorld;
+void main() {
+  if (uWire > 0.5) { fragColor = vec4(0.07, 0.09, 0.11, 1.0); return; }
+  vec3 n = normalize(cross(dFdx(vWorld), dFdy(vWorld)));
+  if (n.z < 0.0) n = -n;
+  float shade = clamp(dot(n, uSun), 0.0, 1.0);
+  float h = clamp((vWorld.z - uZRange.x) / max(uZRange.y - uZRange.x, 1.0), 0.0, 1.0);
+  vec3 low = vec3(0.30, 0.50, 0.28), mid = vec3(0.70, 0.63, 0.42), high = vec3(0.96, 0.95, 0.92);
+  vec3 c = h < 0.5 ? mix(low, mid, h * 2.0) : mix(mid, high, h * 2.0 - 1.0);
+  fragColor = vec4(c * (0.28 + 0.72 * shade), 1.0);
+}`;
+const fill = new THREE.ShaderMaterial({
+  uniforms,
+  vertexShader,
+  fragmentShader,
+  glslVersion: THREE.GLSL3,
+  polygonOffset: true,
+  polygonOffsetFactor: 1,
+  polygonOffsetUnits: 1,
+});
+const wireUniforms = { ...uniforms, uWire: { value: 1 } };
+const wire = new THREE.ShaderMaterial({ uniforms: wireUniforms, vertexShader, fragmentShader, glslVersion: THREE.GLSL3, wireframe: true });
+let geometry = null;
+let grownSeen = -1;
+const fillMesh = new THREE.Mesh(new THREE.BufferGeometry(), fill);
+const wireMesh = new THREE.Mesh(new THREE.BufferGeometry(), wire);
+for (const m of [fillMesh, wireMesh]) {
+  m.frustumCulled = false;
+  scene.add(m);
+}
+wireMesh.visible = false;
+
+/** (Re)wraps the LOD's arrays in a geometry (at start and when they grow). */
+function rebuildGeometry() {
+  const g = new THREE.BufferGeometry();
+  g.setAttribute('position', new THREE.BufferAttribute(lod.position, 3).setUsage(THREE.DynamicDrawUsage));
+  g.setAttribute('morph', new THREE.BufferAttribute(lod.morph, 2).setUsage(THREE.DynamicDrawUsage));
+  g.setIndex(new THREE.BufferAttribute(lod.index, 1).setUsage(THREE.DynamicDrawUsage));
+  const r = Math.hypot(meta.width * meta.cell_size_m[0], meta.height * meta.cell_size_m[1]);
+  g.boundingSphere = new THREE.Sphere(new THREE.Vector3(), r);
+  if (geometry) geometry.dispose();
+  geometry = g;
+  fillMesh.geometry = g;
+  wireMesh.geometry = g;
+  grownSeen = lod.grown;
+  lod.takeDirty();
+}
+
+/** Uploads only the pages of triangles and vertices that changed. */
+function uploadChanges() {
+  if (lod.grown !== grownSeen) {
+    rebuildGeometry();
+    return;
+  }
+  const { tri, vert } = lod.takeDirty();
+  const page = 1024;
+  for (const p of tri) geometry.index.addUpdateRange(p * page * 3, Math.min(page * 3, lod.index.length - p * page * 3));
+  if (tri.length) geometry.index.needsUpdate = true;
+  const pos = geometry.getAttribute('position');
+  const mor = geometry.getAttribute('morph');
+  for (const p of vert) {
+    pos.addUpdateRange(p * page * 3, Math.min(page * 3, lod.position.length - p * page * 3));
+    mor.addUpdateRange(p * page * 2, Math.min(page * 2, lod.morph.length - p * page * 2));
+  }
+  if (vert.length) {
+    pos.needsUpdate = true;
+    mor.needsUpdate = true;
+  }
+  geometry.setDrawRange(0, lod.triTop * 3);
+}
+
+// ---- navigation --------------------------------------------------------------
+
+const orbit = new OrbitControls(camera, renderer.domElement);
+orbit.listenToKeyEvents(window);
+orbit.enableDamping = false;
+const keys = new Set();
+const look = { yaw: 0, pitch: 0, dragging: false, x: 0, y: 0 };
+window.addEventListener('keydown', (e) => {
+  keys.add(e.code);
+  if (e.code === 'KeyF') toggleFly();
+  if (e.code === 'KeyG') toggleWire();
+  if (e.code === 'BracketLeft') setTarget(state.targetPx / 2);
+  if (e.code === 'BracketRight') setTarget(state.targetPx * 2);
+});
+window.addEventListener('keyup', (e) => keys.delete(e.code));
+renderer.domElement.addEventListener('pointerdown', (e) => {
+  if (!state.fly) return;
+  look.dragging = true;
+  look.x = e.clientX;
+  look.y = e.clientY;
+});
+window.addEventListener('pointerup', () => {
+  look.dragging = false;
+});
+window.addEventListener('pointermove', (e) => {
+  if (!state.fly || !look.dragging) return;
+  look.yaw -= (e.clientX - look.x) * 0.004;
+  look.pitch = Math.max(-1.5, Math.min(1.5, look.pitch - (e.clientY - look.y) * 0.004));
+  look.x = e.clientX;
+  look.y = e.clientY;
+});
+document.getElementById('mode').onclick = () => toggleFly();
+document.getElementById('wire').onclick = () => toggleWire();
+document.getElementById('finer').onclick = () => setTarget(state.targetPx / 2);
+document.getElementById('coarser').onclick = () => setTarget(state.targetPx * 2);
+
+function setTarget(px) {
+  state.targetPx = Math.min(64, Math.max(0.25, px));
+}
+
+function toggleWire() {
+  state.wire = !state.wire;
+  wireMesh.visible = state.wire;
+}
+
+function toggleFly() {
+  state.fly = !state.fly;
+  document.getElementById('mode').textContent = state.fly ? 'orbit' : 'fly';
+  orbit.enabled = !state.fly;
+  const d = new THREE.Vector3();
+  camera.getWorldDirection(d);
+  if (state.fly) {
+    look.yaw = Math.atan2(d.y, d.x);
+    look.pitch = Math.asin(Math.max(-1, Math.min(1, d.z)));
+  } else {
+    const dist = Math.max(100, camera.position.z - groundZ(camera.position.x, camera.position.y));
+    orbit.target.copy(camera.position).addScaledVector(d, dist * 2);
+    orbit.update();
+  }
+}
+
+/** Height of the nearest sample known so far under local (x, y). */
+function groundZ(x, y) {
+  if (!meta) return 0;
+  const w = meta.width, h = meta.height;
+  const col = Math.round(x / meta.cell_size_m[0] + (w - 1) / 2);
+  const row = Math.round((h - 1) / 2 - y / meta.cell_size_m[1]);
+  if (col < 0 || row < 0 || col >= w || row >= h) return meta.height_range_m[0];
+  for (let s = 1; s <= 1 << 16; s *= 2) {
+    const c = Math.round(col / s) * s, r = Math.round(row / s) * s;
+    if (c < w && r < h && stepOf[r * w + c] !== 255) return heights[r * w + c];
+  }
+  return meta.height_range_m[0];
+}
+
+function flyStep(dt) {
+  const dir = new THREE.Vector3(Math.cos(look.pitch) * Math.cos(look.yaw), Math.cos(look.pitch) * Math.sin(look.yaw), Math.sin(look.pitch));
+  const right = new THREE.Vector3(Math.sin(look.yaw), -Math.cos(look.yaw), 0);
+  const agl = Math.max(30, camera.position.z - groundZ(camera.position.x, camera.position.y));
+  const speed = agl * (keys.has('ShiftLeft') || keys.has('ShiftRight') ? 5 : 1) * dt;
+  const p = camera.position;
+  if (keys.has('KeyW') || keys.has('ArrowUp')) p.addScaledVector(dir, speed);
+  if (keys.has('KeyS') || keys.has('ArrowDown')) p.addScaledVector(dir, -speed);
+  if (keys.has('KeyD') || keys.has('ArrowRight')) p.addScaledVector(right, speed);
+  if (keys.has('KeyA') || keys.has('ArrowLeft')) p.addScaledVector(right, -speed);
+  if (keys.has('KeyE')) p.z += speed;
+  if (keys.has('KeyQ')) p.z -= speed;
+  camera.lookAt(p.clone().add(dir));
+}
+
+function setView(eye, target) {
+  state.scripted = true;
+  orbit.enabled = false;
+  camera.position.set(eye[0], eye[1], eye[2]);
+  camera.lookAt(target[0], target[1], target[2]);
+}
+
+// ---- the stream --------------------------------------------------------------
+
+function onStep(m) {
+  for (let k = 0; k < m.points.length; k++) {
+    heights[m.points[k]] = m.heights[k];
+    stepOf[m.points[k]] = m.index;
+  }
+  lod.addStep(m.index, m.maxErrorM, m.points);
+  state.steps = m.index + 1;
+  state.received = m.received;
+  state.lastEndOffset = m.endOffset;
+  state.decodeMs = m.decodeMs;
+  if (m.index === 0) rebuildGeometry();
+}
+
+function startWorker() {
+  const worker = new Worker(__COTA_WORKER__);
+  worker.onmessage = (e) => {
+    const m = e.data;
+    if (m.type === 'head') {
+      state.total = m.total;
+      state.stepsAnnounced = m.steps;
+    } else if (m.type === 'step') {
+      onStep(m);
+    } else if (m.type === 'done') {
+      state.done = true;
+      state.received = m.received;
+    } else if (m.type === 'error') {
+      fail(`stream: ${m.message}`);
+    }
+  };
+  worker.onerror = (e) => fail(`worker: ${e.message}`);
+  worker.postMessage({ type: 'start', url: '/stream' });
+}
+
+// ---- frames ------------------------------------------------------------------
+
+function median(a) {
+  if (!a.length) return 0;
+  const s = [...a].sort((x, y) => x - y);
+  return s[s.length >> 1];
+}
+
+function stats() {
+  return {
+    frame: frameNo,
+    triangles: lod ? lod.triCount : 0,
+    refineMs: state.refineMs.at(-1) ?? 0,
+    refineMedianMs: median(state.refineMs.slice(-120)),
+    bytes: state.received,
+    total: state.total,
+    steps: state.steps,
+    stepsAnnounced: state.stepsAnnounced,
+    done: state.done,
+    targetPx: state.targetPx,
+    maxError: state.maxError,
+    firstDraw: state.firstDraw,
+    pending: lod ? lod.pending : false,
+    eye: camera.position.toArray(),
+  };
+}
+
+function drawOverlay() {
+  const s = stats();
+  const kb = (b) => `${(b / 1024).toFixed(0)} KB`;
+  overlay.textContent = [
+    `triangles   ${s.triangles.toLocaleString('en')}`,
+    `refine      ${s.refineMs.toFixed(2)} ms/frame (median ${s.refineMedianMs.toFixed(2)})`,
+    `stream      ${kb(s.bytes)} of ${kb(s.total)}, step ${s.steps}/${s.stepsAnnounced}${s.done ? ' (done)' : ''}`,
+    `screen err  max ${s.maxError.sent.toFixed(2)} px, target ${s.targetPx} px${s.maxError.all > s.maxError.sent + 1e-9 ? ` (${s.maxError.all.toFixed(1)} px until the stream arrives)` : ''}`,
+    `mode        ${state.fly ? 'fly' : 'orbit'}${state.wire ? ', wireframe' : ''}`,
+  ].join('\n');
+}
+
+let last = performance.now();
+function frame(now) {
+  requestAnimationFrame(frame);
+  const dt = Math.min(0.1, (now - last) / 1000);
+  last = now;
+  if (!lod || !geometry) return;
+  if (!state.scripted) {
+    if (state.fly) flyStep(dt);
+    else orbit.update();
+  }
+  const agl = camera.position.z - groundZ(camera.position.x, camera.position.y);
+  camera.near = Math.min(2000, Math.max(1, agl * 0.25));
+  camera.far = Math.max(1e5, 8 * Math.hypot(meta.width * meta.cell_size_m[0], camera.position.z));
+  camera.updateProjectionMatrix();
+  const K = renderer.domElement.clientHeight / (2 * Math.tan((camera.fov * Math.PI) / 360));
+  const t = performance.now();
+  lod.update(camera.position.toArray(), K, state.targetPx);
+  const ms = performance.now() - t;
+  state.refineMs.push(ms);
+  state.triangles.push(lod.triCount);
+  if (state.refineMs.length > 100000) state.refineMs.splice(0, 50000);
+  uploadChanges();
+  uniforms.uFrame.value = lod.frame;
+  wireUniforms.uFrame.value = lod.frame;
+  renderer.render(scene, camera);
+  frameNo++;
+  if (!state.firstDraw && lod.triCount > 0) {
+    state.firstDraw = { bytesReceived: state.received, streamOffset: state.lastEndOffset, ms: performance.now() - state.t0, triangles: lod.triCount };
+  }
+  if (frameNo % 30 === 1) state.maxError = lod.maxScreenError();
+  drawOverlay();
+  for (let k = waiters.length - 1; k >= 0; k--) {
+    if (frameNo >= waiters[k].frame) {
+      waiters[k].resolve(stats());
+      waiters.splice(k, 1);
+    }
+  }
+}
+
+/** Renders now and counts the pixels that are not the sky (for tests). */
+function pixels() {
+  renderer.render(scene, camera);
+  const gl = renderer.getContext();
+  const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
+  const px = new Uint8Array(w * h * 4);
+  gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+  const sky = scene.background;
+  const sr = Math.round(sky.r * 255), sg = Math.round(sky.g * 255), sb = Math.round(sky.b * 255);
+  let terrain = 0;
+  const shades = new Set();
+  for (let i = 0; i < px.length; i += 4) {
+    if (Math.abs(px[i] - sr) + Math.abs(px[i + 1] - sg) + Math.abs(px[i + 2] - sb) > 12) {
+      terrain++;
+      shades.add((px[i] >> 3) * 1024 + (px[i + 1] >> 3) * 32 + (px[i + 2] >> 3));
+    }
+  }
+  return { width: w, height: h, terrainFraction: terrain / (w * h), shades: shades.size };
+}
+
+window.addEventListener('resize', () => {
+  renderer.setSize(window.innerWidth, window.innerHeight);
+  camera.aspect = window.innerWidth / window.innerHeight;
+  camera.updateProjectionMatrix();
+});
+
+async function main() {
+  const r = await fetch('/meta.json');
+  if (!r.ok) throw new Error(`/meta.json: HTTP ${r.status}`);
+  meta = await r.json();
+  const n = meta.width * meta.height;
+  heights = new Float32Array(n);
+  stepOf = new Uint8Array(n).fill(255);
+  lod = new Lod({ width: meta.width, height: meta.height, cellX: meta.cell_size_m[0], cellY: meta.cell_size_m[1], heights, stepOf });
+  uniforms.uZRange.value.set(meta.height_range_m[0], meta.height_range_m[1]);
+  const ext = Math.max(meta.width * meta.cell_size_m[0], meta.height * meta.cell_size_m[1]);
+  camera.position.set(-0.1 * ext, -0.75 * ext, 0.45 * ext);
+  orbit.target.set(0, 0, meta.height_range_m[0]);
+  orbit.update();
+  startWorker();
+  api.ready = true;
+  requestAnimationFrame(frame);
+}
+
+main().catch((e) => fail(String(e.message || e)));
