@@ -36,8 +36,11 @@ pub enum Command {
 /// How to read and combine the input files.
 #[derive(Debug, Args)]
 pub struct InputArgs {
-    /// DEM files: SRTM .hgt/.hgt.zip, GeoTIFF, PNG, ESRI .asc. Several adjacent
-    /// tiles are mosaicked. With none, the bundled sample S29W072.hgt.zip is used.
+    /// DEM files: SRTM .hgt/.hgt.zip, GeoTIFF, PNG or WebP terrain tiles
+    /// (placed by Web-Mercator bounds when named z/x/y.ext), PMTiles archives
+    /// (with --zoom and --bbox), NumPy .npy/.npz, USGS .dem, ESRI .asc.
+    /// Several adjacent tiles are mosaicked. With none, the bundled sample
+    /// S29W072.hgt.zip is used.
     #[arg(value_name = "FILE")]
     pub files: Vec<PathBuf>,
     /// PNG height encoding. Default: terrain-rgb for colour PNGs, gray16 for grayscale.
@@ -70,6 +73,23 @@ pub struct InputArgs {
     /// Band to read from a multi-band raster (1-based).
     #[arg(long, value_name = "N")]
     pub band: Option<u16>,
+    /// The array to read from a NumPy .npz (default: the only 2-D array, or
+    /// one named elevation, dem, z, height or heights).
+    #[arg(long, value_name = "NAME")]
+    pub array: Option<String>,
+    /// PMTiles archives: the zoom level of the tiles to read (with --bbox).
+    #[arg(long, value_name = "Z", requires = "bbox")]
+    pub zoom: Option<u8>,
+    /// PMTiles archives: the box to read, in degrees (west, south, east,
+    /// north); every tile of --zoom touching it is read and mosaicked.
+    #[arg(
+        long,
+        value_name = "W,S,E,N",
+        value_delimiter = ',',
+        allow_negative_numbers = true,
+        requires = "zoom"
+    )]
+    pub bbox: Option<Vec<f64>>,
     /// Where adjacent tiles overlap and disagree: their mean, or the first file's value.
     #[arg(long, value_enum, default_value_t = Seam::Mean)]
     pub seam: Seam,

@@ -8,7 +8,10 @@ use anyhow::Context;
 use cota_core::grid::mosaic::{MosaicOptions, SeamPolicy, SeamReport};
 use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
 use cota_core::HeightGrid;
-use cota_io::{read_dem_bytes, read_region_with_progress, PngEncoding, ReadOptions, RegionOptions};
+use cota_io::{
+    read_dem_bytes, read_region_with_progress, ArrayName, PngEncoding, ReadOptions, RegionOptions,
+    TileRequest,
+};
 
 use crate::args::{Encoding, InputArgs, Seam, Voids};
 use crate::progress;
@@ -74,18 +77,41 @@ pub fn fill(grid: &mut HeightGrid, voids: Voids) -> anyhow::Result<FillReport> {
     fill_voids(grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")
 }
 
-fn read_options(a: &InputArgs) -> ReadOptions {
+fn read_options(a: &InputArgs) -> anyhow::Result<ReadOptions> {
     let enc = a.encoding.map(|e| match e {
         Encoding::TerrainRgb => PngEncoding::TerrainRgb,
         Encoding::Terrarium => PngEncoding::Terrarium,
         Encoding::Gray16 => PngEncoding::Gray16,
     });
-    ReadOptions::DEFAULT
+    let array = match &a.array {
+        Some(name) => Some(ArrayName::new(name).with_context(|| {
+            format!(
+                "--array: expected a name of 1 to {} bytes, found {name:?}",
+                ArrayName::MAX_LEN
+            )
+        })?),
+        None => None,
+    };
+    let tiles = match (a.zoom, &a.bbox) {
+        (Some(zoom), Some(b)) => {
+            let [w, s, e, n] = b[..] else {
+                anyhow::bail!("--bbox: expected W,S,E,N (4 numbers), found {}", b.len());
+            };
+            Some(TileRequest {
+                zoom,
+                bbox_deg: [w, s, e, n],
+            })
+        }
+        _ => None,
+    };
+    Ok(ReadOptions::DEFAULT
         .with_png_encoding(enc)
         .with_gray(a.gray_scale_m, a.gray_offset_m)
         .with_cell_size_m(a.cell_size_m)
         .with_band(a.band)
         .with_max_samples(a.max_samples)
+        .with_array(array)
+        .with_tiles(tiles))
 }
 
 /// A number for a message: plain when of ordinary size, else in scientific
@@ -168,7 +194,7 @@ fn warn_unpositioned(files: &[FileInfo]) {
 /// Reads every input (or the bundled sample) and mosaics them.
 pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
     let t0 = Instant::now();
-    let opts = read_options(a);
+    let opts = read_options(a)?;
     check_options(a)?;
     let policy = match a.seam {
         Seam::Mean => SeamPolicy::Mean,
