@@ -8,8 +8,8 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
+use cota_core::criteria::AvoidVoids;
 use cota_core::criteria::{Criterion, CriterionError};
-use cota_core::mesh::holes::AvoidVoids;
 use cota_core::strip::{stripify_bitree_with, MeshStrip};
 use cota_core::{
     check_mesh, measure, CriterionOptions, HeightGrid, HierarchyKind, Mesh, MeshPlan, Meshed,

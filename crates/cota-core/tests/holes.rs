@@ -7,8 +7,9 @@
 
 mod common;
 
+use cota_core::criteria::AvoidVoids;
 use cota_core::mesh::check::Violation;
-use cota_core::mesh::holes::{cut_holes, fill_flat, AvoidVoids, HoleReport, VoidMask};
+use cota_core::mesh::holes::{cut_holes, fill_flat, HoleReport, VoidMask};
 use cota_core::{check_mesh, CheckOptions, HeightGrid, MaxVerticalError, Mesh, MeshPlan, Mesher};
 
 /// The hole mesh of `voided` at `e` metres, and the uncut mesh.

@@ -2,7 +2,8 @@
 //! that would touch a void, so it has boundaries where the data has.
 //!
 //! How: the voids are filled with a constant ([`fill_flat`]: any fill
-//! would do, no kept triangle reads a filled height), then the grid is refined with [`AvoidVoids`], which wraps the
+//! would do, no kept triangle reads a filled height), then the grid is refined with
+//! [`AvoidVoids`](crate::criteria::AvoidVoids), which wraps the
 //! user's criterion and also splits every triangle larger than a unit
 //! triangle whose bounding box holds a void sample. The hierarchy's rules
 //! (paper `000_ebf7e3a88dffd361.txt` §2: a split needs its diamond's
@@ -17,7 +18,6 @@
 //! The bounding-box test is conservative (a triangle is half its box): a
 //! few triangles next to a void are split that need not be.
 
-use crate::criteria::{Criterion, Element};
 use crate::grid::HeightGrid;
 
 use super::{Mesh, MeshVertex};
@@ -94,30 +94,6 @@ pub fn fill_flat(grid: &mut HeightGrid) -> usize {
         }
     }
     n
-}
-
-/// A criterion that also splits every triangle larger than a unit triangle
-/// whose bounding box holds a void (see the module docs).
-pub struct AvoidVoids<'a> {
-    /// The user's criterion.
-    pub inner: &'a dyn Criterion,
-    /// The voids of the grid before it was filled.
-    pub voids: &'a VoidMask,
-}
-
-impl Criterion for AvoidVoids<'_> {
-    fn wants_split(&self, e: &Element<'_>) -> bool {
-        let xs = e.corners.iter().map(|c| c[0] as usize);
-        let ys = e.corners.iter().map(|c| c[1] as usize);
-        let (x0, x1) = (xs.clone().min().unwrap_or(0), xs.max().unwrap_or(0));
-        let (y0, y1) = (ys.clone().min().unwrap_or(0), ys.max().unwrap_or(0));
-        let unit = x1 - x0 <= 1 && y1 - y0 <= 1;
-        (!unit && self.voids.count(x0, y0, x1, y1) > 0) || self.inner.wants_split(e)
-    }
-
-    fn name(&self) -> String {
-        format!("{}, voids as holes", self.inner.name())
-    }
 }
 
 /// What [`cut_holes`] left out.
