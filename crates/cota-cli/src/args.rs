@@ -40,8 +40,11 @@ pub enum Command {
 /// How to read and combine the input files.
 #[derive(Debug, Clone, Args)]
 pub struct InputArgs {
-    /// DEM files: SRTM .hgt/.hgt.zip, GeoTIFF, PNG, ESRI .asc. Several adjacent
-    /// tiles are mosaicked. With none, the bundled sample S29W072.hgt.zip is used.
+    /// DEM files: SRTM .hgt/.hgt.zip, GeoTIFF, PNG or WebP terrain tiles
+    /// (placed by Web-Mercator bounds when named z/x/y.ext), PMTiles archives
+    /// (with --zoom and --bbox), NumPy .npy/.npz, USGS .dem, ESRI .asc.
+    /// Several adjacent tiles are mosaicked. With none, the bundled sample
+    /// S29W072.hgt.zip is used.
     #[arg(value_name = "FILE")]
     pub files: Vec<PathBuf>,
     /// PNG height encoding. Default: terrain-rgb for colour PNGs, gray16 for grayscale.
@@ -74,6 +77,26 @@ pub struct InputArgs {
     /// Band to read from a multi-band raster (1-based).
     #[arg(long, value_name = "N")]
     pub band: Option<u16>,
+    /// The array to read from a NumPy .npz (default: the only 2-D array, or
+    /// one named elevation, dem, z, height or heights).
+    #[arg(long, value_name = "NAME")]
+    pub array: Option<String>,
+    /// PMTiles archives: the zoom level of the tiles to read (with --bbox).
+    #[arg(long, value_name = "Z", requires = "bbox")]
+    pub zoom: Option<u8>,
+    /// The box to read (west, south, east, north). PMTiles archives (with
+    /// --zoom): in degrees, every tile of --zoom touching it is read and
+    /// mosaicked. Other inputs: only the samples whose centres lie in it are
+    /// kept (after mosaicking), in the input's CRS units: degrees of
+    /// longitude and latitude for SRTM and geographic rasters, the
+    /// projection's units (metres) for projected ones.
+    #[arg(
+        long,
+        value_name = "W,S,E,N",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    pub bbox: Option<Vec<f64>>,
     /// Where adjacent tiles overlap and disagree: their mean, or the first file's value.
     #[arg(long, value_enum, default_value_t = Seam::Mean)]
     pub seam: Seam,
@@ -119,6 +142,9 @@ pub enum Voids {
     Idw,
     /// Refuse inputs with voids.
     Refuse,
+    /// Leave voids out: no triangle touches a void, so the mesh has holes
+    /// where the data has (`cota mesh` only; conforming bitree meshes).
+    Hole,
 }
 
 #[derive(Debug, Args)]
@@ -175,11 +201,6 @@ pub struct MeshArgs {
     /// height, in samples.
     #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, conflicts_with = "bbox")]
     pub crop: Option<Crop>,
-    /// Mesh only the samples whose centres lie in this box, in the input's
-    /// CRS units: degrees of longitude and latitude for SRTM and geographic
-    /// GeoTIFFs, the projection's units (metres) for projected ones.
-    #[arg(long, value_name = "W,S,E,N", value_parser = parse_bbox, allow_hyphen_values = true)]
-    pub bbox: Option<[f64; 4]>,
     /// Vertical exaggeration: the heights written (and --base-m) are
     /// multiplied by F; the report's errors stay in true metres. Not with
     /// --quantize.
@@ -521,21 +542,6 @@ fn parse_crop(s: &str) -> Result<Crop, String> {
         }),
         _ => Err(format!(
             "expected COL,ROW,W,H as four whole numbers, found {s:?}"
-        )),
-    }
-}
-
-/// Parses `WEST,SOUTH,EAST,NORTH`.
-fn parse_bbox(s: &str) -> Result<[f64; 4], String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|e| format!("expected W,S,E,N as four numbers, found {s:?} ({e})"))?;
-    match v[..] {
-        [w, s_, e, n] if v.iter().all(|c| c.is_finite()) => Ok([w, s_, e, n]),
-        _ => Err(format!(
-            "expected W,S,E,N as four finite numbers, found {s:?}"
         )),
     }
 }

@@ -42,6 +42,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
     if let Some(t) = a.tolerances.iter().find(|t| !t.is_finite() || **t < 0.0) {
         anyhow::bail!("--tolerances: expected percentages of 0 or more, found {t}");
     }
+    crate::input::refuse_hole(a.voids, "compare")?;
     let input = load(&a.input)?;
     let name = crate::input::name(&input.files);
     let mut grid = input.grid;

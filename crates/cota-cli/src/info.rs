@@ -1,15 +1,21 @@
 //! `cota info`: what the inputs hold, as read (before any void fill).
 
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use cota_core::{GeoRef, PixelIs};
+use cota_io::read::pmtiles::{self, is_pmtiles_file};
 use serde_json::{json, Value};
 
 use crate::args::InfoArgs;
 use crate::input::{load, FileInfo, Input};
 
 pub fn run(a: &InfoArgs) -> anyhow::Result<ExitCode> {
-    if a.each && a.input.files.len() > 1 {
+    let files = &a.input.files;
+    if a.input.zoom.is_none() && !files.is_empty() && files.iter().all(|f| is_pmtiles_file(f)) {
+        return archives(files, a.json);
+    }
+    if a.each && files.len() > 1 {
         return run_each(a);
     }
     let input = load(&a.input)?;
@@ -39,6 +45,44 @@ fn run_each(a: &InfoArgs) -> anyhow::Result<ExitCode> {
     }
     if a.json {
         println!("{}", serde_json::to_string_pretty(&reports)?);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `cota info ARCHIVE.pmtiles` without --zoom: what each archive holds.
+fn archives(files: &[PathBuf], json: bool) -> anyhow::Result<ExitCode> {
+    let mut all = Vec::new();
+    for f in files {
+        let s = pmtiles::summary(f)?;
+        if json {
+            all.push(json!({
+                "path": f.display().to_string(),
+                "format": "PMTiles",
+                "tile_type": s.tile_type,
+                "tile_compression": s.tile_compression,
+                "min_zoom": s.min_zoom,
+                "max_zoom": s.max_zoom,
+                "bounds_deg": s.bounds_deg,
+                "addressed_tiles": s.addressed_tiles,
+            }));
+            continue;
+        }
+        let [w, so, e, n] = s.bounds_deg;
+        println!("{}", f.display());
+        println!(
+            "  format      PMTiles v3 ({} tiles, {} compression)",
+            s.tile_type, s.tile_compression
+        );
+        println!("  zooms       {}..{}", s.min_zoom, s.max_zoom);
+        println!("  bounds      {w},{so},{e},{n} (W,S,E,N degrees)");
+        println!("  tiles       {}", s.addressed_tiles);
+        println!("  read with   --zoom Z --bbox W,S,E,N");
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&json!({ "archives": all }))?
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -8,7 +8,10 @@ use anyhow::Context;
 use cota_core::grid::mosaic::{MosaicOptions, SeamPolicy, SeamReport};
 use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
 use cota_core::HeightGrid;
-use cota_io::{read_dem_bytes, read_region_with_progress, PngEncoding, ReadOptions, RegionOptions};
+use cota_io::{
+    read_dem_bytes, read_region_with_progress, ArrayName, PngEncoding, ReadOptions, RegionOptions,
+    TileRequest,
+};
 
 use crate::args::{Encoding, InputArgs, Seam, Voids};
 use crate::progress;
@@ -43,10 +46,33 @@ pub fn name(files: &[FileInfo]) -> String {
     names.join(" + ")
 }
 
-/// Applies the `--voids` policy to `grid`.
+/// Refuses `--voids hole` in a command that cannot leave holes.
+pub fn refuse_hole(voids: Voids, command: &str) -> anyhow::Result<()> {
+    if matches!(voids, Voids::Hole) {
+        anyhow::bail!(
+            "--voids hole: expected fill, idw or refuse for cota {command} (it needs a height at every sample); holes are for cota mesh"
+        );
+    }
+    Ok(())
+}
+
+/// Applies the `--voids` policy to `grid` (`hole` fills with a constant: the
+/// mesher then leaves the filled samples out, see `crate::hole`).
 pub fn fill(grid: &mut HeightGrid, voids: Voids) -> anyhow::Result<FillReport> {
+    if matches!(voids, Voids::Hole) {
+        if grid.void_count() == grid.len() {
+            anyhow::bail!("--voids hole: every sample is void, there is nothing to mesh");
+        }
+        let filled = cota_core::mesh::holes::fill_flat(grid);
+        return Ok(FillReport {
+            filled,
+            converged: true,
+            ..FillReport::default()
+        });
+    }
     let policy = match voids {
         Voids::Fill => VoidPolicy::Fill(FillMethod::Harmonic),
+        Voids::Hole => VoidPolicy::Refuse,
         Voids::Idw => VoidPolicy::Fill(FillMethod::InverseDistance),
         Voids::Refuse => VoidPolicy::Refuse,
     };
@@ -54,18 +80,41 @@ pub fn fill(grid: &mut HeightGrid, voids: Voids) -> anyhow::Result<FillReport> {
     fill_voids(grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")
 }
 
-fn read_options(a: &InputArgs) -> ReadOptions {
+fn read_options(a: &InputArgs) -> anyhow::Result<ReadOptions> {
     let enc = a.encoding.map(|e| match e {
         Encoding::TerrainRgb => PngEncoding::TerrainRgb,
         Encoding::Terrarium => PngEncoding::Terrarium,
         Encoding::Gray16 => PngEncoding::Gray16,
     });
-    ReadOptions::DEFAULT
+    let array = match &a.array {
+        Some(name) => Some(ArrayName::new(name).with_context(|| {
+            format!(
+                "--array: expected a name of 1 to {} bytes, found {name:?}",
+                ArrayName::MAX_LEN
+            )
+        })?),
+        None => None,
+    };
+    let tiles = match (a.zoom, &a.bbox) {
+        (Some(zoom), Some(b)) => {
+            let [w, s, e, n] = b[..] else {
+                anyhow::bail!("--bbox: expected W,S,E,N (4 numbers), found {}", b.len());
+            };
+            Some(TileRequest {
+                zoom,
+                bbox_deg: [w, s, e, n],
+            })
+        }
+        _ => None,
+    };
+    Ok(ReadOptions::DEFAULT
         .with_png_encoding(enc)
         .with_gray(a.gray_scale_m, a.gray_offset_m)
         .with_cell_size_m(a.cell_size_m)
         .with_band(a.band)
         .with_max_samples(a.max_samples)
+        .with_array(array)
+        .with_tiles(tiles))
 }
 
 /// A number for a message: plain when of ordinary size, else in scientific
@@ -221,10 +270,19 @@ pub fn seams_json(input: &Input) -> serde_json::Value {
     })
 }
 
-/// Reads every input (or the bundled sample) and mosaics them.
+/// `--bbox` as four numbers.
+fn bbox4(b: &[f64]) -> anyhow::Result<[f64; 4]> {
+    match b[..] {
+        [w, s, e, n] => Ok([w, s, e, n]),
+        _ => anyhow::bail!("--bbox: expected W,S,E,N (4 numbers), found {}", b.len()),
+    }
+}
+
+/// Reads every input (or the bundled sample) and mosaics them, then keeps
+/// the `--bbox` window (for inputs other than PMTiles archives).
 pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
     let t0 = Instant::now();
-    let opts = read_options(a);
+    let opts = read_options(a)?;
     check_options(a)?;
     let policy = match a.seam {
         Seam::Mean => SeamPolicy::Mean,
@@ -249,8 +307,14 @@ pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
     warn_unpositioned(&region.files);
     check_seams(a, region.seams.as_ref(), &region.files)?;
     check_cell_size(&region.grid, &region.files)?;
+    let grid = match (&a.bbox, a.zoom) {
+        (Some(b), None) => {
+            crate::window::bbox(&region.grid, bbox4(b)?).with_context(|| name(&region.files))?
+        }
+        _ => region.grid,
+    };
     Ok(Input {
-        grid: region.grid,
+        grid,
         files: region.files,
         seams: region.seams,
         hole_samples: region.hole_samples,

@@ -8,6 +8,7 @@ use clap::Parser;
 
 mod args;
 mod compare;
+mod hole;
 mod info;
 mod input;
 mod mesh;

@@ -8,7 +8,8 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::criteria::CriterionError;
+use cota_core::criteria::AvoidVoids;
+use cota_core::criteria::{Criterion, CriterionError};
 use cota_core::strip::{stripify_bitree_with, MeshStrip};
 use cota_core::{
     check_mesh, measure, CriterionOptions, HeightGrid, HierarchyKind, Mesh, MeshPlan, Meshed,
@@ -18,6 +19,7 @@ use cota_io::export::{write_mesh, Coords, ExportOptions, GlbQuantization, MeshFo
 use serde_json::json;
 
 use crate::args::{CoordsArg, CriterionArg, HierarchyArg, MeshArgs, MeshKindArg, StripMethodArg};
+use crate::hole::Holes;
 use crate::input::load;
 use crate::progress;
 
@@ -187,6 +189,7 @@ fn validate_tin(a: &MeshArgs) -> anyhow::Result<()> {
 
 /// Validates the flags before any long work.
 fn validate(a: &MeshArgs) -> anyhow::Result<()> {
+    crate::hole::validate(a)?;
     if let Some(out) = &a.output {
         check_output(out, a.base_m)?;
     }
@@ -236,12 +239,28 @@ fn validate(a: &MeshArgs) -> anyhow::Result<()> {
 }
 
 /// The mesh the flags ask for, and the build and extraction times (ms).
-fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f64)> {
+/// With `holes`, the criterion also splits what touches a void.
+fn mesh_grid(
+    a: &MeshArgs,
+    grid: &HeightGrid,
+    holes: Option<&Holes>,
+) -> anyhow::Result<(Meshed, f64, f64)> {
     let mesher = Mesher::new(grid);
     let t = Instant::now();
-    let criterion = mesher
+    let inner = mesher
         .criterion(a.refine.criterion.kind(), &criterion_options(a))
         .map_err(|e| flag_error(a, e))?;
+    let avoid;
+    let criterion: &dyn Criterion = match holes {
+        Some(h) => {
+            avoid = AvoidVoids {
+                inner: &*inner,
+                voids: &h.mask,
+            };
+            &avoid
+        }
+        None => &*inner,
+    };
     let hierarchy = match a.hierarchy {
         HierarchyArg::Bitree if a.mesh == MeshKindArg::Tin => HierarchyKind::Tin {
             lock_border: a.lock_border,
@@ -249,7 +268,7 @@ fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f6
         HierarchyArg::Bitree => HierarchyKind::Bitree,
         HierarchyArg::Quadtree => HierarchyKind::Quadtree(a.quadtree_leaves.options()),
     };
-    let plan = MeshPlan::new(&*criterion)
+    let plan = MeshPlan::new(criterion)
         .with_hierarchy(hierarchy)
         .with_mode(a.refine.mode.mode())
         .with_max_triangles(a.max_triangles);
@@ -266,10 +285,15 @@ fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f6
     }
     let build_ms = ms(t);
     let t = Instant::now();
-    let meshed = mesher.mesh(&plan).map_err(|e| match e {
+    let mut meshed = mesher.mesh(&plan).map_err(|e| match e {
         cota_core::MeshError::BudgetTooSmall { .. } => anyhow::anyhow!("--max-triangles: {e}"),
         e => e.into(),
     })?;
+    if holes.is_some() {
+        // The wrapper hides the user's bound from the mesher; it still holds.
+        meshed.bound_m = inner.vertical_bound_m();
+        meshed.check = meshed.check.with_max_error_m(meshed.bound_m);
+    }
     Ok((meshed, build_ms, criterion_ms + ms(t)))
 }
 
@@ -411,14 +435,16 @@ struct Finished<'m> {
 /// output is written (see [`strip_and_write`]): with `--check` (the output is
 /// written only after the checker passed) and with `--quantize` (the metrics
 /// are taken on the written heights, which swaps them into the mesh for the
-/// while). `None` otherwise.
+/// while), and with `--voids hole` (`always`: measured against the grid with
+/// its voids). `None` otherwise.
 fn measure_first(
     a: &MeshArgs,
     grid: &HeightGrid,
     m: &mut Meshed,
     quant: Option<&GlbQuantization>,
+    always: bool,
 ) -> anyhow::Result<Option<(Metrics, f64)>> {
-    if !a.check && quant.is_none() {
+    if !a.check && quant.is_none() && !always {
         return Ok(None);
     }
     let t = Instant::now();
@@ -481,15 +507,20 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     validate(a)?;
     let input = load(&a.input)?;
     let seams = crate::input::seams_json(&input);
-    let mut grid = crate::window::apply(input.grid, a.crop.as_ref(), a.bbox)?;
+    let mut grid = crate::window::apply(input.grid, a.crop.as_ref())?;
     let nodata = grid.void_count();
+    let holes = Holes::of(a, &grid);
     let t = Instant::now();
     let files = crate::input::name(&input.files);
     let fill = crate::input::fill(&mut grid, a.voids).with_context(|| files.clone())?;
     let fill_ms = ms(t);
-    let (mut m, build_ms, extract_ms) = mesh_grid(a, &grid).with_context(|| files.clone())?;
+    let (mut m, build_ms, extract_ms) =
+        mesh_grid(a, &grid, holes.as_ref()).with_context(|| files.clone())?;
+    let cut = holes.as_ref().map(|h| crate::hole::cut(&mut m, h));
     let (quant, quantize_ms) = quantization(a, &grid, &m)?;
-    let measured = measure_first(a, &grid, &mut m, quant.as_ref())?;
+    // With holes the truth is the grid with its voids (measured first).
+    let truth = holes.as_ref().map_or(&grid, |h| &h.grid);
+    let measured = measure_first(a, truth, &mut m, quant.as_ref(), holes.is_some())?;
     let done = strip_and_write(a, &grid, &m, quant.as_ref(), measured)?;
     let (metrics, strip, measure_ms, strip_ms) =
         (done.metrics, done.strip, done.measure_ms, done.strip_ms);
@@ -504,7 +535,10 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "assumed_cell_size_m": crate::input::assumed_cell_m(&input.files),
         "width": grid.width(),
         "height": grid.height(),
-        "voids_filled": fill.filled,
+        "voids_filled": if cut.is_some() { 0 } else { fill.filled },
+        "voids": crate::hole::policy_name(a.voids),
+        "triangles_left_out": cut.map(|c| c.triangles_left_out),
+        "area_left_out_m2": cut.map(|c| c.cells_left_out * cell_area_m2(&grid)),
         "nodata_count": nodata,
         "seams": seams,
         "threshold_m": m.bound_m,
@@ -555,6 +589,12 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// The area of one cell at the grid's centre, square metres.
+fn cell_area_m2(grid: &HeightGrid) -> f64 {
+    let [dx, dy] = grid.cell_size_m();
+    dx * dy
+}
+
 fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::SeamReport>) {
     let f = |k: &str| r[k].as_f64().unwrap_or(0.0);
     println!(
@@ -575,7 +615,12 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
             s.max_abs_diff_m, s.compared
         );
     }
-    if f("nodata_count") > 0.0 {
+    if let Some(area) = r["area_left_out_m2"].as_f64() {
+        println!(
+            "voids       hole: {} void samples, {} triangles and {area:.4e} m2 left out",
+            r["nodata_count"], r["triangles_left_out"]
+        );
+    } else if f("nodata_count") > 0.0 {
         println!("voids       {} filled", r["voids_filled"]);
     }
     println!(
@@ -663,11 +708,16 @@ fn print_strip_and_check(r: &serde_json::Value) {
         } else {
             "no T-junction"
         };
-        let bound = if r["threshold_m"].is_null() {
-            ""
-        } else {
-            ", bound holds at every sample"
+        let hole = r["voids"].as_str() == Some("hole");
+        let bound = match (r["threshold_m"].is_null(), hole) {
+            (true, _) => "",
+            (false, false) => ", bound holds at every sample",
+            (false, true) => ", bound holds at every valid sample",
         };
-        println!("check       passed: covers the grid exactly, {joints}{bound}");
+        let covers = match hole {
+            true => "covers every cell with four valid corners, touches no void",
+            false => "covers the grid exactly",
+        };
+        println!("check       passed: {covers}, {joints}{bound}");
     }
 }

@@ -60,6 +60,7 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
             a.quantum_m
         );
     }
+    crate::input::refuse_hole(a.voids, "stream")?;
     let input = load(&a.input)?;
     let mut grid = input.grid;
     crate::input::fill(&mut grid, a.voids)?;

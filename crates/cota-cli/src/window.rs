@@ -49,7 +49,9 @@ pub fn bbox(g: &HeightGrid, b: [f64; 4]) -> anyhow::Result<HeightGrid> {
         anyhow::bail!("--bbox: the input has no georeference; use --crop COL,ROW,W,H instead");
     }
     if !(w < e && s < n) {
-        anyhow::bail!("--bbox: expected WEST < EAST and SOUTH < NORTH, found {w},{s},{e},{n}");
+        anyhow::bail!(
+            "--bbox: expected W,S,E,N with WEST < EAST and SOUTH < NORTH, found {w},{s},{e},{n}"
+        );
     }
     let half = match geo.pixel_is {
         PixelIs::Area => 0.5,
@@ -72,15 +74,10 @@ pub fn bbox(g: &HeightGrid, b: [f64; 4]) -> anyhow::Result<HeightGrid> {
     }
 }
 
-/// Applies `--crop` or `--bbox` (at most one is given) to `g`.
-pub fn apply(
-    g: HeightGrid,
-    crop_: Option<&Crop>,
-    bbox_: Option<[f64; 4]>,
-) -> anyhow::Result<HeightGrid> {
-    match (crop_, bbox_) {
-        (Some(c), _) => crop(&g, c),
-        (None, Some(b)) => bbox(&g, b),
-        (None, None) => Ok(g),
+/// Applies `--crop` (when given) to `g`.
+pub fn apply(g: HeightGrid, c: Option<&Crop>) -> anyhow::Result<HeightGrid> {
+    match c {
+        Some(c) => crop(&g, c),
+        None => Ok(g),
     }
 }
