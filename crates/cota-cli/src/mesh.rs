@@ -525,12 +525,8 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let (metrics, strip, measure_ms, strip_ms) =
         (done.metrics, done.strip, done.measure_ms, done.strip_ms);
     let write_ms = done.write_ms + quantize_ms;
-    let written_bound = m
-        .bound_m
-        .zip(quant.as_ref())
-        .map(|(b, q)| b + q.z_step_m() / 2.0);
     let mesh = &m.mesh;
-    let report = json!({
+    let mut report = json!({
         "input": crate::input::name(&input.files),
         "assumed_cell_size_m": crate::input::assumed_cell_m(&input.files),
         "width": grid.width(),
@@ -567,26 +563,36 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "measure_ms": measure_ms,
         "write_ms": write_ms,
         "total_ms": ms(started),
-        "strip_method": strip.as_ref().map(|s| s.method.name()),
-        "strip_refs": strip.as_ref().map(|s| s.strip.refs()),
-        "strip_refs_per_triangle": strip.as_ref().map(|s| s.strip.refs_per_triangle()),
-        "strip_degenerate": strip.as_ref().map(|s| s.strip.degenerate),
-        "strip_retriangulated": strip.as_ref().map(|s| s.retriangulated()),
-        "strip_flipped_cells": strip.as_ref().map(|s| s.flipped_cells),
-        "strip_ms": strip.as_ref().map(|_| strip_ms),
         "output": a.output.as_ref().map(|p| p.display().to_string()),
         "quantized": a.quantize,
         "z_scale": a.z_scale,
         "z_step_m": quant.as_ref().map(|q| q.z_step_m()),
-        "written_bound_m": written_bound,
+        "written_bound_m": m.bound_m.zip(quant.as_ref()).map(|(b, q)| b + q.z_step_m() / 2.0),
         "primitives": quant.as_ref().map(|q| q.primitives()),
     });
+    add_strip_fields(&mut report, strip.as_ref(), strip_ms);
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print_text(&report, &input.seams);
+        print_text(&report);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Adds the strip's figures to the report (`null` without a strip).
+fn add_strip_fields(r: &mut serde_json::Value, strip: Option<&MeshStrip<'_>>, strip_ms: f64) {
+    let fields = json!({
+        "strip_method": strip.map(|s| s.method.name()),
+        "strip_refs": strip.map(|s| s.strip.refs()),
+        "strip_refs_per_triangle": strip.map(|s| s.strip.refs_per_triangle()),
+        "strip_degenerate": strip.map(|s| s.strip.degenerate),
+        "strip_retriangulated": strip.map(|s| s.retriangulated()),
+        "strip_flipped_cells": strip.map(|s| s.flipped_cells),
+        "strip_ms": strip.map(|_| strip_ms),
+    });
+    if let (Some(r), serde_json::Value::Object(f)) = (r.as_object_mut(), fields) {
+        r.extend(f);
+    }
 }
 
 /// The area of one cell at the grid's centre, square metres.
@@ -595,8 +601,8 @@ fn cell_area_m2(grid: &HeightGrid) -> f64 {
     dx * dy
 }
 
-fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::SeamReport>) {
-    let f = |k: &str| r[k].as_f64().unwrap_or(0.0);
+/// The input lines of the text report: size, assumed cell, seams, voids.
+fn print_input(r: &serde_json::Value) {
     println!(
         "input       {} ({} x {})",
         r["input"].as_str().unwrap_or(""),
@@ -609,10 +615,10 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
             crate::input::num(c)
         );
     }
-    if let Some(s) = seams {
+    if let Some(d) = r["seams"]["max_abs_diff_m"].as_f64() {
         println!(
-            "seams       largest difference {} m over {} samples",
-            s.max_abs_diff_m, s.compared
+            "seams       largest difference {d} m over {} samples",
+            r["seams"]["compared"]
         );
     }
     if let Some(area) = r["area_left_out_m2"].as_f64() {
@@ -620,9 +626,14 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
             "voids       hole: {} void samples, {} triangles and {area:.4e} m2 left out",
             r["nodata_count"], r["triangles_left_out"]
         );
-    } else if f("nodata_count") > 0.0 {
+    } else if r["nodata_count"].as_u64().unwrap_or(0) > 0 {
         println!("voids       {} filled", r["voids_filled"]);
     }
+}
+
+fn print_text(r: &serde_json::Value) {
+    let f = |k: &str| r[k].as_f64().unwrap_or(0.0);
+    print_input(r);
     println!(
         "mesh        {} vertices, {} triangles ({:.2}% of {})",
         r["vertices"],

@@ -37,6 +37,14 @@ fn bbox_in_degrees_is_the_same_window_as_crop_in_samples() {
     ] {
         assert_eq!(b[k], c[k], "{k}");
     }
+    // --bbox belongs to every command reading DEMs: `info` describes the window.
+    let o = cota(&["info", "--json", tile, "--bbox", "10.25,0.25,10.5,0.5"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let i: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(
+        (i["width"].as_u64(), i["height"].as_u64()),
+        (Some(301), Some(301))
+    );
     let whole = mesh_json(&[tile]);
     assert!(b["triangles"].as_u64() < whole["triangles"].as_u64());
 }
