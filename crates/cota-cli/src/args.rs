@@ -1,5 +1,6 @@
 //! Command-line flags, turned into library option structs and nothing more.
 
+use std::net::SocketAddr;
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -27,14 +28,14 @@ pub enum Command {
     /// Regenerate paper 000's Table 1 and Table 2: bitree vs restricted quadtree.
     Compare(CompareArgs),
     /// Paper 004: the best (mesh, texture) pair under a byte budget, as a textured GLB.
-    Pair(crate::pair::PairArgs),
+    Pair(PairArgs),
     /// Progressive compact stream (paper 000): encode a DEM, decode any prefix.
     #[command(subcommand)]
     Stream(StreamCommand),
     /// Cesium quantized-mesh-1.0 tile pyramid: error bound per zoom, no seams.
-    Tiles(crate::tiles::TilesArgs),
+    Tiles(TilesArgs),
     /// Serve the terrain over HTTP: browser viewer, CesiumJS page, stream, tiles.
-    Serve(crate::serve::ServeArgs),
+    Serve(ServeArgs),
 }
 
 /// How to read and combine the input files.
@@ -266,7 +267,7 @@ pub struct MeshArgs {
     #[command(flatten)]
     pub refine: RefineArgs,
     #[command(flatten)]
-    pub texture: crate::pair::TextureArgs,
+    pub texture: TextureArgs,
 }
 
 /// How `cota mesh --strip` makes its strip (`cota_core::strip::StripMethod`).
@@ -694,4 +695,162 @@ pub struct StreamDecodeArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+}
+
+/// The image options shared by `cota pair` and `cota mesh --texture`.
+#[derive(Debug, Args)]
+pub struct ImageArgs {
+    /// Bands of the image as R,G,B (1-based), e.g. 3,2,1 for Landsat true
+    /// colour, or one band as gray. Default: 1,2,3 (band 1 for 1-2 bands).
+    #[arg(long, value_name = "R,G,B")]
+    pub bands: Option<String>,
+    /// Drape even when the CRS rule cannot tell that the image's CRS is the
+    /// DEM's (cota does not reproject).
+    #[arg(long)]
+    pub assume_same_crs: bool,
+}
+
+/// `cota mesh --texture`.
+#[derive(Debug, Args)]
+#[command(next_help_heading = "Texture")]
+pub struct TextureArgs {
+    /// .glb only: drape this image (GeoTIFF, PNG or JPEG with a world file,
+    /// or stretched over the DEM) on the mesh: TEXCOORD_0, the image
+    /// resampled bilinearly onto the DEM's extent and embedded as PNG, an
+    /// unlit material.
+    #[arg(long, value_name = "IMAGE")]
+    pub texture: Option<PathBuf>,
+    #[command(flatten)]
+    pub image: ImageArgs,
+}
+
+/// Which pair `cota pair` writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Pick {
+    /// The exact optimum over the two lists.
+    Optimum,
+    /// The paper's greedy scan.
+    Greedy,
+}
+
+/// Which hierarchies make the mesh list.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Hierarchies {
+    Both,
+    Bitree,
+    Quadtree,
+}
+
+#[derive(Debug, Args)]
+pub struct PairArgs {
+    /// The DEM (any format `cota mesh` reads; voids filled harmonically).
+    pub dem: PathBuf,
+    /// The image: GeoTIFF, or PNG/JPEG with a world file or over the DEM's extent.
+    pub image: PathBuf,
+    /// The whole GLB must fit in this many bytes.
+    #[arg(long, value_name = "N")]
+    pub budget_bytes: u64,
+    /// Weight of the mesh's distortion D(M) (m2).
+    #[arg(long, value_name = "A", default_value_t = 1.0)]
+    pub alpha: f64,
+    /// Weight of the texture's distortion D(T) (levels2).
+    #[arg(long, value_name = "B", default_value_t = 1.0)]
+    pub beta: f64,
+    /// Only pairs whose mesh has no more triangles than the texture has
+    /// leaves (paper 004's advice).
+    #[arg(long)]
+    pub polygons_within_texels: bool,
+    /// Write the optimum pair, or the paper's greedy choice.
+    #[arg(long, value_enum, default_value_t = Pick::Optimum)]
+    pub pick: Pick,
+    /// Hierarchies of the mesh list.
+    #[arg(long, value_enum, default_value_t = Hierarchies::Both)]
+    pub hierarchies: Hierarchies,
+    /// Vertical bounds of the mesh list, metres. Default: the height range
+    /// halved 1 to 10 times, and 0.
+    #[arg(long, value_name = "M,...", value_delimiter = ',')]
+    pub mesh_tolerances_m: Option<Vec<f64>>,
+    /// Tolerances of the texture list: sigma_R + sigma_G + sigma_B, levels.
+    #[arg(
+        long,
+        value_name = "T,...",
+        value_delimiter = ',',
+        default_value = "0,2,4,8,12,16,24,32,48,64,96,128"
+    )]
+    pub texture_tolerances: Vec<f64>,
+    /// Output .glb (written atomically). Without it, only the report.
+    #[arg(short, long, value_name = "OUT.glb")]
+    pub output: Option<PathBuf>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub image_args: ImageArgs,
+}
+
+/// Flags of `cota tiles`.
+#[derive(Debug, Args)]
+pub struct TilesArgs {
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Output directory: OUT/layer.json and OUT/{z}/{x}/{y}.terrain.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    /// Coarsest zoom written (0: the two root tiles).
+    #[arg(long, default_value_t = 0, value_name = "A")]
+    pub min_zoom: u8,
+    /// Finest zoom. Default: the zoom whose lattice is as fine as the source.
+    #[arg(long, value_name = "B")]
+    pub max_zoom: Option<u8>,
+    /// cesium-terrain-builder's error per zoom times Q: 6378137·2π·0.25·Q/(65·2)/2^z metres.
+    #[arg(long, value_name = "Q", conflicts_with = "max_error_m_at_max_zoom")]
+    pub error_factor: Option<f64>,
+    /// The error bound at the finest zoom in metres, doubled at each zoom above.
+    #[arg(long, value_name = "E")]
+    pub max_error_m_at_max_zoom: Option<f64>,
+    /// Lattice cells across a tile at the finest zoom (a power of two).
+    #[arg(long, default_value_t = 64, value_name = "S")]
+    pub tile_cells: u32,
+    /// Write oct-encoded vertex normals (extension 1).
+    #[arg(long)]
+    pub normals: bool,
+    /// Write a water mask, water at or below 0 m (extension 2).
+    #[arg(long)]
+    pub watermask: bool,
+    /// Write metadata: child availability and the geometric error (extension 4).
+    #[arg(long)]
+    pub metadata: bool,
+    /// Gzip every tile (serve with Content-Encoding: gzip).
+    #[arg(long)]
+    pub gzip: bool,
+    /// Redo tiles already in OUT.
+    #[arg(long)]
+    pub force: bool,
+    /// Decode every tile again and check it (bound at every lattice sample,
+    /// conformity, edge lists) before writing it.
+    #[arg(long)]
+    pub check: bool,
+    /// What to do with voids.
+    #[arg(long, value_enum, default_value_t = Voids::Fill)]
+    pub voids: Voids,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct ServeArgs {
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// A tile directory written by `cota tiles` (layer.json and
+    /// {z}/{x}/{y}.terrain), served at /tiles/. Without it, tiles are made
+    /// on demand from the input (geographic inputs only) and kept.
+    #[arg(long, value_name = "DIR")]
+    pub tiles: Option<PathBuf>,
+    /// Address and port to listen on (port 0: any free port).
+    #[arg(long, default_value = "127.0.0.1:8080", value_name = "IP:PORT")]
+    pub addr: SocketAddr,
+    /// What to do with voids (no data) before encoding.
+    #[arg(long, value_enum, default_value_t = Voids::Fill)]
+    pub voids: Voids,
 }

@@ -12,6 +12,7 @@ mod hole;
 mod info;
 mod input;
 mod mesh;
+mod output;
 mod pair;
 mod progress;
 mod serve;

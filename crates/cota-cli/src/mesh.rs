@@ -3,7 +3,6 @@
 //! restricted quadtree), measure the mesh exactly, optionally check it and
 //! strip it, and write it atomically.
 
-use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -25,32 +24,6 @@ use crate::progress;
 
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
-}
-
-/// Fails early, before any long work, on output paths that cannot be written.
-pub(crate) fn check_output(out: &Path, base_m: Option<f64>) -> anyhow::Result<MeshFormat> {
-    let format = MeshFormat::from_path(out)?;
-    if base_m.is_some() && format != MeshFormat::Stl {
-        anyhow::bail!(
-            "{}: --base-m makes a closed solid for 3D printing and applies to .stl output only, found .{format}",
-            out.display()
-        );
-    }
-    let dir = match out.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    if !dir.is_dir() {
-        anyhow::bail!(
-            "cannot write {}: expected an existing directory {}, found none",
-            out.display(),
-            dir.display()
-        );
-    }
-    if out.is_dir() {
-        anyhow::bail!("cannot write {}: it is a directory", out.display());
-    }
-    Ok(format)
 }
 
 /// True for the default conforming max-error meshing: the error map's fast
@@ -191,7 +164,7 @@ fn validate_tin(a: &MeshArgs) -> anyhow::Result<()> {
 fn validate(a: &MeshArgs) -> anyhow::Result<()> {
     crate::hole::validate(a)?;
     if let Some(out) = &a.output {
-        check_output(out, a.base_m)?;
+        crate::output::check_output(out, a.base_m)?;
     }
     check_quantize(a)?;
     crate::pair::check_texture(&a.texture, a.output.as_deref(), a.strip, a.quantize)?;
