@@ -1,5 +1,6 @@
 //! Command-line flags, turned into library option structs and nothing more.
 
+use std::net::SocketAddr;
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -10,6 +11,10 @@ use cota_core::{CriterionKind, Mode};
 #[derive(Debug, Parser)]
 #[command(name = "cota", version, about, propagate_version = true)]
 pub struct Cli {
+    /// Show no progress (warnings and errors are still printed). Progress is
+    /// drawn only when stderr is a terminal.
+    #[arg(long, global = true)]
+    pub quiet: bool,
     #[command(subcommand)]
     pub command: Command,
 }
@@ -19,25 +24,28 @@ pub enum Command {
     /// Describe DEM files: format, size, CRS, cell size, height range, voids, seams.
     Info(InfoArgs),
     /// Build a mesh with a guaranteed maximum error, or within a triangle budget.
-    Mesh(MeshArgs),
+    Mesh(Box<MeshArgs>),
     /// Regenerate paper 000's Table 1 and Table 2: bitree vs restricted quadtree.
     Compare(CompareArgs),
     /// Paper 004: the best (mesh, texture) pair under a byte budget, as a textured GLB.
-    Pair(crate::pair::PairArgs),
+    Pair(PairArgs),
     /// Progressive compact stream (paper 000): encode a DEM, decode any prefix.
     #[command(subcommand)]
     Stream(StreamCommand),
     /// Cesium quantized-mesh-1.0 tile pyramid: error bound per zoom, no seams.
-    Tiles(crate::tiles::TilesArgs),
+    Tiles(TilesArgs),
     /// Serve the terrain over HTTP: browser viewer, CesiumJS page, stream, tiles.
-    Serve(crate::serve::ServeArgs),
+    Serve(ServeArgs),
 }
 
 /// How to read and combine the input files.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args)]
 pub struct InputArgs {
-    /// DEM files: SRTM .hgt/.hgt.zip, GeoTIFF, PNG, ESRI .asc. Several adjacent
-    /// tiles are mosaicked. With none, the bundled sample S29W072.hgt.zip is used.
+    /// DEM files: SRTM .hgt/.hgt.zip, GeoTIFF, PNG or WebP terrain tiles
+    /// (placed by Web-Mercator bounds when named z/x/y.ext), PMTiles archives
+    /// (with --zoom and --bbox), NumPy .npy/.npz, USGS .dem, ESRI .asc.
+    /// Several adjacent tiles are mosaicked. With none, the bundled sample
+    /// S29W072.hgt.zip is used.
     #[arg(value_name = "FILE")]
     pub files: Vec<PathBuf>,
     /// PNG height encoding. Default: terrain-rgb for colour PNGs, gray16 for grayscale.
@@ -70,9 +78,43 @@ pub struct InputArgs {
     /// Band to read from a multi-band raster (1-based).
     #[arg(long, value_name = "N")]
     pub band: Option<u16>,
+    /// The array to read from a NumPy .npz (default: the only 2-D array, or
+    /// one named elevation, dem, z, height or heights).
+    #[arg(long, value_name = "NAME")]
+    pub array: Option<String>,
+    /// PMTiles archives: the zoom level of the tiles to read (with --bbox).
+    #[arg(long, value_name = "Z", requires = "bbox")]
+    pub zoom: Option<u8>,
+    /// The box to read (west, south, east, north). PMTiles archives (with
+    /// --zoom): in degrees, every tile of --zoom touching it is read and
+    /// mosaicked. Other inputs: only the samples whose centres lie in it are
+    /// kept (after mosaicking), in the input's CRS units: degrees of
+    /// longitude and latitude for SRTM and geographic rasters, the
+    /// projection's units (metres) for projected ones.
+    #[arg(
+        long,
+        value_name = "W,S,E,N",
+        value_delimiter = ',',
+        allow_negative_numbers = true
+    )]
+    pub bbox: Option<Vec<f64>>,
     /// Where adjacent tiles overlap and disagree: their mean, or the first file's value.
     #[arg(long, value_enum, default_value_t = Seam::Mean)]
     pub seam: Seam,
+    /// Largest disagreement in metres between adjacent tiles where they
+    /// overlap; above it the mosaic warns on stderr (or fails with --strict),
+    /// naming the two files and the worst disagreement.
+    #[arg(
+        long = "seam-tolerance",
+        value_name = "M",
+        default_value_t = 5.0,
+        allow_negative_numbers = true
+    )]
+    pub seam_tolerance_m: f64,
+    /// Fail (exit 1) instead of warning when adjacent tiles disagree by more
+    /// than --seam-tolerance.
+    #[arg(long)]
+    pub strict: bool,
     /// Largest grid one file may declare, in samples; larger files are refused
     /// before anything is allocated. Default: from the machine's memory (16
     /// bytes per sample, at most 2^30); a gzipped .hgt at most one 3601² tile.
@@ -101,15 +143,22 @@ pub enum Voids {
     Idw,
     /// Refuse inputs with voids.
     Refuse,
+    /// Leave voids out: no triangle touches a void, so the mesh has holes
+    /// where the data has (`cota mesh` only; conforming bitree meshes).
+    Hole,
 }
 
 #[derive(Debug, Args)]
 pub struct InfoArgs {
     #[command(flatten)]
     pub input: InputArgs,
-    /// Print one JSON object instead of text.
+    /// Print one JSON object instead of text (with --each, an array of them).
     #[arg(long)]
     pub json: bool,
+    /// Describe each file on its own (unrelated files), instead of
+    /// mosaicking them into one region.
+    #[arg(long)]
+    pub each: bool,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -148,6 +197,21 @@ pub struct MeshArgs {
     /// Output coordinates.
     #[arg(long, value_enum, default_value_t = CoordsArg::Local)]
     pub coords: CoordsArg,
+    /// Mesh only a window of the input (after mosaicking, before the void
+    /// fill): first column, first row (row 0 is the northern row), width,
+    /// height, in samples.
+    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, conflicts_with = "bbox")]
+    pub crop: Option<Crop>,
+    /// Vertical exaggeration: the heights written (and --base-m) are
+    /// multiplied by F; the report's errors stay in true metres. Not with
+    /// --quantize.
+    #[arg(
+        long,
+        value_name = "F",
+        default_value_t = 1.0,
+        allow_negative_numbers = true
+    )]
+    pub z_scale: f64,
     /// STL only: close the surface into a solid with walls down to a flat base at
     /// this height in metres (for 3D printing).
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
@@ -203,7 +267,7 @@ pub struct MeshArgs {
     #[command(flatten)]
     pub refine: RefineArgs,
     #[command(flatten)]
-    pub texture: crate::pair::TextureArgs,
+    pub texture: TextureArgs,
 }
 
 /// How `cota mesh --strip` makes its strip (`cota_core::strip::StripMethod`).
@@ -631,4 +695,190 @@ pub struct StreamDecodeArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
+}
+
+/// The image options shared by `cota pair` and `cota mesh --texture`.
+#[derive(Debug, Args)]
+pub struct ImageArgs {
+    /// Bands of the image as R,G,B (1-based), e.g. 3,2,1 for Landsat true
+    /// colour, or one band as gray. Default: 1,2,3 (band 1 for 1-2 bands).
+    #[arg(long, value_name = "R,G,B")]
+    pub bands: Option<String>,
+    /// Drape even when the CRS rule cannot tell that the image's CRS is the
+    /// DEM's (cota does not reproject).
+    #[arg(long)]
+    pub assume_same_crs: bool,
+}
+
+/// `cota mesh --texture`.
+#[derive(Debug, Args)]
+#[command(next_help_heading = "Texture")]
+pub struct TextureArgs {
+    /// .glb only: drape this image (GeoTIFF, PNG or JPEG with a world file,
+    /// or stretched over the DEM) on the mesh: TEXCOORD_0, the image
+    /// resampled bilinearly onto the DEM's extent and embedded as PNG, an
+    /// unlit material.
+    #[arg(long, value_name = "IMAGE")]
+    pub texture: Option<PathBuf>,
+    #[command(flatten)]
+    pub image: ImageArgs,
+}
+
+/// Which pair `cota pair` writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Pick {
+    /// The exact optimum over the two lists.
+    Optimum,
+    /// The paper's greedy scan.
+    Greedy,
+}
+
+/// Which hierarchies make the mesh list.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Hierarchies {
+    Both,
+    Bitree,
+    Quadtree,
+}
+
+#[derive(Debug, Args)]
+pub struct PairArgs {
+    /// The DEM (any format `cota mesh` reads; voids filled harmonically).
+    pub dem: PathBuf,
+    /// The image: GeoTIFF, or PNG/JPEG with a world file or over the DEM's extent.
+    pub image: PathBuf,
+    /// The whole GLB must fit in this many bytes.
+    #[arg(long, value_name = "N")]
+    pub budget_bytes: u64,
+    /// Weight of the mesh's distortion D(M) (m2).
+    #[arg(long, value_name = "A", default_value_t = 1.0)]
+    pub alpha: f64,
+    /// Weight of the texture's distortion D(T) (levels2).
+    #[arg(long, value_name = "B", default_value_t = 1.0)]
+    pub beta: f64,
+    /// Only pairs whose mesh has no more triangles than the texture has
+    /// leaves (paper 004's advice).
+    #[arg(long)]
+    pub polygons_within_texels: bool,
+    /// Write the optimum pair, or the paper's greedy choice.
+    #[arg(long, value_enum, default_value_t = Pick::Optimum)]
+    pub pick: Pick,
+    /// Hierarchies of the mesh list.
+    #[arg(long, value_enum, default_value_t = Hierarchies::Both)]
+    pub hierarchies: Hierarchies,
+    /// Vertical bounds of the mesh list, metres. Default: the height range
+    /// halved 1 to 10 times, and 0.
+    #[arg(long, value_name = "M,...", value_delimiter = ',')]
+    pub mesh_tolerances_m: Option<Vec<f64>>,
+    /// Tolerances of the texture list: sigma_R + sigma_G + sigma_B, levels.
+    #[arg(
+        long,
+        value_name = "T,...",
+        value_delimiter = ',',
+        default_value = "0,2,4,8,12,16,24,32,48,64,96,128"
+    )]
+    pub texture_tolerances: Vec<f64>,
+    /// Output .glb (written atomically). Without it, only the report.
+    #[arg(short, long, value_name = "OUT.glb")]
+    pub output: Option<PathBuf>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub image_args: ImageArgs,
+}
+
+/// Flags of `cota tiles`.
+#[derive(Debug, Args)]
+pub struct TilesArgs {
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// Output directory: OUT/layer.json and OUT/{z}/{x}/{y}.terrain.
+    #[arg(short, long, value_name = "OUT")]
+    pub output: PathBuf,
+    /// Coarsest zoom written (0: the two root tiles).
+    #[arg(long, default_value_t = 0, value_name = "A")]
+    pub min_zoom: u8,
+    /// Finest zoom. Default: the zoom whose lattice is as fine as the source.
+    #[arg(long, value_name = "B")]
+    pub max_zoom: Option<u8>,
+    /// cesium-terrain-builder's error per zoom times Q: 6378137·2π·0.25·Q/(65·2)/2^z metres.
+    #[arg(long, value_name = "Q", conflicts_with = "max_error_m_at_max_zoom")]
+    pub error_factor: Option<f64>,
+    /// The error bound at the finest zoom in metres, doubled at each zoom above.
+    #[arg(long, value_name = "E")]
+    pub max_error_m_at_max_zoom: Option<f64>,
+    /// Lattice cells across a tile at the finest zoom (a power of two).
+    #[arg(long, default_value_t = 64, value_name = "S")]
+    pub tile_cells: u32,
+    /// Write oct-encoded vertex normals (extension 1).
+    #[arg(long)]
+    pub normals: bool,
+    /// Write a water mask, water at or below 0 m (extension 2).
+    #[arg(long)]
+    pub watermask: bool,
+    /// Write metadata: child availability and the geometric error (extension 4).
+    #[arg(long)]
+    pub metadata: bool,
+    /// Gzip every tile (serve with Content-Encoding: gzip).
+    #[arg(long)]
+    pub gzip: bool,
+    /// Redo tiles already in OUT.
+    #[arg(long)]
+    pub force: bool,
+    /// Decode every tile again and check it (bound at every lattice sample,
+    /// conformity, edge lists) before writing it.
+    #[arg(long)]
+    pub check: bool,
+    /// What to do with voids.
+    #[arg(long, value_enum, default_value_t = Voids::Fill)]
+    pub voids: Voids,
+    /// Print the report as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Print the shard plan (each shard's tiles, zoom by zoom) for --shards N and exit.
+    #[arg(long, conflicts_with_all = ["shard", "reduce"])]
+    pub plan: bool,
+    /// Number of shards for --plan and --reduce.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub shards: u32,
+    /// Write only shard I of N (0-based) and its record OUT/.cota-shard-I-of-N.json;
+    /// idempotent. Then --reduce --shards N writes layer.json.
+    #[arg(long, value_name = "I/N", value_parser = parse_shard, conflicts_with = "reduce")]
+    pub shard: Option<(u32, u32)>,
+    /// Check the records of --shards N shards in OUT, write layer.json, remove
+    /// the records (reads no input: the shards recorded it).
+    #[arg(long)]
+    pub reduce: bool,
+}
+
+#[derive(Debug, Args)]
+pub struct ServeArgs {
+    #[command(flatten)]
+    pub input: InputArgs,
+    /// A tile directory written by `cota tiles` (layer.json and
+    /// {z}/{x}/{y}.terrain), served at /tiles/. Without it, tiles are made
+    /// on demand from the input (geographic inputs only) and kept.
+    #[arg(long, value_name = "DIR")]
+    pub tiles: Option<PathBuf>,
+    /// Address and port to listen on (port 0: any free port).
+    #[arg(long, default_value = "127.0.0.1:8080", value_name = "IP:PORT")]
+    pub addr: SocketAddr,
+    /// What to do with voids (no data) before encoding.
+    #[arg(long, value_enum, default_value_t = Voids::Fill)]
+    pub voids: Voids,
+}
+
+/// `I/N` with `I < N`.
+fn parse_shard(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected I/N with 0 <= I < N (e.g. 0/4), found {s:?}");
+    let (i, n) = s.split_once('/').ok_or_else(bad)?;
+    let (i, n): (u32, u32) = (
+        i.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if i >= n {
+        return Err(bad());
+    }
+    Ok((i, n))
 }

@@ -16,10 +16,9 @@ use std::process::ExitCode;
 
 use cota_core::compare::{compare, CompareOptions, Row};
 use cota_core::strip::StripMethod;
-use cota_core::HeightGrid;
 use serde::Serialize;
 
-use crate::args::{CompareArgs, Crop};
+use crate::args::CompareArgs;
 use crate::input::load;
 
 #[derive(Debug, Clone, Serialize)]
@@ -39,35 +38,17 @@ struct Report<'a> {
     rows: &'a [Row],
 }
 
-/// The window `c` of `g`, with its georeference shifted to the window.
-pub fn crop(g: &HeightGrid, c: &Crop) -> anyhow::Result<HeightGrid> {
-    let bad = || {
-        anyhow::anyhow!(
-            "--crop {},{},{},{}: expected a window of at least 2x2 samples inside the {}x{} grid",
-            c.col,
-            c.row,
-            c.width,
-            c.height,
-            g.width(),
-            g.height()
-        )
-    };
-    if c.width < 2 || c.height < 2 {
-        return Err(bad());
-    }
-    g.window(c.col, c.row, c.width, c.height).map_err(|_| bad())
-}
-
 pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
     if let Some(t) = a.tolerances.iter().find(|t| !t.is_finite() || **t < 0.0) {
         anyhow::bail!("--tolerances: expected percentages of 0 or more, found {t}");
     }
+    crate::input::refuse_hole(a.voids, "compare")?;
     let input = load(&a.input)?;
     let name = crate::input::name(&input.files);
     let mut grid = input.grid;
     crate::input::fill(&mut grid, a.voids)?;
     if let Some(c) = &a.crop {
-        grid = crop(&grid, c)?;
+        grid = crate::window::crop(&grid, c)?;
     }
     let opts = CompareOptions::default()
         .with_tolerances_pct(a.tolerances.clone())
@@ -75,7 +56,9 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
         .with_quadtree(a.quadtree.iter().map(|q| q.options()).collect())
         .with_check(a.check)
         .with_strip_method(a.strip_method.method());
+    let spinner = crate::progress::spinner("comparing");
     let c = compare(&grid, &opts)?;
+    drop(spinner);
     let report = Report {
         input: name,
         crop: a.crop.as_ref().map(|c| [c.col, c.row, c.width, c.height]),

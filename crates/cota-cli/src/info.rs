@@ -1,19 +1,88 @@
 //! `cota info`: what the inputs hold, as read (before any void fill).
 
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use cota_core::{GeoRef, PixelIs};
+use cota_io::read::pmtiles::{self, is_pmtiles_file};
 use serde_json::{json, Value};
 
 use crate::args::InfoArgs;
 use crate::input::{load, FileInfo, Input};
 
 pub fn run(a: &InfoArgs) -> anyhow::Result<ExitCode> {
+    let files = &a.input.files;
+    if a.input.zoom.is_none() && !files.is_empty() && files.iter().all(|f| is_pmtiles_file(f)) {
+        return archives(files, a.json);
+    }
+    if a.each && files.len() > 1 {
+        return run_each(a);
+    }
     let input = load(&a.input)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&to_json(&input))?);
     } else {
         print_text(&input);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--each`: every file read and described on its own, in order; the first
+/// file that cannot be read stops the run (its error names it).
+fn run_each(a: &InfoArgs) -> anyhow::Result<ExitCode> {
+    let mut reports = Vec::new();
+    for file in &a.input.files {
+        let one = crate::args::InputArgs {
+            files: vec![file.clone()],
+            ..a.input.clone()
+        };
+        let input = load(&one)?;
+        if a.json {
+            reports.push(to_json(&input));
+        } else {
+            print_text(&input);
+        }
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&reports)?);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `cota info ARCHIVE.pmtiles` without --zoom: what each archive holds.
+fn archives(files: &[PathBuf], json: bool) -> anyhow::Result<ExitCode> {
+    let mut all = Vec::new();
+    for f in files {
+        let s = pmtiles::summary(f)?;
+        if json {
+            all.push(json!({
+                "path": f.display().to_string(),
+                "format": "PMTiles",
+                "tile_type": s.tile_type,
+                "tile_compression": s.tile_compression,
+                "min_zoom": s.min_zoom,
+                "max_zoom": s.max_zoom,
+                "bounds_deg": s.bounds_deg,
+                "addressed_tiles": s.addressed_tiles,
+            }));
+            continue;
+        }
+        let [w, so, e, n] = s.bounds_deg;
+        println!("{}", f.display());
+        println!(
+            "  format      PMTiles v3 ({} tiles, {} compression)",
+            s.tile_type, s.tile_compression
+        );
+        println!("  zooms       {}..{}", s.min_zoom, s.max_zoom);
+        println!("  bounds      {w},{so},{e},{n} (W,S,E,N degrees)");
+        println!("  tiles       {}", s.addressed_tiles);
+        println!("  read with   --zoom Z --bbox W,S,E,N");
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&json!({ "archives": all }))?
+        );
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -79,16 +148,8 @@ fn to_json(input: &Input) -> Value {
         "cell_size_m": g.cell_size_m(),
         "files": input.files.iter().map(file_json).collect::<Vec<_>>(),
     });
-    if let Some(s) = &input.seams {
-        v["seams"] = json!({
-            "overlap_samples": s.overlap_samples,
-            "compared": s.compared,
-            "max_abs_diff_m": s.max_abs_diff_m,
-            "mean_abs_diff_m": s.mean_abs_diff_m,
-            "max_diff_at": s.max_diff_at.map(|p| json!({
-                "col": p.col, "row": p.row, "x": p.x, "y": p.y, "tiles": p.tiles,
-            })),
-        });
+    if input.seams.is_some() {
+        v["seams"] = crate::input::seams_json(input);
         v["hole_samples"] = json!(input.hole_samples);
     }
     v

@@ -8,7 +8,10 @@ use anyhow::Context;
 use cota_core::grid::mosaic::{MosaicOptions, SeamPolicy, SeamReport};
 use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
 use cota_core::HeightGrid;
-use cota_io::{read_dem_bytes, read_region_with_progress, PngEncoding, ReadOptions, RegionOptions};
+use cota_io::{
+    read_dem_bytes, read_region_with_progress, ArrayName, PngEncoding, ReadOptions, RegionOptions,
+    TileRequest,
+};
 
 use crate::args::{Encoding, InputArgs, Seam, Voids};
 use crate::progress;
@@ -31,6 +34,8 @@ pub struct Input {
     pub seams: Option<SeamReport>,
     /// Mosaic samples covered by no file.
     pub hole_samples: usize,
+    /// `--seam-tolerance`, metres.
+    pub seam_tolerance_m: f64,
     /// Time spent reading and mosaicking, milliseconds.
     pub read_ms: f64,
 }
@@ -41,28 +46,75 @@ pub fn name(files: &[FileInfo]) -> String {
     names.join(" + ")
 }
 
-/// Applies the `--voids` policy to `grid`.
+/// Refuses `--voids hole` in a command that cannot leave holes.
+pub fn refuse_hole(voids: Voids, command: &str) -> anyhow::Result<()> {
+    if matches!(voids, Voids::Hole) {
+        anyhow::bail!(
+            "--voids hole: expected fill, idw or refuse for cota {command} (it needs a height at every sample); holes are for cota mesh"
+        );
+    }
+    Ok(())
+}
+
+/// Applies the `--voids` policy to `grid` (`hole` fills with a constant: the
+/// mesher then leaves the filled samples out, see `crate::hole`).
 pub fn fill(grid: &mut HeightGrid, voids: Voids) -> anyhow::Result<FillReport> {
+    if matches!(voids, Voids::Hole) {
+        if grid.void_count() == grid.len() {
+            anyhow::bail!("--voids hole: every sample is void, there is nothing to mesh");
+        }
+        let filled = cota_core::mesh::holes::fill_flat(grid);
+        return Ok(FillReport {
+            filled,
+            converged: true,
+            ..FillReport::default()
+        });
+    }
     let policy = match voids {
         Voids::Fill => VoidPolicy::Fill(FillMethod::Harmonic),
+        Voids::Hole => VoidPolicy::Refuse,
         Voids::Idw => VoidPolicy::Fill(FillMethod::InverseDistance),
         Voids::Refuse => VoidPolicy::Refuse,
     };
+    let _spinner = (grid.void_count() > 0).then(|| progress::spinner("filling voids"));
     fill_voids(grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")
 }
 
-fn read_options(a: &InputArgs) -> ReadOptions {
+fn read_options(a: &InputArgs) -> anyhow::Result<ReadOptions> {
     let enc = a.encoding.map(|e| match e {
         Encoding::TerrainRgb => PngEncoding::TerrainRgb,
         Encoding::Terrarium => PngEncoding::Terrarium,
         Encoding::Gray16 => PngEncoding::Gray16,
     });
-    ReadOptions::DEFAULT
+    let array = match &a.array {
+        Some(name) => Some(ArrayName::new(name).with_context(|| {
+            format!(
+                "--array: expected a name of 1 to {} bytes, found {name:?}",
+                ArrayName::MAX_LEN
+            )
+        })?),
+        None => None,
+    };
+    let tiles = match (a.zoom, &a.bbox) {
+        (Some(zoom), Some(b)) => {
+            let [w, s, e, n] = b[..] else {
+                anyhow::bail!("--bbox: expected W,S,E,N (4 numbers), found {}", b.len());
+            };
+            Some(TileRequest {
+                zoom,
+                bbox_deg: [w, s, e, n],
+            })
+        }
+        _ => None,
+    };
+    Ok(ReadOptions::DEFAULT
         .with_png_encoding(enc)
         .with_gray(a.gray_scale_m, a.gray_offset_m)
         .with_cell_size_m(a.cell_size_m)
         .with_band(a.band)
         .with_max_samples(a.max_samples)
+        .with_array(array)
+        .with_tiles(tiles))
 }
 
 /// A number for a message: plain when of ordinary size, else in scientific
@@ -82,10 +134,17 @@ fn check_options(a: &InputArgs) -> anyhow::Result<()> {
         ("--gray-scale-m", a.gray_scale_m),
         ("--gray-offset-m", a.gray_offset_m),
         ("--cell-size-m", a.cell_size_m),
+        ("--seam-tolerance", a.seam_tolerance_m),
     ] {
         if !v.is_finite() {
             anyhow::bail!("{name}: expected a finite number of metres, found {v}");
         }
+    }
+    if a.seam_tolerance_m < 0.0 {
+        anyhow::bail!(
+            "--seam-tolerance: expected a number of metres >= 0, found {}",
+            num(a.seam_tolerance_m)
+        );
     }
     let cell = a.cell_size_m;
     if cell <= 0.0 || !(cell as f32).is_normal() || !((cell * 65536.0) as f32).is_finite() {
@@ -142,10 +201,88 @@ fn warn_unpositioned(files: &[FileInfo]) {
     }
 }
 
-/// Reads every input (or the bundled sample) and mosaics them.
+/// The path of input `index`, for messages.
+fn path_of(files: &[FileInfo], index: usize) -> String {
+    files
+        .get(index)
+        .map_or_else(|| format!("file {index}"), |f| f.path.display().to_string())
+}
+
+/// Warns on stderr (fails with `--strict`) when overlapping tiles disagree
+/// by more than `--seam-tolerance`, naming the two files and the worst
+/// disagreement.
+fn check_seams(
+    a: &InputArgs,
+    seams: Option<&SeamReport>,
+    files: &[FileInfo],
+) -> anyhow::Result<()> {
+    let Some(s) = seams.filter(|s| s.max_abs_diff_m > a.seam_tolerance_m) else {
+        return Ok(());
+    };
+    let (pair, at) = match s.max_diff_at {
+        Some(p) => (
+            format!(
+                "{} and {}",
+                path_of(files, p.tiles[0]),
+                path_of(files, p.tiles[1])
+            ),
+            format!(" at ({}, {})", num(p.x), num(p.y)),
+        ),
+        None => (name(files), String::new()),
+    };
+    let msg = format!(
+        "{pair} disagree by up to {} m{at} where they overlap (mean {} m over {} samples), \
+         more than --seam-tolerance {} m",
+        num(s.max_abs_diff_m),
+        num(s.mean_abs_diff_m),
+        s.compared,
+        num(a.seam_tolerance_m)
+    );
+    if a.strict {
+        anyhow::bail!("{msg} (--strict)");
+    }
+    let kept = match a.seam {
+        Seam::Mean => "their mean",
+        Seam::First => "the first file's value",
+    };
+    eprintln!("cota: warning: {msg}; {kept} is used there (--seam; --strict refuses)");
+    Ok(())
+}
+
+/// The seam report as JSON, with the files of the largest disagreement
+/// named; `null` for a single file.
+pub fn seams_json(input: &Input) -> serde_json::Value {
+    let tolerance_m = input.seam_tolerance_m;
+    let Some(s) = &input.seams else {
+        return serde_json::Value::Null;
+    };
+    serde_json::json!({
+        "overlap_samples": s.overlap_samples,
+        "compared": s.compared,
+        "max_abs_diff_m": s.max_abs_diff_m,
+        "mean_abs_diff_m": s.mean_abs_diff_m,
+        "tolerance_m": tolerance_m,
+        "within_tolerance": s.max_abs_diff_m <= tolerance_m,
+        "max_diff_at": s.max_diff_at.map(|p| serde_json::json!({
+            "col": p.col, "row": p.row, "x": p.x, "y": p.y, "tiles": p.tiles,
+            "files": [path_of(&input.files, p.tiles[0]), path_of(&input.files, p.tiles[1])],
+        })),
+    })
+}
+
+/// `--bbox` as four numbers.
+fn bbox4(b: &[f64]) -> anyhow::Result<[f64; 4]> {
+    match b[..] {
+        [w, s, e, n] => Ok([w, s, e, n]),
+        _ => anyhow::bail!("--bbox: expected W,S,E,N (4 numbers), found {}", b.len()),
+    }
+}
+
+/// Reads every input (or the bundled sample) and mosaics them, then keeps
+/// the `--bbox` window (for inputs other than PMTiles archives).
 pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
     let t0 = Instant::now();
-    let opts = read_options(a);
+    let opts = read_options(a)?;
     check_options(a)?;
     let policy = match a.seam {
         Seam::Mean => SeamPolicy::Mean,
@@ -168,12 +305,20 @@ pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
         r
     };
     warn_unpositioned(&region.files);
+    check_seams(a, region.seams.as_ref(), &region.files)?;
     check_cell_size(&region.grid, &region.files)?;
+    let grid = match (&a.bbox, a.zoom) {
+        (Some(b), None) => {
+            crate::window::bbox(&region.grid, bbox4(b)?).with_context(|| name(&region.files))?
+        }
+        _ => region.grid,
+    };
     Ok(Input {
-        grid: region.grid,
+        grid,
         files: region.files,
         seams: region.seams,
         hole_samples: region.hole_samples,
+        seam_tolerance_m: a.seam_tolerance_m,
         read_ms: t0.elapsed().as_secs_f64() * 1e3,
     })
 }

@@ -8,14 +8,17 @@ use clap::Parser;
 
 mod args;
 mod compare;
+mod hole;
 mod info;
 mod input;
 mod mesh;
+mod output;
 mod pair;
 mod progress;
 mod serve;
 mod stream;
 mod tiles;
+mod window;
 
 fn main() -> ExitCode {
     quiet_broken_pipe();
@@ -30,6 +33,7 @@ fn main() -> ExitCode {
 
 fn run() -> anyhow::Result<ExitCode> {
     let cli = args::Cli::parse();
+    progress::set_quiet(cli.quiet);
     match cli.command {
         args::Command::Info(a) => info::run(&a),
         args::Command::Mesh(a) => mesh::run(&a),

@@ -3,12 +3,12 @@
 //! restricted quadtree), measure the mesh exactly, optionally check it and
 //! strip it, and write it atomically.
 
-use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::criteria::CriterionError;
+use cota_core::criteria::AvoidVoids;
+use cota_core::criteria::{Criterion, CriterionError};
 use cota_core::strip::{stripify_bitree_with, MeshStrip};
 use cota_core::{
     check_mesh, measure, CriterionOptions, HeightGrid, HierarchyKind, Mesh, MeshPlan, Meshed,
@@ -18,37 +18,12 @@ use cota_io::export::{write_mesh, Coords, ExportOptions, GlbQuantization, MeshFo
 use serde_json::json;
 
 use crate::args::{CoordsArg, CriterionArg, HierarchyArg, MeshArgs, MeshKindArg, StripMethodArg};
+use crate::hole::Holes;
 use crate::input::load;
 use crate::progress;
 
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
-}
-
-/// Fails early, before any long work, on output paths that cannot be written.
-pub(crate) fn check_output(out: &Path, base_m: Option<f64>) -> anyhow::Result<MeshFormat> {
-    let format = MeshFormat::from_path(out)?;
-    if base_m.is_some() && format != MeshFormat::Stl {
-        anyhow::bail!(
-            "{}: --base-m makes a closed solid for 3D printing and applies to .stl output only, found .{format}",
-            out.display()
-        );
-    }
-    let dir = match out.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    if !dir.is_dir() {
-        anyhow::bail!(
-            "cannot write {}: expected an existing directory {}, found none",
-            out.display(),
-            dir.display()
-        );
-    }
-    if out.is_dir() {
-        anyhow::bail!("cannot write {}: it is a directory", out.display());
-    }
-    Ok(format)
 }
 
 /// True for the default conforming max-error meshing: the error map's fast
@@ -100,10 +75,20 @@ fn flag_error(a: &MeshArgs, e: CriterionError) -> anyhow::Error {
     }
 }
 
-/// `--quantize` needs a .glb output, a triangle list and real heights.
+/// `--quantize` needs a .glb output, a triangle list and real heights
+/// (`--z-scale` 1).
 fn check_quantize(a: &MeshArgs) -> anyhow::Result<()> {
+    if !(a.z_scale.is_finite() && a.z_scale > 0.0) {
+        anyhow::bail!(
+            "--z-scale: expected a positive finite factor, found {}",
+            crate::input::num(a.z_scale)
+        );
+    }
     if !a.quantize {
         return Ok(());
+    }
+    if a.z_scale != 1.0 {
+        anyhow::bail!("--quantize: expected --z-scale 1 (a quantized GLB keeps true heights)");
     }
     if let Some(out) = &a.output {
         if MeshFormat::from_path(out)? != MeshFormat::Glb {
@@ -177,8 +162,9 @@ fn validate_tin(a: &MeshArgs) -> anyhow::Result<()> {
 
 /// Validates the flags before any long work.
 fn validate(a: &MeshArgs) -> anyhow::Result<()> {
+    crate::hole::validate(a)?;
     if let Some(out) = &a.output {
-        check_output(out, a.base_m)?;
+        crate::output::check_output(out, a.base_m)?;
     }
     check_quantize(a)?;
     crate::pair::check_texture(&a.texture, a.output.as_deref(), a.strip, a.quantize)?;
@@ -226,12 +212,28 @@ fn validate(a: &MeshArgs) -> anyhow::Result<()> {
 }
 
 /// The mesh the flags ask for, and the build and extraction times (ms).
-fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f64)> {
+/// With `holes`, the criterion also splits what touches a void.
+fn mesh_grid(
+    a: &MeshArgs,
+    grid: &HeightGrid,
+    holes: Option<&Holes>,
+) -> anyhow::Result<(Meshed, f64, f64)> {
     let mesher = Mesher::new(grid);
     let t = Instant::now();
-    let criterion = mesher
+    let inner = mesher
         .criterion(a.refine.criterion.kind(), &criterion_options(a))
         .map_err(|e| flag_error(a, e))?;
+    let avoid;
+    let criterion: &dyn Criterion = match holes {
+        Some(h) => {
+            avoid = AvoidVoids {
+                inner: &*inner,
+                voids: &h.mask,
+            };
+            &avoid
+        }
+        None => &*inner,
+    };
     let hierarchy = match a.hierarchy {
         HierarchyArg::Bitree if a.mesh == MeshKindArg::Tin => HierarchyKind::Tin {
             lock_border: a.lock_border,
@@ -239,7 +241,7 @@ fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f6
         HierarchyArg::Bitree => HierarchyKind::Bitree,
         HierarchyArg::Quadtree => HierarchyKind::Quadtree(a.quadtree_leaves.options()),
     };
-    let plan = MeshPlan::new(&*criterion)
+    let plan = MeshPlan::new(criterion)
         .with_hierarchy(hierarchy)
         .with_mode(a.refine.mode.mode())
         .with_max_triangles(a.max_triangles);
@@ -248,8 +250,7 @@ fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f6
     if plan.error_map_bound_m().is_some() {
         let pb = progress::bar(0, "building");
         mesher.prepare(&plan, &|done, total| {
-            pb.set_length(total as u64);
-            pb.set_position(done as u64);
+            progress::set_progress(&pb, done as u64, total as u64);
         })?;
         pb.finish_and_clear();
     } else {
@@ -257,10 +258,15 @@ fn mesh_grid(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<(Meshed, f64, f6
     }
     let build_ms = ms(t);
     let t = Instant::now();
-    let meshed = mesher.mesh(&plan).map_err(|e| match e {
+    let mut meshed = mesher.mesh(&plan).map_err(|e| match e {
         cota_core::MeshError::BudgetTooSmall { .. } => anyhow::anyhow!("--max-triangles: {e}"),
         e => e.into(),
     })?;
+    if holes.is_some() {
+        // The wrapper hides the user's bound from the mesher; it still holds.
+        meshed.bound_m = inner.vertical_bound_m();
+        meshed.check = meshed.check.with_max_error_m(meshed.bound_m);
+    }
     Ok((meshed, build_ms, criterion_ms + ms(t)))
 }
 
@@ -272,7 +278,7 @@ fn export_options(a: &MeshArgs) -> ExportOptions {
     };
     ExportOptions::DEFAULT
         .with_coords(coords)
-        .with_base_m(a.base_m)
+        .with_base_m(a.base_m.map(|b| b * a.z_scale))
         .with_quantize(a.quantize)
         .with_replace_read_only(a.force)
 }
@@ -346,7 +352,20 @@ fn strip<'m>(
     Ok(Some(s))
 }
 
-/// Writes the mesh (or its strip with `--strip`); returns the time taken (ms).
+/// `mesh` with its heights multiplied by `--z-scale` (borrowed when 1).
+fn scaled(mesh: &Mesh, z_scale: f64) -> std::borrow::Cow<'_, Mesh> {
+    if z_scale == 1.0 {
+        return std::borrow::Cow::Borrowed(mesh);
+    }
+    let mut m = mesh.clone();
+    for v in &mut m.vertices {
+        v.z_m = (f64::from(v.z_m) * z_scale) as f32;
+    }
+    std::borrow::Cow::Owned(m)
+}
+
+/// Writes the mesh (or its strip with `--strip`), heights times `--z-scale`;
+/// returns the time taken (ms).
 fn write(
     a: &MeshArgs,
     grid: &HeightGrid,
@@ -359,17 +378,19 @@ fn write(
     };
     let eo = export_options(a);
     let t = Instant::now();
-    if crate::pair::write_draped(&a.texture, out, grid, &m.mesh, &eo)? {
+    let mesh = scaled(&m.mesh, a.z_scale);
+    if crate::pair::write_draped(&a.texture, out, grid, &mesh, &eo)? {
         return Ok(ms(t));
     }
     match (strip, a.strip, quant) {
         (Some(s), true, _) => cota_io::export::write_atomically_forced(out, a.force, |w| {
-            cota_io::export::write_glb_strip(w, &s.mesh, &s.strip.indices, grid, &eo)
+            let sm = scaled(&s.mesh, a.z_scale);
+            cota_io::export::write_glb_strip(w, &sm, &s.strip.indices, grid, &eo)
         })?,
         (_, _, Some(q)) => cota_io::export::write_atomically_forced(out, a.force, |w| {
             cota_io::export::write_glb_quantized(w, &m.mesh, grid, &eo, q)
         })?,
-        _ => write_mesh(out, &m.mesh, grid, &eo)?,
+        _ => write_mesh(out, &mesh, grid, &eo)?,
     }
     Ok(ms(t))
 }
@@ -387,17 +408,20 @@ struct Finished<'m> {
 /// output is written (see [`strip_and_write`]): with `--check` (the output is
 /// written only after the checker passed) and with `--quantize` (the metrics
 /// are taken on the written heights, which swaps them into the mesh for the
-/// while). `None` otherwise.
+/// while), and with `--voids hole` (`always`: measured against the grid with
+/// its voids). `None` otherwise.
 fn measure_first(
     a: &MeshArgs,
     grid: &HeightGrid,
     m: &mut Meshed,
     quant: Option<&GlbQuantization>,
+    always: bool,
 ) -> anyhow::Result<Option<(Metrics, f64)>> {
-    if !a.check && quant.is_none() {
+    if !a.check && quant.is_none() && !always {
         return Ok(None);
     }
     let t = Instant::now();
+    let _spinner = progress::spinner(if a.check { "checking" } else { "measuring" });
     let metrics = measure_mesh(a, grid, m, quant)?;
     Ok(Some((metrics, ms(t))))
 }
@@ -416,6 +440,12 @@ fn strip_and_write<'m>(
     quant: Option<&GlbQuantization>,
     measured: Option<(Metrics, f64)>,
 ) -> anyhow::Result<Finished<'m>> {
+    let what = match (measured.is_some(), a.output.is_some()) {
+        (true, _) => "writing",
+        (false, true) => "measuring, writing",
+        (false, false) => "measuring",
+    };
+    let _spinner = progress::spinner(what);
     let strip_then_write = || -> anyhow::Result<_> {
         let t = Instant::now();
         let strip = strip(a, grid, m)?;
@@ -449,31 +479,37 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let started = Instant::now();
     validate(a)?;
     let input = load(&a.input)?;
-    let mut grid = input.grid;
+    let seams = crate::input::seams_json(&input);
+    let mut grid = crate::window::apply(input.grid, a.crop.as_ref())?;
     let nodata = grid.void_count();
+    let holes = Holes::of(a, &grid);
     let t = Instant::now();
     let files = crate::input::name(&input.files);
     let fill = crate::input::fill(&mut grid, a.voids).with_context(|| files.clone())?;
     let fill_ms = ms(t);
-    let (mut m, build_ms, extract_ms) = mesh_grid(a, &grid).with_context(|| files.clone())?;
+    let (mut m, build_ms, extract_ms) =
+        mesh_grid(a, &grid, holes.as_ref()).with_context(|| files.clone())?;
+    let cut = holes.as_ref().map(|h| crate::hole::cut(&mut m, h));
     let (quant, quantize_ms) = quantization(a, &grid, &m)?;
-    let measured = measure_first(a, &grid, &mut m, quant.as_ref())?;
+    // With holes the truth is the grid with its voids (measured first).
+    let truth = holes.as_ref().map_or(&grid, |h| &h.grid);
+    let measured = measure_first(a, truth, &mut m, quant.as_ref(), holes.is_some())?;
     let done = strip_and_write(a, &grid, &m, quant.as_ref(), measured)?;
     let (metrics, strip, measure_ms, strip_ms) =
         (done.metrics, done.strip, done.measure_ms, done.strip_ms);
     let write_ms = done.write_ms + quantize_ms;
-    let written_bound = m
-        .bound_m
-        .zip(quant.as_ref())
-        .map(|(b, q)| b + q.z_step_m() / 2.0);
     let mesh = &m.mesh;
-    let report = json!({
+    let mut report = json!({
         "input": crate::input::name(&input.files),
         "assumed_cell_size_m": crate::input::assumed_cell_m(&input.files),
         "width": grid.width(),
         "height": grid.height(),
-        "voids_filled": fill.filled,
+        "voids_filled": if cut.is_some() { 0 } else { fill.filled },
+        "voids": crate::hole::policy_name(a.voids),
+        "triangles_left_out": cut.map(|c| c.triangles_left_out),
+        "area_left_out_m2": cut.map(|c| c.cells_left_out * cell_area_m2(&grid)),
         "nodata_count": nodata,
+        "seams": seams,
         "threshold_m": m.bound_m,
         "hierarchy": if a.hierarchy == HierarchyArg::Quadtree { "quadtree" } else { "bitree" },
         "mesh": if a.mesh == MeshKindArg::Tin { "tin" } else { "bitree" },
@@ -500,29 +536,46 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "measure_ms": measure_ms,
         "write_ms": write_ms,
         "total_ms": ms(started),
-        "strip_method": strip.as_ref().map(|s| s.method.name()),
-        "strip_refs": strip.as_ref().map(|s| s.strip.refs()),
-        "strip_refs_per_triangle": strip.as_ref().map(|s| s.strip.refs_per_triangle()),
-        "strip_degenerate": strip.as_ref().map(|s| s.strip.degenerate),
-        "strip_retriangulated": strip.as_ref().map(|s| s.retriangulated()),
-        "strip_flipped_cells": strip.as_ref().map(|s| s.flipped_cells),
-        "strip_ms": strip.as_ref().map(|_| strip_ms),
         "output": a.output.as_ref().map(|p| p.display().to_string()),
         "quantized": a.quantize,
+        "z_scale": a.z_scale,
         "z_step_m": quant.as_ref().map(|q| q.z_step_m()),
-        "written_bound_m": written_bound,
+        "written_bound_m": m.bound_m.zip(quant.as_ref()).map(|(b, q)| b + q.z_step_m() / 2.0),
         "primitives": quant.as_ref().map(|q| q.primitives()),
     });
+    add_strip_fields(&mut report, strip.as_ref(), strip_ms);
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print_text(&report, &input.seams);
+        print_text(&report);
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::SeamReport>) {
-    let f = |k: &str| r[k].as_f64().unwrap_or(0.0);
+/// Adds the strip's figures to the report (`null` without a strip).
+fn add_strip_fields(r: &mut serde_json::Value, strip: Option<&MeshStrip<'_>>, strip_ms: f64) {
+    let fields = json!({
+        "strip_method": strip.map(|s| s.method.name()),
+        "strip_refs": strip.map(|s| s.strip.refs()),
+        "strip_refs_per_triangle": strip.map(|s| s.strip.refs_per_triangle()),
+        "strip_degenerate": strip.map(|s| s.strip.degenerate),
+        "strip_retriangulated": strip.map(|s| s.retriangulated()),
+        "strip_flipped_cells": strip.map(|s| s.flipped_cells),
+        "strip_ms": strip.map(|_| strip_ms),
+    });
+    if let (Some(r), serde_json::Value::Object(f)) = (r.as_object_mut(), fields) {
+        r.extend(f);
+    }
+}
+
+/// The area of one cell at the grid's centre, square metres.
+fn cell_area_m2(grid: &HeightGrid) -> f64 {
+    let [dx, dy] = grid.cell_size_m();
+    dx * dy
+}
+
+/// The input lines of the text report: size, assumed cell, seams, voids.
+fn print_input(r: &serde_json::Value) {
     println!(
         "input       {} ({} x {})",
         r["input"].as_str().unwrap_or(""),
@@ -535,15 +588,25 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
             crate::input::num(c)
         );
     }
-    if let Some(s) = seams {
+    if let Some(d) = r["seams"]["max_abs_diff_m"].as_f64() {
         println!(
-            "seams       largest difference {} m over {} samples",
-            s.max_abs_diff_m, s.compared
+            "seams       largest difference {d} m over {} samples",
+            r["seams"]["compared"]
         );
     }
-    if f("nodata_count") > 0.0 {
+    if let Some(area) = r["area_left_out_m2"].as_f64() {
+        println!(
+            "voids       hole: {} void samples, {} triangles and {area:.4e} m2 left out",
+            r["nodata_count"], r["triangles_left_out"]
+        );
+    } else if r["nodata_count"].as_u64().unwrap_or(0) > 0 {
         println!("voids       {} filled", r["voids_filled"]);
     }
+}
+
+fn print_text(r: &serde_json::Value) {
+    let f = |k: &str| r[k].as_f64().unwrap_or(0.0);
+    print_input(r);
     println!(
         "mesh        {} vertices, {} triangles ({:.2}% of {})",
         r["vertices"],
@@ -596,7 +659,9 @@ fn print_text(r: &serde_json::Value, seams: &Option<cota_core::grid::mosaic::Sea
         f("total_ms")
     );
     if let Some(out) = r["output"].as_str() {
-        println!("wrote       {out}");
+        let z = r["z_scale"].as_f64().filter(|z| *z != 1.0);
+        let z = z.map(|z| format!(" (heights x {z})")).unwrap_or_default();
+        println!("wrote       {out}{z}");
     }
 }
 
@@ -627,11 +692,16 @@ fn print_strip_and_check(r: &serde_json::Value) {
         } else {
             "no T-junction"
         };
-        let bound = if r["threshold_m"].is_null() {
-            ""
-        } else {
-            ", bound holds at every sample"
+        let hole = r["voids"].as_str() == Some("hole");
+        let bound = match (r["threshold_m"].is_null(), hole) {
+            (true, _) => "",
+            (false, false) => ", bound holds at every sample",
+            (false, true) => ", bound holds at every valid sample",
         };
-        println!("check       passed: covers the grid exactly, {joints}{bound}");
+        let covers = match hole {
+            true => "covers every cell with four valid corners, touches no void",
+            false => "covers the grid exactly",
+        };
+        println!("check       passed: {covers}, {joints}{bound}");
     }
 }

@@ -13,12 +13,11 @@
 //! of at most [`FRAME_RESERVE_BYTES`], so pairs are chosen within
 //! `budget − FRAME_RESERVE_BYTES` and the file is never over the budget.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
-use clap::{Args, ValueEnum};
 use cota_core::pair::{
     choose, mesh_list, Candidate, Choice, MeshCandidate, MeshListOptions, PairOptions,
 };
@@ -31,100 +30,11 @@ use cota_io::export::{
 use cota_io::image::{place_on, read_image, Bands, ImageOptions};
 use serde_json::{json, Value};
 
+use crate::args::{Hierarchies, ImageArgs, PairArgs, Pick, TextureArgs};
+
 /// Bytes kept for the GLB's frame (12-byte header, two chunk headers, the
 /// JSON padded to 4): the JSON of a textured GLB is about 1.2 KB.
 pub const FRAME_RESERVE_BYTES: u64 = 4096;
-
-/// The image options shared by `cota pair` and `cota mesh --texture`.
-#[derive(Debug, Args)]
-pub struct ImageArgs {
-    /// Bands of the image as R,G,B (1-based), e.g. 3,2,1 for Landsat true
-    /// colour, or one band as gray. Default: 1,2,3 (band 1 for 1-2 bands).
-    #[arg(long, value_name = "R,G,B")]
-    pub bands: Option<String>,
-    /// Drape even when the CRS rule cannot tell that the image's CRS is the
-    /// DEM's (cota does not reproject).
-    #[arg(long)]
-    pub assume_same_crs: bool,
-}
-
-/// `cota mesh --texture`.
-#[derive(Debug, Args)]
-#[command(next_help_heading = "Texture")]
-pub struct TextureArgs {
-    /// .glb only: drape this image (GeoTIFF, PNG or JPEG with a world file,
-    /// or stretched over the DEM) on the mesh: TEXCOORD_0, the image
-    /// resampled bilinearly onto the DEM's extent and embedded as PNG, an
-    /// unlit material.
-    #[arg(long, value_name = "IMAGE")]
-    pub texture: Option<PathBuf>,
-    #[command(flatten)]
-    pub image: ImageArgs,
-}
-
-/// Which pair `cota pair` writes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Pick {
-    /// The exact optimum over the two lists.
-    Optimum,
-    /// The paper's greedy scan.
-    Greedy,
-}
-
-/// Which hierarchies make the mesh list.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Hierarchies {
-    Both,
-    Bitree,
-    Quadtree,
-}
-
-#[derive(Debug, Args)]
-pub struct PairArgs {
-    /// The DEM (any format `cota mesh` reads; voids filled harmonically).
-    pub dem: PathBuf,
-    /// The image: GeoTIFF, or PNG/JPEG with a world file or over the DEM's extent.
-    pub image: PathBuf,
-    /// The whole GLB must fit in this many bytes.
-    #[arg(long, value_name = "N")]
-    pub budget_bytes: u64,
-    /// Weight of the mesh's distortion D(M) (m2).
-    #[arg(long, value_name = "A", default_value_t = 1.0)]
-    pub alpha: f64,
-    /// Weight of the texture's distortion D(T) (levels2).
-    #[arg(long, value_name = "B", default_value_t = 1.0)]
-    pub beta: f64,
-    /// Only pairs whose mesh has no more triangles than the texture has
-    /// leaves (paper 004's advice).
-    #[arg(long)]
-    pub polygons_within_texels: bool,
-    /// Write the optimum pair, or the paper's greedy choice.
-    #[arg(long, value_enum, default_value_t = Pick::Optimum)]
-    pub pick: Pick,
-    /// Hierarchies of the mesh list.
-    #[arg(long, value_enum, default_value_t = Hierarchies::Both)]
-    pub hierarchies: Hierarchies,
-    /// Vertical bounds of the mesh list, metres. Default: the height range
-    /// halved 1 to 10 times, and 0.
-    #[arg(long, value_name = "M,...", value_delimiter = ',')]
-    pub mesh_tolerances_m: Option<Vec<f64>>,
-    /// Tolerances of the texture list: sigma_R + sigma_G + sigma_B, levels.
-    #[arg(
-        long,
-        value_name = "T,...",
-        value_delimiter = ',',
-        default_value = "0,2,4,8,12,16,24,32,48,64,96,128"
-    )]
-    pub texture_tolerances: Vec<f64>,
-    /// Output .glb (written atomically). Without it, only the report.
-    #[arg(short, long, value_name = "OUT.glb")]
-    pub output: Option<PathBuf>,
-    /// Print one JSON object instead of text.
-    #[arg(long)]
-    pub json: bool,
-    #[command(flatten)]
-    pub image_args: ImageArgs,
-}
 
 /// One texture of the list: its tolerance, leaves, D(T) and the PNG.
 struct TextureCandidate {
@@ -528,7 +438,7 @@ pub fn check_texture(
 
 /// A writable `.glb` output path (`what` says why it must be one).
 fn check_glb_output(out: &Path, what: &str) -> anyhow::Result<()> {
-    if crate::mesh::check_output(out, None)? != cota_io::export::MeshFormat::Glb {
+    if crate::output::check_output(out, None)? != cota_io::export::MeshFormat::Glb {
         anyhow::bail!("{}: {what}, expected a .glb output", out.display());
     }
     Ok(())

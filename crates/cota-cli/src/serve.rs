@@ -4,14 +4,11 @@
 //! directory; without, tiles made on demand from the hierarchy prepared in
 //! memory (`cota_server`). Stops on Ctrl-C or SIGTERM.
 
-use std::net::SocketAddr;
-use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context;
-use clap::Args;
 use cota_core::tiles::{LatticeOptions, TilerOptions, TilesError};
 use cota_core::HeightGrid;
 use cota_io::stream_file::MAGIC;
@@ -20,25 +17,8 @@ use cota_server::{
     DemandTileSource, DirTileSource, ServeError, ServerState, StreamAsset, TileSource,
 };
 
-use crate::args::{InputArgs, Voids};
+use crate::args::ServeArgs;
 use crate::input::{fill, load, name};
-
-#[derive(Debug, Args)]
-pub struct ServeArgs {
-    #[command(flatten)]
-    pub input: InputArgs,
-    /// A tile directory written by `cota tiles` (layer.json and
-    /// {z}/{x}/{y}.terrain), served at /tiles/. Without it, tiles are made
-    /// on demand from the input (geographic inputs only) and kept.
-    #[arg(long, value_name = "DIR")]
-    pub tiles: Option<PathBuf>,
-    /// Address and port to listen on (port 0: any free port).
-    #[arg(long, default_value = "127.0.0.1:8080", value_name = "IP:PORT")]
-    pub addr: SocketAddr,
-    /// What to do with voids (no data) before encoding.
-    #[arg(long, value_enum, default_value_t = Voids::Fill)]
-    pub voids: Voids,
-}
 
 /// The stream of the inputs (a `.cstream` as it is, DEMs encoded
 /// losslessly) and, for DEMs, their grid.

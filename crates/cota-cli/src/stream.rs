@@ -19,7 +19,7 @@ use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
 use cota_io::stream_file::{read_stream, step_end_offsets, write_stream, StreamLimit};
 use serde_json::json;
 
-use crate::args::{CoordsArg, StreamCommand, StreamDecodeArgs, StreamEncodeArgs};
+use crate::args::{CoordsArg, StreamCommand, StreamDecodeArgs, StreamEncodeArgs, StreamModeArg};
 use crate::input::load;
 
 pub fn run(c: &StreamCommand) -> anyhow::Result<ExitCode> {
@@ -37,6 +37,19 @@ fn ratio(a: u64, b: usize) -> f64 {
     }
 }
 
+/// Encodes `grid` as `mode` asks, with a spinner on a terminal.
+fn encode_grid(
+    grid: &HeightGrid,
+    mode: StreamModeArg,
+    opts: &StreamOptions,
+) -> anyhow::Result<cota_core::stream::EncodedStream> {
+    let _spinner = crate::progress::spinner("encoding");
+    Ok(match mode.mode() {
+        None => encode(grid, opts)?,
+        Some(mode) => encode_marks_progressive(grid, mode, opts)?,
+    })
+}
+
 fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
     if a.max_error.is_nan() || a.max_error < 0.0 {
         anyhow::bail!("--max-error: expected 0 m or more, found {} m", a.max_error);
@@ -47,6 +60,7 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
             a.quantum_m
         );
     }
+    crate::input::refuse_hole(a.voids, "stream")?;
     let input = load(&a.input)?;
     let mut grid = input.grid;
     crate::input::fill(&mut grid, a.voids)?;
@@ -55,10 +69,7 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         .with_quantum_m(a.quantum_m)
         .with_max_error_m(a.max_error)
         .with_thresholds_m(a.thresholds.clone());
-    let s = match a.mode.mode() {
-        None => encode(&grid, &opts)?,
-        Some(mode) => encode_marks_progressive(&grid, mode, &opts)?,
-    };
+    let s = encode_grid(&grid, a.mode, &opts)?;
     let encode_ms = t.elapsed().as_secs_f64() * 1e3;
     write_stream(&a.output, &s, grid.georef())?;
     let ends = step_end_offsets(&s, grid.georef());
@@ -111,6 +122,22 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(ExitCode::SUCCESS);
     }
+    print_encode_text(a, &name, &grid, &s, &ends);
+    println!("wrote       {}", a.output.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The text report of `cota stream encode`: one line per step, the total.
+fn print_encode_text(
+    a: &StreamEncodeArgs,
+    name: &str,
+    grid: &HeightGrid,
+    s: &cota_core::stream::EncodedStream,
+    ends: &[u64],
+) {
+    let total = ends.last().copied().unwrap_or(0);
+    let full = 2 * (grid.width() - 1) * (grid.height() - 1);
+    let last = s.steps.last();
     println!(
         "input       {} ({} x {}), quantum {} m{}",
         name,
@@ -135,7 +162,7 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         "B/tri",
         "B/pt"
     );
-    for (k, (st, &end)) in s.steps.iter().zip(&ends).enumerate() {
+    for (k, (st, &end)) in s.steps.iter().zip(ends).enumerate() {
         let thr = if k == 0 {
             "coarse".to_string()
         } else {
@@ -161,8 +188,22 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         ratio(total, full),
         full
     );
-    println!("wrote       {}", a.output.display());
-    Ok(ExitCode::SUCCESS)
+}
+
+/// Writes the decoded mesh to `-o`, if given.
+fn write_decoded(
+    a: &StreamDecodeArgs,
+    mesh: &cota_core::Mesh,
+    grid: &HeightGrid,
+) -> anyhow::Result<()> {
+    if let Some(out) = &a.output {
+        let coords = match a.coords {
+            CoordsArg::Local => Coords::LocalMetres,
+            CoordsArg::Grid => Coords::Grid,
+        };
+        write_mesh(out, mesh, grid, &ExportOptions::DEFAULT.with_coords(coords))?;
+    }
+    Ok(())
 }
 
 fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
@@ -191,18 +232,7 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
         d.georef.clone(),
     )
     .with_context(|| format!("{}: decoded surface", a.input.display()))?;
-    if let Some(out) = &a.output {
-        let coords = match a.coords {
-            CoordsArg::Local => Coords::LocalMetres,
-            CoordsArg::Grid => Coords::Grid,
-        };
-        write_mesh(
-            out,
-            &mesh,
-            &grid,
-            &ExportOptions::DEFAULT.with_coords(coords),
-        )?;
-    }
+    write_decoded(a, &mesh, &grid)?;
     let used = d.steps.last().map_or(0, |s| s.end_offset);
     let steps: Vec<_> = d
         .steps
@@ -241,6 +271,21 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(ExitCode::SUCCESS);
     }
+    print_decode_text(a, &d, &mesh, used);
+    if let Some(out) = &a.output {
+        println!("wrote       {}", out.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The text report of `cota stream decode`: the steps used, the mesh.
+fn print_decode_text(
+    a: &StreamDecodeArgs,
+    d: &cota_io::stream_file::DecodedStream,
+    mesh: &cota_core::Mesh,
+    used: u64,
+) {
+    let h = d.decoder.header();
     println!(
         "input       {} ({} x {}), {} of {} bytes, {} steps",
         a.input.display(),
@@ -278,8 +323,4 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
         ratio(used, mesh.triangle_count()),
         ratio(used, mesh.vertex_count())
     );
-    if let Some(out) = &a.output {
-        println!("wrote       {}", out.display());
-    }
-    Ok(ExitCode::SUCCESS)
 }

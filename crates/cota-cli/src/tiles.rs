@@ -2,11 +2,9 @@
 //! zoom and no seams; with `--check`, every tile decoded again and checked
 //! after quantization.
 
-use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context;
-use clap::Args;
 use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
     resampling_deviation, shard_plan, Deviation, ErrorSchedule, Lattice, LatticeOptions, Prepared,
@@ -17,86 +15,8 @@ use cota_io::tiles::{
 };
 use serde_json::json;
 
-use crate::args::{InputArgs, Voids};
+use crate::args::TilesArgs;
 use crate::{input, progress};
-
-/// Flags of `cota tiles`.
-#[derive(Debug, Args)]
-pub struct TilesArgs {
-    #[command(flatten)]
-    pub input: InputArgs,
-    /// Output directory: OUT/layer.json and OUT/{z}/{x}/{y}.terrain.
-    #[arg(short, long, value_name = "OUT")]
-    pub output: PathBuf,
-    /// Coarsest zoom written (0: the two root tiles).
-    #[arg(long, default_value_t = 0, value_name = "A")]
-    pub min_zoom: u8,
-    /// Finest zoom. Default: the zoom whose lattice is as fine as the source.
-    #[arg(long, value_name = "B")]
-    pub max_zoom: Option<u8>,
-    /// cesium-terrain-builder's error per zoom times Q: 6378137·2π·0.25·Q/(65·2)/2^z metres.
-    #[arg(long, value_name = "Q", conflicts_with = "max_error_m_at_max_zoom")]
-    pub error_factor: Option<f64>,
-    /// The error bound at the finest zoom in metres, doubled at each zoom above.
-    #[arg(long, value_name = "E")]
-    pub max_error_m_at_max_zoom: Option<f64>,
-    /// Lattice cells across a tile at the finest zoom (a power of two).
-    #[arg(long, default_value_t = 64, value_name = "S")]
-    pub tile_cells: u32,
-    /// Write oct-encoded vertex normals (extension 1).
-    #[arg(long)]
-    pub normals: bool,
-    /// Write a water mask, water at or below 0 m (extension 2).
-    #[arg(long)]
-    pub watermask: bool,
-    /// Write metadata: child availability and the geometric error (extension 4).
-    #[arg(long)]
-    pub metadata: bool,
-    /// Gzip every tile (serve with Content-Encoding: gzip).
-    #[arg(long)]
-    pub gzip: bool,
-    /// Redo tiles already in OUT.
-    #[arg(long)]
-    pub force: bool,
-    /// Decode every tile again and check it (bound at every lattice sample,
-    /// conformity, edge lists) before writing it.
-    #[arg(long)]
-    pub check: bool,
-    /// What to do with voids.
-    #[arg(long, value_enum, default_value_t = Voids::Fill)]
-    pub voids: Voids,
-    /// Print the report as one JSON object.
-    #[arg(long)]
-    pub json: bool,
-    /// Print the shard plan (each shard's tiles, zoom by zoom) for --shards N and exit.
-    #[arg(long, conflicts_with_all = ["shard", "reduce"])]
-    pub plan: bool,
-    /// Number of shards for --plan and --reduce.
-    #[arg(long, default_value_t = 1, value_name = "N")]
-    pub shards: u32,
-    /// Write only shard I of N (0-based) and its record OUT/.cota-shard-I-of-N.json;
-    /// idempotent. Then --reduce --shards N writes layer.json.
-    #[arg(long, value_name = "I/N", value_parser = parse_shard, conflicts_with = "reduce")]
-    pub shard: Option<(u32, u32)>,
-    /// Check the records of --shards N shards in OUT, write layer.json, remove
-    /// the records (reads no input: the shards recorded it).
-    #[arg(long)]
-    pub reduce: bool,
-}
-
-/// `I/N` with `I < N`.
-fn parse_shard(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("expected I/N with 0 <= I < N (e.g. 0/4), found {s:?}");
-    let (i, n) = s.split_once('/').ok_or_else(bad)?;
-    let (i, n): (u32, u32) = (
-        i.trim().parse().map_err(|_| bad())?,
-        n.trim().parse().map_err(|_| bad())?,
-    );
-    if i >= n {
-        return Err(bad());
-    }
-    Ok((i, n))
-}
 
 /// Runs `cota tiles`.
 pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {

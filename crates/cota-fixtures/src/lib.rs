@@ -2,7 +2,7 @@
 //!
 //! The data cota's tests and benchmarks run on, as **plain data**: row-major
 //! `f32` heights (north row first, voids NaN) with what the file said about
-//! its place ([`Samples`]). It depends on no cota crate (only `zip` and `flate2`), so
+//! its place ([`Samples`]). It depends on no cota crate (only `zip`, `flate2` and `image-webp`), so
 //! `cota-core`'s own tests can use it without a dependency cycle; each crate
 //! turns [`Samples`] into its grid type in its `tests/common`.
 //!
@@ -18,6 +18,8 @@
 //! * [`crop`]: a window of row-major heights.
 //! * [`rough_terrain`]: smooth hills plus seeded noise, for property tests.
 //! * [`bombs`]: a gzip bomb and a PNG dimension bomb, written streaming.
+//! * [`formats`]: writers of Terrarium WebP tiles, PMTiles archives, NumPy
+//!   `.npy`/`.npz` and USGS ASCII DEMs, made from real heights in a test's set-up.
 //!
 //! The readers here are deliberately small (the formats of the bundled and
 //! shared SRTM and ASCII files, no more); `cota-io` is the real reader, and
@@ -26,6 +28,7 @@
 
 mod ascii;
 pub mod bombs;
+pub mod formats;
 mod srtm;
 
 use std::fmt;

@@ -47,6 +47,14 @@ pub struct ReadOptions {
     /// 1-based band to read from a multi-band raster. `None` reads single-band
     /// files and refuses multi-band ones as ambiguous. Default: `None`.
     pub band: Option<u16>,
+    /// The array to read from a NumPy `.npz` archive. `None` reads the only
+    /// 2-D array, or the one named `elevation`, `dem`, `z`, `height` or
+    /// `heights`, and refuses an archive where that is ambiguous (listing the
+    /// names). Default: `None`.
+    pub array: Option<ArrayName>,
+    /// Which tiles to read from a tile archive (PMTiles): a zoom and a box.
+    /// `None` refuses an archive (naming its zooms and bounds). Default: `None`.
+    pub tiles: Option<TileRequest>,
     /// Largest grid, in samples, one file may declare; larger headers are
     /// refused before anything is allocated, and compressed inputs stop
     /// decompressing beyond it. `None`: the machine's default
@@ -54,6 +62,60 @@ pub struct ReadOptions {
     /// one 3601² tile). Never above [`cota_core::grid::MAX_SAMPLES`].
     /// Default: `None`.
     pub max_samples: Option<u64>,
+}
+
+/// The name of an array in a NumPy `.npz` archive (at most
+/// [`ArrayName::MAX_LEN`] bytes; stored inline so that [`ReadOptions`] stays `Copy`).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub struct ArrayName {
+    bytes: [u8; ArrayName::MAX_LEN],
+    len: u8,
+}
+
+impl ArrayName {
+    /// The longest name accepted, in bytes.
+    pub const MAX_LEN: usize = 64;
+
+    /// The name, or `None` when it is empty or longer than [`ArrayName::MAX_LEN`] bytes.
+    pub fn new(name: &str) -> Option<Self> {
+        let src = name.as_bytes();
+        if src.is_empty() || src.len() > Self::MAX_LEN {
+            return None;
+        }
+        let mut bytes = [0u8; Self::MAX_LEN];
+        bytes[..src.len()].copy_from_slice(src);
+        Some(ArrayName {
+            bytes,
+            len: src.len() as u8,
+        })
+    }
+
+    /// The name as given.
+    pub fn as_str(&self) -> &str {
+        std::str::from_utf8(&self.bytes[..usize::from(self.len)]).unwrap_or("")
+    }
+}
+
+impl fmt::Debug for ArrayName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Debug::fmt(self.as_str(), f)
+    }
+}
+
+impl fmt::Display for ArrayName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Tiles to read from a tile archive: a zoom level and a longitude/latitude
+/// box (WGS 84 degrees); every tile of that zoom that touches the box is read.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TileRequest {
+    /// The zoom level.
+    pub zoom: u8,
+    /// West, south, east, north, in degrees.
+    pub bbox_deg: [f64; 4],
 }
 
 impl ReadOptions {
@@ -64,6 +126,8 @@ impl ReadOptions {
         gray_offset_m: 0.0,
         cell_size_m: 1.0,
         band: None,
+        array: None,
+        tiles: None,
         max_samples: None,
     };
 
@@ -83,6 +147,18 @@ impl ReadOptions {
     /// Sets [`ReadOptions::band`].
     pub const fn with_band(mut self, band: Option<u16>) -> Self {
         self.band = band;
+        self
+    }
+
+    /// Sets [`ReadOptions::array`].
+    pub const fn with_array(mut self, array: Option<ArrayName>) -> Self {
+        self.array = array;
+        self
+    }
+
+    /// Sets [`ReadOptions::tiles`].
+    pub const fn with_tiles(mut self, tiles: Option<TileRequest>) -> Self {
+        self.tiles = tiles;
         self
     }
 
@@ -118,6 +194,16 @@ pub enum Format {
     Png(PngEncoding),
     /// ESRI ASCII grid (`.asc`).
     EsriAscii,
+    /// WebP with a height encoding (terrain-RGB or Terrarium).
+    WebP(PngEncoding),
+    /// Tiles of a PMTiles v3 archive (PNG or WebP, with this encoding).
+    Pmtiles(PngEncoding),
+    /// A NumPy `.npy` array.
+    Npy,
+    /// An array of a NumPy `.npz` archive.
+    Npz,
+    /// USGS ASCII DEM (`.dem`, type A header and B profiles).
+    UsgsDem,
 }
 
 impl fmt::Display for Format {
@@ -128,6 +214,11 @@ impl fmt::Display for Format {
             Format::GeoTiff => f.write_str("GeoTIFF"),
             Format::Png(e) => write!(f, "PNG ({e})"),
             Format::EsriAscii => f.write_str("ESRI ASCII grid"),
+            Format::WebP(e) => write!(f, "WebP ({e})"),
+            Format::Pmtiles(e) => write!(f, "PMTiles ({e} tiles)"),
+            Format::Npy => f.write_str("NumPy .npy"),
+            Format::Npz => f.write_str("NumPy .npz"),
+            Format::UsgsDem => f.write_str("USGS ASCII DEM"),
         }
     }
 }
@@ -151,6 +242,8 @@ pub enum DataType {
     F32,
     /// 64-bit float.
     F64,
+    /// 64-bit signed.
+    I64,
     /// 8-bit RGB(A) pixels decoded by a PNG encoding.
     Rgb8,
     /// Decimal text of unknown type. The ESRI ASCII reader reports
@@ -169,6 +262,7 @@ impl fmt::Display for DataType {
             DataType::U32 => "UInt32",
             DataType::F32 => "Float32",
             DataType::F64 => "Float64",
+            DataType::I64 => "Int64",
             DataType::Rgb8 => "RGB8",
             DataType::Text => "text",
         })

@@ -36,7 +36,7 @@ pub enum ReadErrorKind {
     #[error("expected a DEM, found an empty file (0 bytes)")]
     Empty,
     /// The content matches no supported format.
-    #[error("expected an SRTM .hgt, .hgt.zip, GeoTIFF, PNG or ESRI ASCII grid, found {found}")]
+    #[error("expected an SRTM .hgt, .hgt.zip, GeoTIFF, PNG, WebP, PMTiles, NumPy .npy/.npz, USGS .dem or ESRI ASCII grid, found {found}")]
     UnknownFormat {
         /// A description of what the first bytes look like.
         found: String,

@@ -2,8 +2,9 @@
 //!
 //! Everything in cota that touches a file:
 //! * DEM readers ([`read_dem`]): SRTM `.hgt` and `.hgt.zip`, GeoTIFF (pure-Rust
-//!   `tiff` crate), PNG terrain encodings (terrain-RGB, Terrarium, 16-bit gray)
-//!   and ESRI ASCII grids. The format is detected from the content, the file name
+//!   `tiff` crate), PNG terrain encodings (terrain-RGB, Terrarium, 16-bit gray),
+//!   WebP terrain tiles, PMTiles v3 archives of such tiles, NumPy `.npy`/`.npz`,
+//!   USGS ASCII DEMs and ESRI ASCII grids. The format is detected from the content, the file name
 //!   only breaking ties.
 //! * [`read_region`]: several files read in parallel, joined into one grid
 //!   (`cota_core::grid::mosaic`) and their voids filled (`cota_core::grid::voids`).
@@ -25,7 +26,9 @@ pub mod read;
 pub mod stream_file;
 pub mod tiles;
 
-pub use dem::{DataType, Dem, DemSummary, Format, PngEncoding, ReadOptions};
+pub use dem::{
+    ArrayName, DataType, Dem, DemSummary, Format, PngEncoding, ReadOptions, TileRequest,
+};
 pub use error::{ReadError, ReadErrorKind, RegionError};
 pub use read::{
     read_dem, read_dem_bytes, read_region, read_region_with_progress, Region, RegionOptions,

@@ -31,6 +31,7 @@ mod choice;
 pub mod curvature;
 pub mod light;
 pub mod view;
+mod voids;
 
 use crate::grid::HeightGrid;
 
@@ -38,6 +39,7 @@ pub use choice::{CriterionKind, CriterionOptions};
 pub use curvature::{AccumulatedCurvature, CurvatureMap};
 pub use light::IlluminationMask;
 pub use view::{Paper001, Paper003, ScreenSpaceError};
+pub use voids::AvoidVoids;
 
 /// A criterion setting out of its range, or a missing one.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -9,15 +9,25 @@
 //! A gzipped file is decompressed (once) and its content detected again.
 //!
 //! Layout: this module dispatches to the readers (`srtm`, `asc`, `png`,
-//! `geotiff`), which import only [`crate::dem`], [`crate::error`] and
-//! `sniff`; `region` joins what was read. No reader imports this module.
+//! `webp`, `geotiff`, `npy`, `usgs_dem`, [`pmtiles`]), which import only
+//! [`crate::dem`], [`crate::error`], `sniff` and the shared helpers `rgb`
+//! (RGB height encodings) and `tile` (z/x/y web tiles); [`pmtiles`], a
+//! container, also calls the `png` and `webp` readers for its tiles; `region`
+//! joins what was read. No reader imports this module. A PMTiles archive is read from
+//! the open file (its header, directories and the tiles asked for), never whole.
 
 mod asc;
 mod geotiff;
+mod npy;
+pub mod pmtiles;
 mod png;
 mod region;
+mod rgb;
 mod sniff;
 mod srtm;
+mod tile;
+mod usgs_dem;
+mod webp;
 
 use std::path::Path;
 
@@ -39,6 +49,13 @@ use crate::error::{ReadError, ReadErrorKind, RegionError};
 /// A [`ReadError`] naming `path` and saying what was expected and found.
 pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Dem, ReadError> {
     let wrap = |kind| ReadError::new(path, kind);
+    if pmtiles::is_pmtiles_file(path) {
+        // An archive may be far larger than memory: read only what is asked.
+        let mut file = std::fs::File::open(path).map_err(|e| wrap(ReadErrorKind::Io(e)))?;
+        return pmtiles::decode(&mut file, path, opts)
+            .map(with_guessed_crs)
+            .map_err(wrap);
+    }
     let bytes = std::fs::read(path).map_err(|e| wrap(ReadErrorKind::Io(e)))?;
     if bytes.is_empty() {
         return Err(wrap(ReadErrorKind::Empty));
@@ -79,8 +96,14 @@ pub(crate) fn decode_bytes(
         // gzip (`N00E010.hgt.gz` as served by the AWS/Mapzen "skadi" tiles, or
         // any other gzipped DEM): decompress and read what is inside.
         Sniffed::Gzip => gunzip_and_decode(bytes, path, opts),
-        // A ZIP is read as a zipped SRTM tile (the only zipped format cota knows).
+        // A ZIP of `.npy` members is a NumPy `.npz`; any other is read as a
+        // zipped SRTM tile.
+        Sniffed::Zip if npy::is_npz(bytes) => npy::decode_npz(bytes, path, opts),
         Sniffed::Zip => srtm::decode(bytes, path, opts),
+        Sniffed::WebP => webp::decode(bytes, path, opts),
+        Sniffed::Npy => npy::decode_npy(bytes, path, opts),
+        Sniffed::UsgsDem => usgs_dem::decode(bytes, path, opts),
+        Sniffed::Pmtiles => pmtiles::decode(&mut std::io::Cursor::new(bytes), path, opts),
         Sniffed::Tiff => geotiff::decode(bytes, path, opts),
         Sniffed::Png => png::decode(bytes, path, opts),
         Sniffed::Ascii => asc::decode(bytes, path, opts),

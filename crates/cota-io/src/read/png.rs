@@ -22,8 +22,10 @@
 //! * Not read (an `Unsupported` error): palette images, gray below 8 bits,
 //!   16-bit RGB(A) (both RGB encodings are defined on 8-bit channels), and an
 //!   encoding that does not fit the image (RGB encodings on gray, gray on RGB).
-//! * PNG carries no georeference: [`GeoRef::unreferenced`] with
-//!   [`ReadOptions::cell_size_m`]. Only the first frame of an APNG is read.
+//! * PNG carries no georeference. A file named as a web tile (`…/z/x/y.png`)
+//!   is placed by its Web-Mercator tile bounds (see `tile`); any other gets
+//!   [`GeoRef::unreferenced`] with [`ReadOptions::cell_size_m`]. Only the
+//!   first frame of an APNG is read.
 
 use std::io::Cursor;
 use std::path::Path;
@@ -32,6 +34,8 @@ use cota_core::grid::MAX_SAMPLES;
 use cota_core::{GeoRef, HeightGrid};
 use png::{BitDepth, ColorType, Transformations};
 
+use super::rgb::{plausible, terrain_rgb, terrarium};
+use super::tile::georef_for;
 use crate::dem::{DataType, Dem, Format, PngEncoding, ReadOptions};
 use crate::error::{malformed, ReadErrorKind};
 
@@ -78,8 +82,9 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<De
             encoding = PngEncoding::Terrarium;
         }
     }
-    let georef = GeoRef::unreferenced(opts.cell_size_m);
-    let grid = HeightGrid::new(out.width as usize, out.height as usize, heights, georef)?;
+    let (w, h) = (out.width as usize, out.height as usize);
+    let georef = georef_for(path, w, h).unwrap_or_else(|| GeoRef::unreferenced(opts.cell_size_m));
+    let grid = HeightGrid::new(w, h, heights, georef)?;
     Ok(Dem {
         grid,
         format: Format::Png(encoding),
@@ -239,44 +244,15 @@ fn to_heights(
     Ok(heights)
 }
 
-/// Heights on Earth: the Dead Sea shore to above Everest, with room for
-/// bathymetry down to −12 000 m.
-const PLAUSIBLE_M: std::ops::RangeInclusive<f32> = -12_000.0..=9_000.0;
-
-/// True when every valid height lies in [`PLAUSIBLE_M`].
-fn plausible(heights: &[f32]) -> bool {
-    heights
-        .iter()
-        .all(|h| h.is_nan() || PLAUSIBLE_M.contains(h))
-}
-
 /// Maps every N-byte pixel of `buf` to a height.
 fn map_pixels<const N: usize>(buf: &[u8], f: impl Fn([u8; N]) -> f32) -> Vec<f32> {
     let (pixels, _) = buf.as_chunks::<N>();
     pixels.iter().map(|&p| f(p)).collect()
 }
 
-/// Mapbox terrain-RGB: −10000 + (R·65536 + G·256 + B)·0.1 m.
-fn terrain_rgb(r: u8, g: u8, b: u8) -> f32 {
-    let v = u32::from(r) << 16 | u32::from(g) << 8 | u32::from(b);
-    (-10_000.0 + f64::from(v) * 0.1) as f32
-}
-
-/// Mapzen Terrarium: R·256 + G + B/256 − 32768 m.
-fn terrarium(r: u8, g: u8, b: u8) -> f32 {
-    (f64::from(r) * 256.0 + f64::from(g) + f64::from(b) / 256.0 - 32_768.0) as f32
-}
-
 #[cfg(test)]
 mod test {
     use super::*;
-
-    #[test]
-    fn encodings() {
-        assert_eq!(terrain_rgb(1, 134, 160), 0.0);
-        assert_eq!(terrarium(128, 0, 0), 0.0);
-        assert_eq!(terrarium(128, 1, 128), 1.5);
-    }
 
     #[test]
     fn size_guard() {

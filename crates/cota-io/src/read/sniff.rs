@@ -11,6 +11,10 @@ pub(crate) enum Sniffed {
     Zip,
     Tiff,
     Png,
+    WebP,
+    Pmtiles,
+    Npy,
+    UsgsDem,
     Ascii,
     Unknown,
 }
@@ -39,6 +43,14 @@ pub(crate) fn sniff(bytes: &[u8]) -> Sniffed {
         Sniffed::Tiff
     } else if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
         Sniffed::Png
+    } else if super::webp::is_webp(bytes) {
+        Sniffed::WebP
+    } else if bytes.starts_with(b"PMTiles") {
+        Sniffed::Pmtiles
+    } else if bytes.starts_with(b"\x93NUMPY") {
+        Sniffed::Npy
+    } else if super::usgs_dem::is_usgs_dem(bytes) {
+        Sniffed::UsgsDem
     } else {
         let head = &bytes[..bytes.len().min(64)];
         let head = head.strip_prefix(b"\xef\xbb\xbf").unwrap_or(head); // UTF-8 BOM
@@ -83,7 +95,11 @@ pub(crate) fn name_hint(path: &Path) -> String {
         "png" => "a PNG: no PNG signature 89 50 4e 47 0d 0a 1a 0a",
         "tif" | "tiff" => "a TIFF: no TIFF header II*\\0 or MM\\0*",
         "asc" => "an ESRI ASCII grid: no header key such as ncols",
-        "zip" => "a ZIP archive: no PK\\x03\\x04 signature",
+        "zip" | "npz" => "a ZIP archive: no PK\\x03\\x04 signature",
+        "webp" => "a WebP image: no RIFF....WEBP header",
+        "npy" => "a NumPy array: no \\x93NUMPY signature",
+        "pmtiles" => "a PMTiles archive: no PMTiles signature",
+        "dem" => "a USGS ASCII DEM: no type A record (1024 bytes, level, pattern and unit codes)",
         _ => return String::new(),
     };
     format!(", not {lacks} despite the .{ext} name")

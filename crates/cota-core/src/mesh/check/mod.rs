@@ -41,12 +41,14 @@
 //!    ([`Violation::UnusedVertex`]); an unused vertex lying on an edge would
 //!    otherwise hide a T-junction from (3).
 
+mod holes;
 pub mod placed;
 
 pub use placed::{check_placed_mesh, PlacedMesh, PlacedVertex, Region};
 
 use rayon::prelude::*;
 
+use super::holes::VoidMask;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{diagonal_of, Hierarchy};
 use crate::mesh::metrics::{measure, Metrics};
@@ -74,6 +76,14 @@ pub struct CheckOptions {
     /// and 7): no vertex strictly inside any edge, every vertex used by a
     /// triangle. Default: false.
     pub general: bool,
+    /// The grid's voids are holes ([`super::holes`]): a vertex on a void,
+    /// and a triangle with a void sample in or on it, are violations; the
+    /// coverage required is of the valid region (every cell whose four
+    /// corners are valid has its centre in a triangle) instead of the whole
+    /// rectangle, so the area test is dropped and an edge without its
+    /// reverse may also lie next to a void (a void among the corners of the
+    /// cells on either side of it). Default: false.
+    pub holes: bool,
 }
 
 impl CheckOptions {
@@ -84,6 +94,7 @@ impl CheckOptions {
         allow_fictitious: false,
         height_tolerance_m: 0.0,
         general: false,
+        holes: false,
     };
 
     /// Conforming, true heights, and `|Δz| ≤ max_error_m` everywhere.
@@ -94,6 +105,7 @@ impl CheckOptions {
             allow_fictitious: false,
             height_tolerance_m: 0.0,
             general: false,
+            holes: false,
         }
     }
 
@@ -119,6 +131,12 @@ impl CheckOptions {
     /// Sets [`CheckOptions::height_tolerance_m`].
     pub const fn with_height_tolerance_m(mut self, tolerance_m: f64) -> Self {
         self.height_tolerance_m = tolerance_m;
+        self
+    }
+
+    /// Sets [`CheckOptions::holes`].
+    pub const fn with_holes(mut self, yes: bool) -> Self {
+        self.holes = yes;
         self
     }
 
@@ -291,6 +309,37 @@ pub enum Violation {
         /// Twice the grid's area, in cells.
         expected: i64,
     },
+    /// With [`CheckOptions::holes`]: a vertex on a void sample.
+    #[error("vertex {vertex} lies on the void sample at column {col}, row {row}")]
+    VertexOnVoid {
+        /// Vertex index.
+        vertex: usize,
+        /// Column.
+        col: u32,
+        /// Row.
+        row: u32,
+    },
+    /// With [`CheckOptions::holes`]: a triangle with a void sample in or on it.
+    #[error("triangle {tri} touches the void sample at column {col}, row {row}")]
+    TriangleOnVoid {
+        /// Triangle index.
+        tri: usize,
+        /// Column.
+        col: u32,
+        /// Row.
+        row: u32,
+    },
+    /// With [`CheckOptions::holes`]: cells with four valid corners that no
+    /// triangle covers.
+    #[error("{count} cells with four valid corners are not covered, the first at column {col}, row {row}")]
+    UncoveredCells {
+        /// How many.
+        count: usize,
+        /// Its north-west corner's column.
+        col: u32,
+        /// Its north-west corner's row.
+        row: u32,
+    },
     /// Samples no triangle covers.
     #[error("{count} samples are not covered by any triangle")]
     Uncovered {
@@ -377,9 +426,12 @@ fn check_on_pool(
     if found.total == 0 && opts.general {
         check_general(grid, mesh, &owner, &mut found);
     }
+    if found.total == 0 && opts.holes {
+        holes::check_holes(grid, mesh, &mut found);
+    }
     let metrics = measure(grid, mesh);
     if found.total == 0 {
-        if metrics.uncovered > 0 {
+        if metrics.uncovered > 0 && !opts.holes {
             found.push(Violation::Uncovered {
                 count: metrics.uncovered,
             });
@@ -440,6 +492,14 @@ fn check_vertices(
         }
         owner[i] = k as u32;
         let truth = grid.heights()[i];
+        if opts.holes && truth.is_nan() {
+            found.push(Violation::VertexOnVoid {
+                vertex: k,
+                col: v.col,
+                row: v.row,
+            });
+            continue;
+        }
         let within = (f64::from(v.z_m) - f64::from(truth)).abs() <= opts.height_tolerance_m;
         if v.z_m.to_bits() != truth.to_bits() && !opts.allow_fictitious && !within {
             found.push(Violation::WrongHeight {
@@ -574,7 +634,8 @@ fn check_triangles(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &
         }
         area2 += a;
     }
-    let faults = Edges::new(mesh).faults(grid, mesh, opts.conforming);
+    let voids = opts.holes.then(|| VoidMask::new(grid));
+    let faults = Edges::new(mesh).faults(grid, mesh, opts.conforming, voids.as_ref());
     for (from, to) in faults.overused {
         found.push(Violation::EdgeOveruse { from, to });
     }
@@ -587,7 +648,7 @@ fn check_triangles(grid: &HeightGrid, mesh: &Mesh, opts: &CheckOptions, found: &
         });
     }
     let expected = 2 * (grid.width() as i64 - 1) * (grid.height() as i64 - 1);
-    if area2 != expected {
+    if area2 != expected && !opts.holes {
         found.push(Violation::AreaMismatch {
             got: area2,
             expected,
@@ -639,7 +700,13 @@ impl Edges {
     /// The edges used twice in one direction (once per repeat), and, when
     /// `conforming`, the ends of every edge without its reverse that is not on
     /// the grid's border; both in sorted edge order.
-    fn faults(&self, grid: &HeightGrid, mesh: &Mesh, conforming: bool) -> Faults {
+    fn faults(
+        &self,
+        grid: &HeightGrid,
+        mesh: &Mesh,
+        conforming: bool,
+        voids: Option<&VoidMask>,
+    ) -> Faults {
         let (w, h) = (grid.width() as u32, grid.height() as u32);
         let per_vertex: Vec<_> = (0..mesh.vertices.len() as u32)
             .into_par_iter()
@@ -661,6 +728,7 @@ impl Edges {
                                 || (a.row == 0 && b.row == 0)
                                 || (a.row == h - 1 && b.row == h - 1))
                         })
+                        .filter(|(a, b)| !voids.is_some_and(|m| holes::next_to_void(m, a, b)))
                         .collect()
                 } else {
                     Vec::new()
