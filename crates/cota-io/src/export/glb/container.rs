@@ -186,3 +186,40 @@ pub(super) fn write_padding<W: Write + ?Sized>(
     w.write_all(&[byte; 3][..n])?;
     Ok(())
 }
+
+/// A document's one mesh: one primitive (indices accessor 2, material 0,
+/// the given attributes and mode) on one node turned from Z-up to glTF's
+/// Y-up, in one scene; the callers fill in buffers, accessors, materials.
+pub(super) fn single_mesh_root(
+    attributes: std::collections::BTreeMap<Checked<json::mesh::Semantic>, Index<Accessor>>,
+    mode: json::mesh::Mode,
+) -> json::Root {
+    json::Root {
+        meshes: vec![json::Mesh {
+            extensions: None,
+            extras: None,
+            primitives: vec![json::mesh::Primitive {
+                attributes,
+                extensions: None,
+                extras: None,
+                indices: Some(Index::new(2)),
+                material: Some(Index::new(0)),
+                mode: Checked::Valid(mode),
+                targets: None,
+            }],
+            weights: None,
+        }],
+        nodes: vec![json::Node {
+            mesh: Some(Index::new(0)),
+            rotation: Some(z_up_to_y_up()),
+            ..json::Node::default()
+        }],
+        scenes: vec![json::Scene {
+            extensions: None,
+            extras: None,
+            nodes: vec![Index::new(0)],
+        }],
+        scene: Some(Index::new(0)),
+        ..json::Root::default()
+    }
+}

@@ -35,13 +35,13 @@ use cota_core::{HeightGrid, Mesh};
 use gltf_json as json;
 use json::accessor::{ComponentType, Type};
 use json::buffer::Target;
-use json::mesh::{Mode, Primitive, Semantic};
+use json::mesh::{Mode, Semantic};
 use json::validation::Checked;
 use json::Index;
 use rayon::prelude::*;
 
 use self::container::{
-    accessor, asset, buffer, terrain_material, view, write_container, z_up_to_y_up, WithBounds,
+    accessor, asset, buffer, single_mesh_root, terrain_material, view, write_container, WithBounds,
 };
 use super::coords::{Frame, GeoInfo};
 use super::error::ExportError;
@@ -299,32 +299,7 @@ fn build_root(
             accessor(2, layout.indices, layout.index, Type::Scalar),
         ],
         materials: vec![terrain_material()],
-        meshes: vec![json::Mesh {
-            extensions: None,
-            extras: None,
-            primitives: vec![Primitive {
-                attributes,
-                extensions: None,
-                extras: None,
-                indices: Some(Index::new(2)),
-                material: Some(Index::new(0)),
-                mode: Checked::Valid(mode),
-                targets: None,
-            }],
-            weights: None,
-        }],
-        nodes: vec![json::Node {
-            mesh: Some(Index::new(0)),
-            rotation: Some(z_up_to_y_up()),
-            ..json::Node::default()
-        }],
-        scenes: vec![json::Scene {
-            extensions: None,
-            extras: None,
-            nodes: vec![Index::new(0)],
-        }],
-        scene: Some(Index::new(0)),
-        ..json::Root::default()
+        ..single_mesh_root(attributes, mode)
     })
 }
 

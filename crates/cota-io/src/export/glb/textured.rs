@@ -29,7 +29,7 @@ use cota_core::{HeightGrid, Mesh};
 use gltf_json as json;
 use json::accessor::{ComponentType, Type};
 use json::buffer::Target;
-use json::mesh::{Mode, Primitive, Semantic};
+use json::mesh::{Mode, Semantic};
 use json::texture::{MagFilter, MinFilter, WrappingMode};
 use json::validation::Checked;
 use json::Index;
@@ -41,7 +41,7 @@ use super::super::geometry::{check_mesh, push_f32s, to_f32};
 use super::super::options::ExportOptions;
 use super::super::par::write_chunks;
 use super::container::{
-    accessor, asset, buffer, pad4, view, write_container, z_up_to_y_up, WithBounds,
+    accessor, asset, buffer, pad4, single_mesh_root, view, write_container, WithBounds,
 };
 use super::{bounds, index_type};
 
@@ -251,32 +251,7 @@ fn build_root(
         textures: vec![texture],
         samplers: vec![sampler],
         extensions_used: vec!["KHR_materials_unlit".to_string()],
-        meshes: vec![json::Mesh {
-            extensions: None,
-            extras: None,
-            primitives: vec![Primitive {
-                attributes,
-                extensions: None,
-                extras: None,
-                indices: Some(Index::new(2)),
-                material: Some(Index::new(0)),
-                mode: Checked::Valid(Mode::Triangles),
-                targets: None,
-            }],
-            weights: None,
-        }],
-        nodes: vec![json::Node {
-            mesh: Some(Index::new(0)),
-            rotation: Some(z_up_to_y_up()),
-            ..json::Node::default()
-        }],
-        scenes: vec![json::Scene {
-            extensions: None,
-            extras: None,
-            nodes: vec![Index::new(0)],
-        }],
-        scene: Some(Index::new(0)),
-        ..json::Root::default()
+        ..single_mesh_root(attributes, Mode::Triangles)
     })
 }
 
