@@ -153,7 +153,15 @@ fn square_tris(i: u64, j: u64, size: u64) -> ([Tri; 4], [Tri; 2]) {
     let c = [x0 + s / 2, y0 + s / 2];
     let side = |a: Pt, b: Pt| Tri { a, b, c };
     let sides = [side(nw, ne), side(ne, se), side(se, sw), side(sw, nw)];
-    let halves = if (i + j).is_multiple_of(2) {
+    let halves = square_halves([nw, ne, sw, se], (i + j).is_multiple_of(2));
+    (sides, halves)
+}
+
+/// The two halves of a square with corners `[nw, ne, sw, se]`, split along
+/// the diagonal its parity gives (`even`: nw–se), each as a bitree root
+/// (hypotenuse a–b, right angle at c); the tiles' checkerboard of squares.
+pub(crate) fn square_halves([nw, ne, sw, se]: [Pt; 4], even: bool) -> [Tri; 2] {
+    if even {
         [
             Tri {
                 a: nw,
@@ -179,8 +187,7 @@ fn square_tris(i: u64, j: u64, size: u64) -> ([Tri; 4], [Tri; 2]) {
                 c: nw,
             },
         ]
-    };
-    (sides, halves)
+    }
 }
 
 /// The own error `e(T)` of a global triangle over the lattice (window

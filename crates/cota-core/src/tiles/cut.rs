@@ -20,7 +20,7 @@
 
 use std::collections::HashMap;
 
-use super::cap::Cap;
+use super::cap::{square_halves, Cap};
 use super::error::TilesError;
 use super::lattice::Lattice;
 use super::plan::{children_in, plan, TileRange, TilerOptions, ZoomPlan};
@@ -199,33 +199,7 @@ impl<'l> Prepared<'l> {
         let (x0, y0, s) = (o[0] as u32, o[1] as u32, cells as u32);
         let (nw, ne, sw, se) = ([x0, y0], [x0 + s, y0], [x0, y0 + s], [x0 + s, y0 + s]);
         let even = (u64::from(x0) / cells + u64::from(y0) / cells).is_multiple_of(2);
-        let roots = if even {
-            [
-                Tri {
-                    a: nw,
-                    b: se,
-                    c: ne,
-                },
-                Tri {
-                    a: se,
-                    b: nw,
-                    c: sw,
-                },
-            ]
-        } else {
-            [
-                Tri {
-                    a: ne,
-                    b: sw,
-                    c: se,
-                },
-                Tri {
-                    a: sw,
-                    b: ne,
-                    c: nw,
-                },
-            ]
-        };
+        let roots = square_halves([nw, ne, sw, se], even);
         let mut stack: Vec<Tri> = roots.iter().rev().copied().collect();
         let mut out = Vec::new();
         while let Some(t) = stack.pop() {
