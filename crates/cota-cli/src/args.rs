@@ -45,7 +45,9 @@ pub struct InputArgs {
     /// (placed by Web-Mercator bounds when named z/x/y.ext), PMTiles archives
     /// (with --zoom and --bbox), NumPy .npy/.npz, USGS .dem, ESRI .asc.
     /// Several adjacent tiles are mosaicked. With none, the bundled sample
-    /// S29W072.hgt.zip is used.
+    /// S29W072.hgt.zip is used. `-` reads one DEM from standard input (its
+    /// format detected from the content; a raw .hgt by its size), within
+    /// --max-samples.
     #[arg(value_name = "FILE")]
     pub files: Vec<PathBuf>,
     /// PNG height encoding. Default: terrain-rgb for colour PNGs, gray16 for grayscale.
@@ -186,14 +188,18 @@ pub struct MeshArgs {
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub max_triangles: Option<usize>,
     /// Output mesh: .obj, .ply, .stl or .glb (written atomically). Without it only
-    /// the report is printed.
+    /// the report is printed. `-` writes to standard output (with --format;
+    /// no atomic rename there: a failure part-way leaves a partial stream;
+    /// binary formats are refused on a terminal), and the report goes to
+    /// stderr.
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<PathBuf>,
-    /// Replace OUT even when it is a read-only file (refused otherwise). A
-    /// symbolic link OUT is written through: its target is replaced, the
-    /// link kept.
-    #[arg(long)]
-    pub force: bool,
+    /// The output format, for `-o -` (standard output); with a file name it
+    /// must agree with the extension.
+    #[arg(long, value_enum)]
+    pub format: Option<MeshFormatArg>,
+    #[command(flatten)]
+    pub force: ForceArgs,
     /// Output coordinates.
     #[arg(long, value_enum, default_value_t = CoordsArg::Local)]
     pub coords: CoordsArg,
@@ -216,6 +222,18 @@ pub struct MeshArgs {
     /// this height in metres (for 3D printing).
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
     pub base_m: Option<f64>,
+    /// STL only: print scale, model length to true length, as 1:N or a
+    /// factor (1:100000 = 0.00001: 1 km becomes 10 mm). The STL is then in
+    /// millimetres, heights (times --z-scale, from 0 m) at the same scale.
+    /// Needs --coords local.
+    #[arg(long, value_name = "1:N", value_parser = parse_scale, conflicts_with = "size_mm")]
+    pub scale: Option<f64>,
+    /// STL only: print size: the longer horizontal side of the model in
+    /// millimetres; the other side and the heights (times --z-scale, from
+    /// 0 m) at the same scale. The STL is then in millimetres. Needs
+    /// --coords local.
+    #[arg(long, value_name = "MM", allow_negative_numbers = true)]
+    pub size_mm: Option<f64>,
     /// Void policy.
     #[arg(long, value_enum, default_value_t = Voids::Fill)]
     pub voids: Voids,
@@ -268,6 +286,59 @@ pub struct MeshArgs {
     pub refine: RefineArgs,
     #[command(flatten)]
     pub texture: TextureArgs,
+}
+
+/// `--force`, shared by every command that writes files.
+#[derive(Debug, Clone, Copy, Args)]
+pub struct ForceArgs {
+    /// Replace an output file even when it is read-only (refused otherwise).
+    /// A symbolic link is written through: its target is replaced, the link
+    /// kept.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// A mesh file format (`--format`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum MeshFormatArg {
+    /// Wavefront OBJ (text).
+    Obj,
+    /// Binary PLY.
+    Ply,
+    /// Binary STL.
+    Stl,
+    /// Binary glTF.
+    Glb,
+}
+
+impl MeshFormatArg {
+    /// The library's format.
+    pub fn format(self) -> cota_io::export::MeshFormat {
+        use cota_io::export::MeshFormat;
+        match self {
+            MeshFormatArg::Obj => MeshFormat::Obj,
+            MeshFormatArg::Ply => MeshFormat::Ply,
+            MeshFormatArg::Stl => MeshFormat::Stl,
+            MeshFormatArg::Glb => MeshFormat::Glb,
+        }
+    }
+}
+
+/// A print scale: `1:N` or a positive factor.
+fn parse_scale(s: &str) -> Result<f64, String> {
+    let bad = || format!("expected 1:N (e.g. 1:100000) or a positive factor, found {s:?}");
+    let v = match s.split_once(':') {
+        Some((a, b)) => {
+            let a: f64 = a.trim().parse().map_err(|_| bad())?;
+            let b: f64 = b.trim().parse().map_err(|_| bad())?;
+            a / b
+        }
+        None => s.trim().parse().map_err(|_| bad())?,
+    };
+    if !(v.is_finite() && v > 0.0) {
+        return Err(bad());
+    }
+    Ok(v)
 }
 
 /// How `cota mesh --strip` makes its strip (`cota_core::strip::StripMethod`).
@@ -611,6 +682,8 @@ pub struct StreamEncodeArgs {
     /// Output stream file (written atomically).
     #[arg(short, long, value_name = "OUT.cstream")]
     pub output: std::path::PathBuf,
+    #[command(flatten)]
+    pub force: ForceArgs,
     /// Error of the last step in metres (0: the lossless E = 0 mesh).
     #[arg(
         long,
@@ -686,9 +759,17 @@ pub struct StreamDecodeArgs {
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
     pub max_error: Option<f64>,
     /// Output mesh: .obj, .ply, .stl or .glb (written atomically). Without it
-    /// only the report is printed.
+    /// only the report is printed. `-` writes to standard output (with
+    /// --format; not atomic; binary formats refused on a terminal), and the
+    /// report goes to stderr.
     #[arg(short, long, value_name = "OUT")]
     pub output: Option<std::path::PathBuf>,
+    /// The output format, for `-o -` (standard output); with a file name it
+    /// must agree with the extension.
+    #[arg(long, value_enum)]
+    pub format: Option<MeshFormatArg>,
+    #[command(flatten)]
+    pub force: ForceArgs,
     /// Output coordinates.
     #[arg(long, value_enum, default_value_t = CoordsArg::Local)]
     pub coords: CoordsArg,
@@ -781,6 +862,8 @@ pub struct PairArgs {
     /// Output .glb (written atomically). Without it, only the report.
     #[arg(short, long, value_name = "OUT.glb")]
     pub output: Option<PathBuf>,
+    #[command(flatten)]
+    pub force: ForceArgs,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
@@ -823,7 +906,8 @@ pub struct TilesArgs {
     /// Gzip every tile (serve with Content-Encoding: gzip).
     #[arg(long)]
     pub gzip: bool,
-    /// Redo tiles already in OUT.
+    /// Redo tiles already in OUT, and replace read-only files there
+    /// (refused otherwise).
     #[arg(long)]
     pub force: bool,
     /// Decode every tile again and check it (bound at every lattice sample,

@@ -1,7 +1,8 @@
 //! Reading the inputs of a command: each file, the mosaic of several, the
 //! bundled sample when there is none.
 
-use std::path::Path;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
@@ -9,8 +10,8 @@ use cota_core::grid::mosaic::{MosaicOptions, SeamPolicy, SeamReport};
 use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
 use cota_core::HeightGrid;
 use cota_io::{
-    read_dem_bytes, read_region_with_progress, ArrayName, PngEncoding, ReadOptions, RegionOptions,
-    TileRequest,
+    read_dem_bytes, read_dem_from, read_region_with_progress, ArrayName, PngEncoding, ReadOptions,
+    Region, RegionOptions, TileRequest,
 };
 
 use crate::args::{Encoding, InputArgs, Seam, Voids};
@@ -278,6 +279,49 @@ fn bbox4(b: &[f64]) -> anyhow::Result<[f64; 4]> {
     }
 }
 
+/// The name standard input (`-`) is reported under.
+pub const STDIN_NAME: &str = "<stdin>";
+
+/// True for the path `-`: standard input or output.
+pub fn is_dash(p: &Path) -> bool {
+    p.as_os_str() == "-"
+}
+
+/// Reads the files (`-`: standard input, which must then be the only one;
+/// none: the bundled sample) into one region.
+fn read_inputs(
+    files: &[PathBuf],
+    opts: &ReadOptions,
+    region_opts: &RegionOptions,
+) -> anyhow::Result<Region> {
+    let one = |dem| -> anyhow::Result<Region> { Ok(cota_io::read::join(vec![dem], region_opts)?) };
+    match files {
+        [] => one(read_dem_bytes(SAMPLE, Path::new(SAMPLE_NAME), opts)?),
+        [f] if is_dash(f) => {
+            let stdin = std::io::stdin();
+            if stdin.is_terminal() {
+                anyhow::bail!(
+                    "-: expected a DEM on standard input, found a terminal (pipe or redirect one: cota info - < FILE)"
+                );
+            }
+            let _spinner = progress::spinner("reading");
+            one(read_dem_from(stdin.lock(), Path::new(STDIN_NAME), opts)?)
+        }
+        _ if files.iter().any(|f| is_dash(f)) => anyhow::bail!(
+            "-: standard input must be the only FILE (it holds one DEM), found {} files",
+            files.len()
+        ),
+        _ => {
+            let pb = progress::bar(files.len() as u64, "reading");
+            let r = read_region_with_progress(files, region_opts, &|done, _| {
+                pb.set_position(done as u64)
+            })?;
+            pb.finish_and_clear();
+            Ok(r)
+        }
+    }
+}
+
 /// Reads every input (or the bundled sample) and mosaics them, then keeps
 /// the `--bbox` window (for inputs other than PMTiles archives).
 pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
@@ -293,17 +337,7 @@ pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
         .with_read(opts)
         .with_mosaic(MosaicOptions::DEFAULT.with_seam_policy(policy))
         .with_fill(None);
-    let region = if a.files.is_empty() {
-        let sample = read_dem_bytes(SAMPLE, Path::new(SAMPLE_NAME), &opts)?;
-        cota_io::read::join(vec![sample], &region_opts)?
-    } else {
-        let pb = progress::bar(a.files.len() as u64, "reading");
-        let r = read_region_with_progress(&a.files, &region_opts, &|done, _| {
-            pb.set_position(done as u64)
-        })?;
-        pb.finish_and_clear();
-        r
-    };
+    let region = read_inputs(&a.files, &opts, &region_opts)?;
     warn_unpositioned(&region.files);
     check_seams(a, region.seams.as_ref(), &region.files)?;
     check_cell_size(&region.grid, &region.files)?;

@@ -6,6 +6,14 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
+/// `writeln!` into a `String` report (which cannot fail).
+macro_rules! say {
+    ($s:expr, $($t:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = writeln!($s, $($t)*);
+    }};
+}
+
 mod args;
 mod compare;
 mod hole;
@@ -14,6 +22,7 @@ mod input;
 mod mesh;
 mod output;
 mod pair;
+mod print;
 mod progress;
 mod serve;
 mod stream;

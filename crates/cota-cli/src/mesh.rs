@@ -14,7 +14,7 @@ use cota_core::{
     check_mesh, measure, CriterionOptions, HeightGrid, HierarchyKind, Mesh, MeshPlan, Meshed,
     Mesher, Metrics, Mode,
 };
-use cota_io::export::{write_mesh, Coords, ExportOptions, GlbQuantization, MeshFormat};
+use cota_io::export::{write_mesh_to, Coords, ExportOptions, GlbQuantization, MeshFormat};
 use serde_json::json;
 
 use crate::args::{CoordsArg, CriterionArg, HierarchyArg, MeshArgs, MeshKindArg, StripMethodArg};
@@ -91,7 +91,7 @@ fn check_quantize(a: &MeshArgs) -> anyhow::Result<()> {
         anyhow::bail!("--quantize: expected --z-scale 1 (a quantized GLB keeps true heights)");
     }
     if let Some(out) = &a.output {
-        if MeshFormat::from_path(out)? != MeshFormat::Glb {
+        if crate::output::format_of(out, a.format)? != MeshFormat::Glb {
             anyhow::bail!(
                 "{}: --quantize writes a quantized glTF, expected a .glb output",
                 out.display()
@@ -163,11 +163,19 @@ fn validate_tin(a: &MeshArgs) -> anyhow::Result<()> {
 /// Validates the flags before any long work.
 fn validate(a: &MeshArgs) -> anyhow::Result<()> {
     crate::hole::validate(a)?;
-    if let Some(out) = &a.output {
-        crate::output::check_output(out, a.base_m)?;
-    }
+    let format = match &a.output {
+        Some(out) => Some(crate::output::check_output(out, a.format, a.base_m)?),
+        None => None,
+    };
+    crate::print::validate(a, format)?;
     check_quantize(a)?;
-    crate::pair::check_texture(&a.texture, a.output.as_deref(), a.strip, a.quantize)?;
+    crate::pair::check_texture(
+        &a.texture,
+        a.output.as_deref(),
+        a.format,
+        a.strip,
+        a.quantize,
+    )?;
     if let Some(e) = a.max_error {
         if e.is_nan() || e < 0.0 {
             anyhow::bail!(
@@ -195,7 +203,7 @@ fn validate(a: &MeshArgs) -> anyhow::Result<()> {
             );
         }
         if let Some(out) = &a.output {
-            if MeshFormat::from_path(out)? != MeshFormat::Glb {
+            if crate::output::format_of(out, a.format)? != MeshFormat::Glb {
                 anyhow::bail!(
                     "{}: --strip writes a glTF triangle strip, expected a .glb output",
                     out.display()
@@ -280,7 +288,7 @@ fn export_options(a: &MeshArgs) -> ExportOptions {
         .with_coords(coords)
         .with_base_m(a.base_m.map(|b| b * a.z_scale))
         .with_quantize(a.quantize)
-        .with_replace_read_only(a.force)
+        .with_replace_read_only(a.force.force)
 }
 
 /// With `--quantize`, the plan of the quantized GLB (planning the file
@@ -376,22 +384,22 @@ fn write(
     let Some(out) = &a.output else {
         return Ok(0.0);
     };
-    let eo = export_options(a);
+    let units = crate::print::mm_per_m(a, grid)?.unwrap_or(1.0);
+    let eo = export_options(a).with_stl_units_per_m(units);
     let t = Instant::now();
     let mesh = scaled(&m.mesh, a.z_scale);
-    if crate::pair::write_draped(&a.texture, out, grid, &mesh, &eo)? {
+    if crate::pair::write_draped(&a.texture, out, a.force.force, grid, &mesh, &eo)? {
         return Ok(ms(t));
     }
-    match (strip, a.strip, quant) {
-        (Some(s), true, _) => cota_io::export::write_atomically_forced(out, a.force, |w| {
+    let format = crate::output::format_of(out, a.format)?;
+    crate::output::write_with(out, a.force.force, |w| match (strip, a.strip, quant) {
+        (Some(s), true, _) => {
             let sm = scaled(&s.mesh, a.z_scale);
             cota_io::export::write_glb_strip(w, &sm, &s.strip.indices, grid, &eo)
-        })?,
-        (_, _, Some(q)) => cota_io::export::write_atomically_forced(out, a.force, |w| {
-            cota_io::export::write_glb_quantized(w, &m.mesh, grid, &eo, q)
-        })?,
-        _ => write_mesh(out, &mesh, grid, &eo)?,
-    }
+        }
+        (_, _, Some(q)) => cota_io::export::write_glb_quantized(w, &m.mesh, grid, &eo, q),
+        _ => write_mesh_to(w, format, &mesh, grid, &eo),
+    })?;
     Ok(ms(t))
 }
 
@@ -544,11 +552,12 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "primitives": quant.as_ref().map(|q| q.primitives()),
     });
     add_strip_fields(&mut report, strip.as_ref(), strip_ms);
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        print_text(&report);
-    }
+    crate::print::add_fields(&mut report, a, &grid)?;
+    let text = match a.json {
+        true => format!("{}\n", serde_json::to_string_pretty(&report)?),
+        false => text(&report),
+    };
+    crate::output::print_report(a.output.as_deref(), &text);
     Ok(ExitCode::SUCCESS)
 }
 
@@ -575,39 +584,48 @@ fn cell_area_m2(grid: &HeightGrid) -> f64 {
 }
 
 /// The input lines of the text report: size, assumed cell, seams, voids.
-fn print_input(r: &serde_json::Value) {
-    println!(
+fn print_input(txt: &mut String, r: &serde_json::Value) {
+    say!(
+        txt,
         "input       {} ({} x {})",
         r["input"].as_str().unwrap_or(""),
         r["width"],
         r["height"]
     );
     if let Some(c) = r["assumed_cell_size_m"].as_f64() {
-        println!(
+        say!(
+            txt,
             "cell        assumed {} m: the input has no georeference (set it with --cell-size-m)",
             crate::input::num(c)
         );
     }
     if let Some(d) = r["seams"]["max_abs_diff_m"].as_f64() {
-        println!(
+        say!(
+            txt,
             "seams       largest difference {d} m over {} samples",
             r["seams"]["compared"]
         );
     }
     if let Some(area) = r["area_left_out_m2"].as_f64() {
-        println!(
+        say!(
+            txt,
             "voids       hole: {} void samples, {} triangles and {area:.4e} m2 left out",
-            r["nodata_count"], r["triangles_left_out"]
+            r["nodata_count"],
+            r["triangles_left_out"]
         );
     } else if r["nodata_count"].as_u64().unwrap_or(0) > 0 {
-        println!("voids       {} filled", r["voids_filled"]);
+        say!(txt, "voids       {} filled", r["voids_filled"]);
     }
 }
 
-fn print_text(r: &serde_json::Value) {
+/// The text report.
+fn text(r: &serde_json::Value) -> String {
+    let mut text = String::new();
+    let txt = &mut text;
     let f = |k: &str| r[k].as_f64().unwrap_or(0.0);
-    print_input(r);
-    println!(
+    print_input(txt, r);
+    say!(
+        txt,
         "mesh        {} vertices, {} triangles ({:.2}% of {})",
         r["vertices"],
         r["triangles"],
@@ -623,7 +641,8 @@ fn print_text(r: &serde_json::Value) {
         (Some(b), None) => format!("bound {b} m"),
         (None, _) => "no vertical bound".to_string(),
     };
-    println!(
+    say!(
+        txt,
         "error       max {:.3} m ({bound}), RMSE {:.3} m, mean {:.3} m",
         f("max_error_m"),
         f("rmse_m"),
@@ -634,21 +653,26 @@ fn print_text(r: &serde_json::Value) {
         (Some("tin"), _) => "tin, ",
         _ => "",
     };
-    println!(
+    say!(
+        txt,
         "refinement  {tin}{}, {}",
         r["mode"].as_str().unwrap_or(""),
         r["criterion"].as_str().unwrap_or("")
     );
-    println!(
+    say!(
+        txt,
         "points      {} transmitted, {} fictitious, {} line triangles",
-        r["transmitted_points"], r["fictitious_points"], r["line_triangles"]
+        r["transmitted_points"],
+        r["fictitious_points"],
+        r["line_triangles"]
     );
-    println!(
+    say!(
+        txt,
         "volume      {:.4e} m3 between mesh and grid",
         f("volume_m3")
     );
-    print_strip_and_check(r);
-    println!(
+    print_strip_and_check(txt, r);
+    say!(txt, 
         "time        read {:.1} ms, fill {:.1} ms, build {:.1} ms, extract {:.2} ms, measure {:.1} ms, write {:.1} ms, total {:.1} ms",
         f("read_ms"),
         f("fill_ms"),
@@ -661,19 +685,22 @@ fn print_text(r: &serde_json::Value) {
     if let Some(out) = r["output"].as_str() {
         let z = r["z_scale"].as_f64().filter(|z| *z != 1.0);
         let z = z.map(|z| format!(" (heights x {z})")).unwrap_or_default();
-        println!("wrote       {out}{z}");
+        say!(txt, "wrote       {out}{z}");
     }
+    crate::print::text_line(txt, r);
+    text
 }
 
 /// The strip and check lines of the text report.
-fn print_strip_and_check(r: &serde_json::Value) {
+fn print_strip_and_check(txt: &mut String, r: &serde_json::Value) {
     let f = |k: &str| r[k].as_f64().unwrap_or(0.0);
     if let Some(refs) = r["strip_refs"].as_u64() {
         let cells = match r["strip_flipped_cells"].as_u64() {
             Some(n) if n > 0 => format!(", {n} unit cells re-triangulated (same error)"),
             _ => String::new(),
         };
-        println!(
+        say!(
+            txt,
             "strip       {refs} references ({:.3} per triangle, {}), {} degenerate{cells}",
             f("strip_refs_per_triangle"),
             r["strip_method"].as_str().unwrap_or(""),
@@ -681,7 +708,7 @@ fn print_strip_and_check(r: &serde_json::Value) {
         );
     }
     if let Some(s) = r["z_step_m"].as_f64() {
-        println!(
+        say!(txt, 
             "quantized   KHR_mesh_quantization, height step {s} m, {} primitives; error and volume as written",
             r["primitives"]
         );
@@ -702,6 +729,6 @@ fn print_strip_and_check(r: &serde_json::Value) {
             true => "covers every cell with four valid corners, touches no void",
             false => "covers the grid exactly",
         };
-        println!("check       passed: {covers}, {joints}{bound}");
+        say!(txt, "check       passed: {covers}, {joints}{bound}");
     }
 }

@@ -1,17 +1,60 @@
-//! Checks on output paths made before any long work.
+//! Output paths: checks made before any long work, and the one way every
+//! command writes a file (atomically, `--force` for read-only targets) or
+//! standard output (`-o -`).
 
+use std::io::{IsTerminal, Write};
 use std::path::Path;
 
-use cota_io::export::MeshFormat;
+use anyhow::Context;
+use cota_io::export::{ExportError, MeshFormat};
 
-/// Fails early, before any long work, on output paths that cannot be written.
-pub fn check_output(out: &Path, base_m: Option<f64>) -> anyhow::Result<MeshFormat> {
-    let format = MeshFormat::from_path(out)?;
+use crate::args::MeshFormatArg;
+use crate::input::is_dash;
+
+/// The format of mesh output `out`: `--format` when given (a file's
+/// extension must then agree), else the extension. Standard output (`-`)
+/// needs `--format`.
+pub fn format_of(out: &Path, flag: Option<MeshFormatArg>) -> anyhow::Result<MeshFormat> {
+    let flag = flag.map(MeshFormatArg::format);
+    if is_dash(out) {
+        return flag.ok_or_else(|| {
+            anyhow::anyhow!(
+                "-o -: expected --format obj, ply, stl or glb (standard output has no extension)"
+            )
+        });
+    }
+    let ext = MeshFormat::from_path(out)?;
+    match flag {
+        Some(f) if f != ext => anyhow::bail!(
+            "{}: --format {f} disagrees with the extension .{ext}",
+            out.display()
+        ),
+        _ => Ok(ext),
+    }
+}
+
+/// Fails early, before any long work, on output paths that cannot be
+/// written; returns the format. Standard output (`-`) takes any format but
+/// a binary one on a terminal.
+pub fn check_output(
+    out: &Path,
+    flag: Option<MeshFormatArg>,
+    base_m: Option<f64>,
+) -> anyhow::Result<MeshFormat> {
+    let format = format_of(out, flag)?;
     if base_m.is_some() && format != MeshFormat::Stl {
         anyhow::bail!(
             "{}: --base-m makes a closed solid for 3D printing and applies to .stl output only, found .{format}",
             out.display()
         );
+    }
+    if is_dash(out) {
+        if format != MeshFormat::Obj && std::io::stdout().is_terminal() {
+            anyhow::bail!(
+                "-o -: refusing to write binary .{format} to a terminal; redirect standard output to a file or a pipe"
+            );
+        }
+        return Ok(format);
     }
     let dir = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
@@ -28,4 +71,31 @@ pub fn check_output(out: &Path, base_m: Option<f64>) -> anyhow::Result<MeshForma
         anyhow::bail!("cannot write {}: it is a directory", out.display());
     }
     Ok(format)
+}
+
+/// Writes what `encode` writes to `out`: atomically to a file (a read-only
+/// file refused unless `force`), or to standard output for `-` (no atomic
+/// rename there: an error part-way leaves what was already sent).
+pub fn write_with<F>(out: &Path, force: bool, encode: F) -> anyhow::Result<()>
+where
+    F: FnOnce(&mut (dyn Write + Send)) -> Result<(), ExportError>,
+{
+    if !is_dash(out) {
+        cota_io::export::write_atomically_forced(out, force, encode)?;
+        return Ok(());
+    }
+    let mut w = std::io::BufWriter::with_capacity(1 << 20, std::io::stdout());
+    encode(&mut w).context("-: writing to standard output")?;
+    w.flush().context("-: writing to standard output")?;
+    Ok(())
+}
+
+/// Prints a report: to stdout, or to stderr when the output itself goes to
+/// stdout (`-o -`).
+pub fn print_report(out: Option<&Path>, text: &str) {
+    if out.is_some_and(is_dash) {
+        eprint!("{text}");
+    } else {
+        print!("{text}");
+    }
 }

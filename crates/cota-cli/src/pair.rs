@@ -24,13 +24,12 @@ use cota_core::pair::{
 use cota_core::quadtree::QuadOptions;
 use cota_core::texture::{drape, DrapeOptions, RgbImage, TextureQuadtree};
 use cota_core::{HeightGrid, HierarchyKind, Mesh, Mesher};
-use cota_io::export::{
-    encode_png, textured_mesh_bytes, write_atomically, write_glb_textured, ExportOptions,
-};
+use cota_io::export::{encode_png, textured_mesh_bytes, write_glb_textured, ExportOptions};
 use cota_io::image::{place_on, read_image, Bands, ImageOptions};
 use serde_json::{json, Value};
 
-use crate::args::{Hierarchies, ImageArgs, PairArgs, Pick, TextureArgs};
+use crate::args::{Hierarchies, ImageArgs, MeshFormatArg, PairArgs, Pick, TextureArgs};
+use crate::input::is_dash;
 
 /// Bytes kept for the GLB's frame (12-byte header, two chunk headers, the
 /// JSON padded to 4): the JSON of a textured GLB is about 1.2 KB.
@@ -168,12 +167,18 @@ fn sweep(ms_: &[Candidate], ts: &[Candidate], opts: &PairOptions) -> (usize, f64
 pub fn run(a: &PairArgs) -> anyhow::Result<ExitCode> {
     validate(a)?;
     let t0 = Instant::now();
+    let spinner = crate::progress::spinner("reading");
     let (grid, texture, about) = read_pair(&a.dem, &a.image, &a.image_args)?;
+    drop(spinner);
     let read_ms = ms(t0);
     let t = Instant::now();
+    let spinner = crate::progress::spinner("textures");
     let textures = texture_list(&texture, &a.texture_tolerances)?;
+    drop(spinner);
+    let spinner = crate::progress::spinner("meshes");
     let mesher = Mesher::new(&grid);
     let meshes = meshes(a, &mesher)?;
+    drop(spinner);
     let lists_ms = ms(t);
     let (mc, tc): (Vec<Candidate>, Vec<Candidate>) = (
         meshes.iter().map(|m| m.candidate()).collect(),
@@ -198,22 +203,24 @@ pub fn run(a: &PairArgs) -> anyhow::Result<ExitCode> {
     cota_core::check_mesh(&grid, &chosen.mesh, &chosen.check)
         .context("the invariant checker rejected the chosen mesh (this is a bug in cota)")?;
     let t = Instant::now();
+    let spinner = crate::progress::spinner("writing");
     let written = write(a, &grid, &chosen.mesh, &textures[pair.texture].png)?;
+    drop(spinner);
     let timing = json!({"read_ms": read_ms, "lists_ms": lists_ms, "choose_us": choose_us,
         "sweep_budgets": budgets, "sweep_us": sweep_us, "write_ms": ms(t)});
     let report = report(a, &about, &meshes, &textures, &choice, written, timing);
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        print_text(&report);
-    }
+    let text = match a.json {
+        true => format!("{}\n", serde_json::to_string_pretty(&report)?),
+        false => text(&report),
+    };
+    crate::output::print_report(a.output.as_deref(), &text);
     Ok(ExitCode::SUCCESS)
 }
 
 /// Flags checked before any work.
 fn validate(a: &PairArgs) -> anyhow::Result<()> {
     if let Some(out) = &a.output {
-        check_glb_output(out, "cota pair writes a textured glTF")?;
+        check_glb_output(out, None, "cota pair writes a textured glTF")?;
     }
     for (flag, v) in [("--alpha", a.alpha), ("--beta", a.beta)] {
         if !(v.is_finite() && v >= 0.0) {
@@ -254,7 +261,7 @@ fn write(a: &PairArgs, grid: &HeightGrid, mesh: &Mesh, png: &[u8]) -> anyhow::Re
         );
     }
     if let Some(out) = &a.output {
-        write_atomically(out, |w| Ok(w.write_all(&bytes)?))?;
+        crate::output::write_with(out, a.force.force, |w| Ok(w.write_all(&bytes)?))?;
     }
     Ok(bytes.len() as u64)
 }
@@ -337,14 +344,19 @@ fn pair_line(p: &Value) -> String {
     )
 }
 
-fn print_text(r: &Value) {
+/// The text report.
+fn text(r: &Value) -> String {
+    let mut text = String::new();
+    let txt = &mut text;
     let i = &r["image"];
-    println!(
+    say!(
+        txt,
         "dem         {} ({})",
         r["dem"].as_str().unwrap_or(""),
         i["dem_crs"].as_str().unwrap_or("")
     );
-    println!(
+    say!(
+        txt,
         "image       {} ({}, bands {}, {}), placed by {}",
         i["image"].as_str().unwrap_or(""),
         i["format"].as_str().unwrap_or(""),
@@ -352,25 +364,34 @@ fn print_text(r: &Value) {
         i["image_crs"].as_str().unwrap_or(""),
         i["placement"].as_str().unwrap_or("")
     );
-    println!("crs         {}", i["crs_rule"].as_str().unwrap_or(""));
-    println!(
+    say!(txt, "crs         {}", i["crs_rule"].as_str().unwrap_or(""));
+    say!(
+        txt,
         "texture     {} x {} texels, bilinear per channel",
-        i["texture_size"][0], i["texture_size"][1]
+        i["texture_size"][0],
+        i["texture_size"][1]
     );
     let n = |k: &str| r[k].as_array().map_or(0, Vec::len);
-    println!(
+    say!(
+        txt,
         "lists       {} meshes, {} textures",
         n("meshes"),
         n("textures")
     );
-    println!(
+    say!(
+        txt,
         "budget      {} bytes ({} kept for the GLB frame)",
-        r["budget_bytes"], r["frame_reserve_bytes"]
+        r["budget_bytes"],
+        r["frame_reserve_bytes"]
     );
-    println!("optimum     {}", pair_line(&r["optimum"]));
+    say!(txt, "optimum     {}", pair_line(&r["optimum"]));
     match r["greedy"].is_null() {
-        true => println!("greedy      no pair (every fitting texture is smaller than its mesh)"),
-        false => println!(
+        true => say!(
+            txt,
+            "greedy      no pair (every fitting texture is smaller than its mesh)"
+        ),
+        false => say!(
+            txt,
             "greedy      {}\ngap         {:.6e} ({:.2}% above the optimum)",
             pair_line(&r["greedy"]),
             r["greedy_gap"].as_f64().unwrap_or(0.0),
@@ -378,7 +399,7 @@ fn print_text(r: &Value) {
         ),
     }
     let t = &r["timing"];
-    println!(
+    say!(txt, 
         "time        read {:.1} ms, lists {:.1} ms, choose {:.1} us, every budget ({}) {:.1} us, write {:.1} ms",
         t["read_ms"].as_f64().unwrap_or(0.0),
         t["lists_ms"].as_f64().unwrap_or(0.0),
@@ -388,12 +409,14 @@ fn print_text(r: &Value) {
         t["write_ms"].as_f64().unwrap_or(0.0)
     );
     if let Some(out) = r["output"].as_str() {
-        println!(
+        say!(
+            txt,
             "wrote       {out} ({} bytes, {})",
             r["glb_bytes"],
             r["picked"].as_str().unwrap_or("")
         );
     }
+    text
 }
 
 /// `cota mesh --texture`: writes `mesh` as a textured GLB with the whole
@@ -401,6 +424,7 @@ fn print_text(r: &Value) {
 pub fn write_draped(
     t: &TextureArgs,
     out: &Path,
+    force: bool,
     grid: &HeightGrid,
     mesh: &Mesh,
     opts: &ExportOptions,
@@ -410,7 +434,7 @@ pub fn write_draped(
     };
     let (texture, _) = drape_image(grid, image, &t.image)?;
     let png = encode_png(&texture)?;
-    write_atomically(out, |w| {
+    crate::output::write_with(out, force, |w| {
         write_glb_textured(w, mesh, grid, &png, opts).map(|_| ())
     })?;
     Ok(true)
@@ -420,6 +444,7 @@ pub fn write_draped(
 pub fn check_texture(
     t: &TextureArgs,
     out: Option<&Path>,
+    format: Option<MeshFormatArg>,
     strip: bool,
     quantize: bool,
 ) -> anyhow::Result<()> {
@@ -427,7 +452,7 @@ pub fn check_texture(
         return Ok(());
     }
     match out {
-        Some(o) => check_glb_output(o, "--texture writes a textured glTF")?,
+        Some(o) => check_glb_output(o, format, "--texture writes a textured glTF")?,
         None => anyhow::bail!("--texture: expected -o OUT.glb, found no output"),
     }
     if strip || quantize {
@@ -436,9 +461,11 @@ pub fn check_texture(
     Ok(())
 }
 
-/// A writable `.glb` output path (`what` says why it must be one).
-fn check_glb_output(out: &Path, what: &str) -> anyhow::Result<()> {
-    if crate::output::check_output(out, None)? != cota_io::export::MeshFormat::Glb {
+/// A writable `.glb` output path, or standard output (`-`, taken as GLB
+/// unless `format` says otherwise); `what` says why it must be one.
+fn check_glb_output(out: &Path, format: Option<MeshFormatArg>, what: &str) -> anyhow::Result<()> {
+    let format = format.or(is_dash(out).then_some(MeshFormatArg::Glb));
+    if crate::output::check_output(out, format, None)? != cota_io::export::MeshFormat::Glb {
         anyhow::bail!("{}: {what}, expected a .glb output", out.display());
     }
     Ok(())

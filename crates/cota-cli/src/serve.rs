@@ -38,6 +38,7 @@ fn stream_of(a: &ServeArgs) -> anyhow::Result<(StreamAsset, Option<HeightGrid>)>
     let input = load(&a.input)?;
     let mut grid = input.grid;
     fill(&mut grid, a.voids)?;
+    let _spinner = crate::progress::spinner("encoding");
     let stream = StreamAsset::from_grid(&grid, &name(&input.files))?;
     Ok((stream, Some(grid)))
 }
@@ -64,12 +65,15 @@ fn tiles_of(
         return Ok(None);
     };
     let t = Instant::now();
-    match DemandTileSource::new(
+    let spinner = crate::progress::spinner("preparing tiles");
+    let source = DemandTileSource::new(
         grid,
         &LatticeOptions::DEFAULT,
         &TilerOptions::DEFAULT,
         DEMAND_TILES,
-    ) {
+    );
+    drop(spinner);
+    match source {
         Ok(src) => {
             let p = src.prepared();
             println!(

@@ -15,8 +15,8 @@ use std::time::Instant;
 use anyhow::Context;
 use cota_core::stream::{encode, encode_marks_progressive, StreamOptions};
 use cota_core::HeightGrid;
-use cota_io::export::{write_mesh, Coords, ExportOptions, MeshFormat};
-use cota_io::stream_file::{read_stream, step_end_offsets, write_stream, StreamLimit};
+use cota_io::export::{write_mesh_to, Coords, ExportOptions};
+use cota_io::stream_file::{read_stream, step_end_offsets, stream_bytes, StreamLimit};
 use serde_json::json;
 
 use crate::args::{CoordsArg, StreamCommand, StreamDecodeArgs, StreamEncodeArgs, StreamModeArg};
@@ -50,7 +50,8 @@ fn encode_grid(
     })
 }
 
-fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
+/// The flags of `cota stream encode`, checked before any work.
+fn check_encode(a: &StreamEncodeArgs) -> anyhow::Result<()> {
     if a.max_error.is_nan() || a.max_error < 0.0 {
         anyhow::bail!("--max-error: expected 0 m or more, found {} m", a.max_error);
     }
@@ -61,6 +62,16 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         );
     }
     crate::input::refuse_hole(a.voids, "stream")?;
+    if crate::input::is_dash(&a.output) {
+        anyhow::bail!(
+            "-o -: expected a file name (cota stream encode prints its report on stdout)"
+        );
+    }
+    Ok(())
+}
+
+fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
+    check_encode(a)?;
     let input = load(&a.input)?;
     let mut grid = input.grid;
     crate::input::fill(&mut grid, a.voids)?;
@@ -71,7 +82,8 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         .with_thresholds_m(a.thresholds.clone());
     let s = encode_grid(&grid, a.mode, &opts)?;
     let encode_ms = t.elapsed().as_secs_f64() * 1e3;
-    write_stream(&a.output, &s, grid.georef())?;
+    let bytes = stream_bytes(&s, grid.georef());
+    crate::output::write_with(&a.output, a.force.force, |w| Ok(w.write_all(&bytes)?))?;
     let ends = step_end_offsets(&s, grid.georef());
     let total = ends.last().copied().unwrap_or(0);
     let full = 2 * (grid.width() - 1) * (grid.height() - 1);
@@ -201,7 +213,14 @@ fn write_decoded(
             CoordsArg::Local => Coords::LocalMetres,
             CoordsArg::Grid => Coords::Grid,
         };
-        write_mesh(out, mesh, grid, &ExportOptions::DEFAULT.with_coords(coords))?;
+        let format = crate::output::format_of(out, a.format)?;
+        let opts = ExportOptions::DEFAULT
+            .with_coords(coords)
+            .with_replace_read_only(a.force.force);
+        let _spinner = crate::progress::spinner("writing");
+        crate::output::write_with(out, a.force.force, |w| {
+            write_mesh_to(w, format, mesh, grid, &opts)
+        })?;
     }
     Ok(())
 }
@@ -213,12 +232,15 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
         }
     }
     if let Some(out) = &a.output {
-        MeshFormat::from_path(out)?;
+        crate::output::check_output(out, a.format, None)?;
     }
     let limit = StreamLimit::ALL
         .with_max_bytes(a.max_bytes)
         .with_max_error_m(a.max_error);
-    let d = read_stream(&a.input, &limit)?;
+    let d = {
+        let _spinner = crate::progress::spinner("decoding");
+        read_stream(&a.input, &limit)?
+    };
     let h = d.decoder.header().clone();
     let mesh = d.decoder.mesh();
     let heights = d
@@ -267,26 +289,26 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
         "steps": steps,
         "output": a.output.as_ref().map(|p| p.display().to_string()),
     });
-    if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-        return Ok(ExitCode::SUCCESS);
-    }
-    print_decode_text(a, &d, &mesh, used);
-    if let Some(out) = &a.output {
-        println!("wrote       {}", out.display());
-    }
+    let text = match a.json {
+        true => format!("{}\n", serde_json::to_string_pretty(&report)?),
+        false => decode_text(a, &d, &mesh, used),
+    };
+    crate::output::print_report(a.output.as_deref(), &text);
     Ok(ExitCode::SUCCESS)
 }
 
 /// The text report of `cota stream decode`: the steps used, the mesh.
-fn print_decode_text(
+fn decode_text(
     a: &StreamDecodeArgs,
     d: &cota_io::stream_file::DecodedStream,
     mesh: &cota_core::Mesh,
     used: u64,
-) {
+) -> String {
+    let mut text = String::new();
+    let txt = &mut text;
     let h = d.decoder.header();
-    println!(
+    say!(
+        txt,
         "input       {} ({} x {}), {} of {} bytes, {} steps",
         a.input.display(),
         h.width,
@@ -295,12 +317,21 @@ fn print_decode_text(
         d.file_bytes,
         d.steps.len()
     );
-    println!(
+    say!(
+        txt,
         "{:>4} {:>10} {:>10} {:>11} {:>11} {:>10} {:>8} {:>8}",
-        "step", "max err m", "new pts", "bytes", "triangles", "vertices", "B/tri", "B/pt"
+        "step",
+        "max err m",
+        "new pts",
+        "bytes",
+        "triangles",
+        "vertices",
+        "B/tri",
+        "B/pt"
     );
     for s in &d.steps {
-        println!(
+        say!(
+            txt,
             "{:>4} {:>10.3} {:>10} {:>11} {:>11} {:>10} {:>8.3} {:>8.3}",
             s.info.index,
             s.info.max_error_m,
@@ -312,15 +343,21 @@ fn print_decode_text(
             ratio(s.end_offset, s.info.vertices)
         );
     }
-    println!(
+    say!(
+        txt,
         "mesh        {} vertices, {} triangles, max error {} m",
         mesh.vertex_count(),
         mesh.triangle_count(),
         d.decoder.max_error_m().unwrap_or(0.0)
     );
-    println!(
+    say!(
+        txt,
         "size        {:.3} B per triangle, {:.3} B per point",
         ratio(used, mesh.triangle_count()),
         ratio(used, mesh.vertex_count())
     );
+    if let Some(out) = &a.output {
+        say!(txt, "wrote       {}", out.display());
+    }
+    text
 }

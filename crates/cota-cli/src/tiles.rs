@@ -30,10 +30,11 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     let lattice_opts = LatticeOptions::DEFAULT
         .with_max_zoom(a.max_zoom)
         .with_tile_cells(a.tile_cells);
+    let spinner = progress::spinner("resampling");
     let lattice =
         Lattice::resample(&inp.grid, &lattice_opts).with_context(|| format!("tiling {name}"))?;
     let deviation = resampling_deviation(&inp.grid, &lattice);
-    drop(inp.grid);
+    drop((spinner, inp.grid));
     let error = match (a.error_factor, a.max_error_m_at_max_zoom) {
         (_, Some(e)) => ErrorSchedule::AtMaxZoom { max_error_m: e },
         (q, None) => ErrorSchedule::Cesium {
@@ -48,7 +49,9 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         return print_plan(&zooms, a.shards, a.json);
     }
     let t_prep = Instant::now();
+    let spinner = progress::spinner("preparing");
     let prepared = Prepared::new(&lattice, &opts).with_context(|| format!("tiling {name}"))?;
+    drop(spinner);
     let prep_s = t_prep.elapsed().as_secs_f64();
     let report = write(a, &prepared)?;
     let total_s = t0.elapsed().as_secs_f64();
@@ -93,7 +96,7 @@ fn write(a: &TilesArgs, prepared: &Prepared<'_>) -> anyhow::Result<PyramidReport
 
 /// `--reduce`: the shards' records into layer.json.
 fn reduce(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
-    let r = reduce_shards(&a.output, a.shards)
+    let r = reduce_shards(&a.output, a.shards, a.force)
         .with_context(|| format!("reducing {}", a.output.display()))?;
     if a.json {
         println!("{}", json!({"reduced": r.shards, "tiles": r.tiles}));

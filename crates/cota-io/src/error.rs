@@ -91,6 +91,23 @@ pub enum ReadErrorKind {
         /// The byte limit.
         limit: u64,
     },
+    /// The file (or standard input) holds more bytes than any DEM within the
+    /// sample limit may take ([`crate::limits::max_file_bytes`]); refused
+    /// before it is read.
+    #[error(
+        "too large: {bytes} bytes, over the {limit} bytes a DEM of at most {max_samples} samples \
+         may take ({per_sample} bytes per sample; raise the limit with --max-samples)"
+    )]
+    FileTooLarge {
+        /// The file's size in bytes (for a stream: the bytes read before it stopped).
+        bytes: u64,
+        /// The byte limit.
+        limit: u64,
+        /// The sample limit it comes from.
+        max_samples: u64,
+        /// The bytes allowed per sample.
+        per_sample: u64,
+    },
     /// The grid could not be built from what was read.
     #[error(transparent)]
     Grid(#[from] cota_core::GridError),

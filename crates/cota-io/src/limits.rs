@@ -97,6 +97,38 @@ pub(crate) fn gzip_cap(hgt: bool, opts: &ReadOptions) -> u64 {
     }
 }
 
+/// The most bytes one sample may take in any format read whole (ESRI and
+/// USGS ASCII text written with long decimals, e.g. `%.18e`, take up to 25;
+/// binary formats at most 8).
+pub const MAX_FILE_BYTES_PER_SAMPLE: u64 = 32;
+
+/// Room for headers, metadata and container overhead on top of the samples.
+pub const FILE_HEADER_BYTES: u64 = 1 << 20;
+
+/// The largest file a reader loads into memory under `opts`:
+/// [`MAX_FILE_BYTES_PER_SAMPLE`] bytes per sample of the limit plus
+/// [`FILE_HEADER_BYTES`]. A larger file cannot hold a grid within the limit,
+/// so it is refused before it is read.
+pub fn max_file_bytes(opts: &ReadOptions) -> u64 {
+    max_samples(opts)
+        .saturating_mul(MAX_FILE_BYTES_PER_SAMPLE)
+        .saturating_add(FILE_HEADER_BYTES)
+}
+
+/// Refuses a file of `bytes` bytes over [`max_file_bytes`].
+pub(crate) fn check_file_bytes(bytes: u64, opts: &ReadOptions) -> Result<(), ReadErrorKind> {
+    let limit = max_file_bytes(opts);
+    if bytes > limit {
+        return Err(ReadErrorKind::FileTooLarge {
+            bytes,
+            limit,
+            max_samples: max_samples(opts),
+            per_sample: MAX_FILE_BYTES_PER_SAMPLE,
+        });
+    }
+    Ok(())
+}
+
 /// An empty vector with room for `n` items, or a "too large" error naming
 /// `what` and the bytes asked for, instead of an abort.
 pub(crate) fn try_vec<T>(n: usize, what: &str) -> Result<Vec<T>, ReadErrorKind> {
@@ -142,6 +174,19 @@ mod tests {
         assert_eq!(gzip_cap(true, &ReadOptions::DEFAULT), 2 * 3601 * 3601);
         let o = ReadOptions::DEFAULT.with_max_samples(Some(10_000 * 10_000));
         assert_eq!(gzip_cap(true, &o), 2 * 10_000 * 10_000);
+    }
+
+    #[test]
+    fn file_bytes_follow_the_sample_limit() {
+        let o = ReadOptions::DEFAULT.with_max_samples(Some(1000));
+        assert_eq!(max_file_bytes(&o), 32_000 + (1 << 20));
+        assert!(check_file_bytes(32_000 + (1 << 20), &o).is_ok());
+        let e = check_file_bytes(32_001 + (1 << 20), &o).unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            msg.contains("too large") && msg.contains("1000 samples"),
+            "{msg}"
+        );
     }
 
     #[test]

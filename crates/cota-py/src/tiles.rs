@@ -181,7 +181,7 @@ pub(crate) fn tiles_plan<'py>(
 /// missing or disagreeing shard.
 #[pyfunction]
 pub(crate) fn tiles_reduce(py: Python<'_>, out: PathBuf, shards: u32) -> PyResult<u64> {
-    py.detach(|| reduce_shards(&out, shards))
+    py.detach(|| reduce_shards(&out, shards, false))
         .map(|r| r.tiles)
         .map_err(errors::write)
 }

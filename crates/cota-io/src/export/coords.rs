@@ -212,9 +212,13 @@ impl GeoInfo {
 
     /// The 80-byte binary STL header: a short ASCII note, zero-padded. Never
     /// starts with `solid` (which readers take for ASCII STL).
-    pub(crate) fn stl_header(&self) -> [u8; 80] {
+    pub(crate) fn stl_header(&self, units_per_m: f64) -> [u8; 80] {
+        let scale = match units_per_m == 1.0 {
+            true => String::new(),
+            false => format!(" x{units_per_m}"),
+        };
         let text = format!(
-            "cota terrain {}; {}; SW {} {}",
+            "cota terrain {}{scale}; {}; SW {} {}",
             self.coords, self.crs, self.sw_origin_crs[0], self.sw_origin_crs[1]
         );
         let mut header = [0u8; 80];

@@ -70,6 +70,16 @@ pub enum ExportError {
         /// Strip triangles (with orientation) not in the mesh.
         foreign: usize,
     },
+    /// An option out of its range.
+    #[error("{what}: expected {expected}, found {found}")]
+    BadOption {
+        /// The option (its field name in [`ExportOptions`](super::ExportOptions)).
+        what: &'static str,
+        /// What it may be.
+        expected: &'static str,
+        /// What it was.
+        found: String,
+    },
     /// Two options that cannot go together.
     #[error("expected {expected}, found {found}")]
     Incompatible {

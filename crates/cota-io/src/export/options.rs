@@ -88,6 +88,13 @@ pub struct ExportOptions {
     /// Replace an existing read-only file (the CLI's `--force`); otherwise
     /// that is an error. Default: `false`.
     pub replace_read_only: bool,
+    /// STL only: model units written per unit of the output frame (per metre
+    /// in [`Coords::LocalMetres`]). Every STL coordinate, x, y and z alike
+    /// (and so the base of [`ExportOptions::base_m`]), is multiplied by it,
+    /// about the frame's origin (the south-west sample, height 0): 0.01
+    /// writes millimetres at a print scale of 1:100000. Must be positive and
+    /// finite. Ignored by the other formats. Default: 1.0.
+    pub stl_units_per_m: f64,
 }
 
 impl ExportOptions {
@@ -99,7 +106,14 @@ impl ExportOptions {
         normals: false,
         quantize: false,
         replace_read_only: false,
+        stl_units_per_m: 1.0,
     };
+
+    /// Sets [`ExportOptions::stl_units_per_m`].
+    pub const fn with_stl_units_per_m(mut self, units_per_m: f64) -> Self {
+        self.stl_units_per_m = units_per_m;
+        self
+    }
 
     /// Sets [`ExportOptions::replace_read_only`].
     pub const fn with_replace_read_only(mut self, replace: bool) -> Self {

@@ -9,7 +9,9 @@
 //! outside and the facet normal is the unit right-hand normal of the written
 //! (f64) vertices — zero for a degenerate facet — so terrain facets point up
 //! (+z) in either coordinate mode. STL has no units: the numbers are metres in
-//! local metres, grid units horizontally in grid coordinates.
+//! local metres, grid units horizontally in grid coordinates, each multiplied
+//! by [`ExportOptions::stl_units_per_m`] (e.g. millimetres at a print scale;
+//! the header then notes the factor).
 //!
 //! With [`ExportOptions::base_m`] the surface is closed with side walls and a
 //! flat base into a watertight solid (walls from the boundary edges, the base a
@@ -51,24 +53,32 @@ fn encode_stl<W: Write + Send>(
     opts: &ExportOptions,
 ) -> Result<(), ExportError> {
     check_mesh(mesh)?;
+    let scale = opts.stl_units_per_m;
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(ExportError::BadOption {
+            what: "stl_units_per_m",
+            expected: "a positive finite factor",
+            found: scale.to_string(),
+        });
+    }
     let closing = match opts.base_m {
         Some(base_m) => closing_triangles(mesh, base_m)?,
         None => Vec::new(),
     };
     let count = facet_count(mesh.triangles.len() + closing.len())?;
     let frame = Frame::new(grid, opts.coords);
-    w.write_all(&GeoInfo::new(grid, opts.coords).stl_header())?;
+    w.write_all(&GeoInfo::new(grid, opts.coords).stl_header(scale))?;
     w.write_all(&count.to_le_bytes())?;
     write_chunks(&mut w, &mesh.triangles, FACET_BYTES, |_, chunk, buf| {
         for &t in chunk {
-            push_facet(buf, triangle_points(mesh, &frame, frame.orient(t)));
+            push_facet(buf, triangle_points(mesh, &frame, frame.orient(t)), scale);
         }
         Ok(())
     })?;
     write_chunks(&mut w, &closing, FACET_BYTES, |_, chunk, buf| {
         for t in chunk {
             let p = t.map(|g: GridPoint| frame.point(g[0], g[1], g[2]));
-            push_facet(buf, frame.orient(p));
+            push_facet(buf, frame.orient(p), scale);
         }
         Ok(())
     })?;
@@ -88,9 +98,10 @@ fn facet_count(n: usize) -> Result<u32, ExportError> {
 /// Bytes of a facet record.
 const FACET_BYTES: usize = 50;
 
-/// Appends one 50-byte facet record: the unit normal, the three vertices and
-/// a zero attribute byte count.
-fn push_facet(buf: &mut Vec<u8>, p: [[f64; 3]; 3]) {
+/// Appends one 50-byte facet record: the unit normal, the three vertices
+/// (times `scale`) and a zero attribute byte count.
+fn push_facet(buf: &mut Vec<u8>, p: [[f64; 3]; 3], scale: f64) {
+    let p = p.map(|v| v.map(|c| c * scale));
     let n = unit_face_normal_f32(p);
     for v in [n, to_f32(p[0]), to_f32(p[1]), to_f32(p[2])] {
         push_f32s(buf, &v);

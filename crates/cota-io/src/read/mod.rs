@@ -56,11 +56,46 @@ pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Dem, ReadError> {
             .map(with_guessed_crs)
             .map_err(wrap);
     }
-    let bytes = std::fs::read(path).map_err(|e| wrap(ReadErrorKind::Io(e)))?;
+    // The size is checked against the budget before anything is read: a
+    // file larger than any DEM within the sample limit is refused unread.
+    let file = std::fs::File::open(path).map_err(|e| wrap(ReadErrorKind::Io(e)))?;
+    let len = file
+        .metadata()
+        .map_err(|e| wrap(ReadErrorKind::Io(e)))?
+        .len();
+    crate::limits::check_file_bytes(len, opts).map_err(wrap)?;
+    read_dem_from(file, path, opts)
+}
+
+/// Reads one DEM from `reader` (standard input, a pipe, an open file),
+/// detected from its content; `name` names it in messages and supplies what
+/// a name may (an SRTM position, an extension), so a name without either
+/// (`<stdin>`) leaves detection to the content alone: a raw `.hgt` is then
+/// recognised by its size (1201² or 3601² samples). At most
+/// [`crate::limits::max_file_bytes`] bytes are read: a longer stream is
+/// refused as too large once that many have arrived, never held whole.
+///
+/// # Errors
+/// A [`ReadError`] naming `name`: [`ReadErrorKind::FileTooLarge`] past the
+/// byte budget, [`ReadErrorKind::Empty`] for no bytes, else as [`read_dem`].
+pub fn read_dem_from<R: std::io::Read>(
+    reader: R,
+    name: &Path,
+    opts: &ReadOptions,
+) -> Result<Dem, ReadError> {
+    use std::io::Read;
+    let wrap = |kind| ReadError::new(name, kind);
+    let limit = crate::limits::max_file_bytes(opts);
+    let mut bytes = Vec::new();
+    reader
+        .take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| wrap(ReadErrorKind::Io(e)))?;
+    crate::limits::check_file_bytes(bytes.len() as u64, opts).map_err(wrap)?;
     if bytes.is_empty() {
         return Err(wrap(ReadErrorKind::Empty));
     }
-    decode_bytes(&bytes, path, opts).map_err(wrap)
+    decode_bytes(&bytes, name, opts).map_err(wrap)
 }
 
 /// Applies [`cota_core::GeoRef::guess_geographic`] to a freshly read DEM.

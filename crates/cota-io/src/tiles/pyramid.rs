@@ -279,10 +279,23 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> PyramidError + '_ {
 }
 
 /// Writes `bytes` to `path` atomically: a temporary file beside it, renamed.
+/// An existing read-only `path` is refused unless `replace_read_only` (the
+/// CLI's `--force`), as the mesh writers do.
 ///
 /// # Errors
 /// [`PyramidError::Io`] naming the path.
-pub fn write_file_atomically(path: &Path, bytes: &[u8]) -> Result<(), PyramidError> {
+pub fn write_file_atomically(
+    path: &Path,
+    bytes: &[u8],
+    replace_read_only: bool,
+) -> Result<(), PyramidError> {
+    let read_only = std::fs::metadata(path).is_ok_and(|m| m.permissions().readonly());
+    if read_only && !replace_read_only {
+        return Err(io_err(path)(std::io::Error::new(
+            std::io::ErrorKind::PermissionDenied,
+            "the existing file is read-only; use --force to replace it",
+        )));
+    }
     let dir = path.parent().unwrap_or(Path::new("."));
     std::fs::create_dir_all(dir).map_err(io_err(dir))?;
     let name = path
@@ -327,7 +340,7 @@ pub(crate) fn manifest(
         }
         return Ok(());
     }
-    write_file_atomically(&path, want.as_bytes())
+    write_file_atomically(&path, want.as_bytes(), opts.force)
 }
 
 /// Per-tile outcome folded into the report.
@@ -356,7 +369,11 @@ pub fn write_pyramid(
     let t0 = Instant::now();
     let tiles: Vec<TileId> = prep.tiles().collect();
     let outcomes = write_tiles(prep, out, opts, &tiles, progress)?;
-    write_file_atomically(&out.join("layer.json"), layer_text(prep, opts).as_bytes())?;
+    write_file_atomically(
+        &out.join("layer.json"),
+        layer_text(prep, opts).as_bytes(),
+        opts.force,
+    )?;
     Ok(PyramidReport {
         zooms: fold(prep, &outcomes),
         seconds: t0.elapsed().as_secs_f64(),
@@ -391,7 +408,7 @@ pub(crate) fn write_tiles(
                 }
             } else {
                 let m = make_tile(prep, t, opts)?;
-                write_file_atomically(&path, &m.bytes)?;
+                write_file_atomically(&path, &m.bytes, opts.force)?;
                 Outcome {
                     zoom: t.z,
                     written: true,

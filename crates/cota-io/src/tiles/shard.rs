@@ -61,6 +61,7 @@ pub fn write_shard(
     write_file_atomically(
         &shard_record_path(out, shard.index, shard.shards),
         format!("{record}\n").as_bytes(),
+        opts.force,
     )?;
     Ok(PyramidReport {
         zooms: fold(prep, &outcomes),
@@ -145,12 +146,17 @@ fn agreed(
 
 /// Reads the records of the `shards` shards under `out`, checks that all
 /// are there and agree with each other and with `OUT/.cota-tiles.json`,
-/// writes `layer.json` and removes the records.
+/// writes `layer.json` and removes the records. An existing read-only
+/// `layer.json` is refused unless `replace_read_only` (the CLI's `--force`).
 ///
 /// # Errors
 /// [`PyramidError::Shard`] naming the missing or disagreeing records (the
 /// directory is left as it was), [`PyramidError::Io`].
-pub fn reduce_shards(out: &Path, shards: u32) -> Result<ReduceReport, PyramidError> {
+pub fn reduce_shards(
+    out: &Path,
+    shards: u32,
+    replace_read_only: bool,
+) -> Result<ReduceReport, PyramidError> {
     let paths: Vec<PathBuf> = (0..shards)
         .map(|i| shard_record_path(out, i, shards))
         .collect();
@@ -178,7 +184,7 @@ pub fn reduce_shards(out: &Path, shards: u32) -> Result<ReduceReport, PyramidErr
         .collect::<Result<Vec<_>, _>>()?;
     let (layer, tiles) = agreed(&paths, &records, &run, &manifest)?;
     remove_temporaries(out)?;
-    write_file_atomically(&out.join("layer.json"), layer.as_bytes())?;
+    write_file_atomically(&out.join("layer.json"), layer.as_bytes(), replace_read_only)?;
     for p in &paths {
         std::fs::remove_file(p).map_err(|source| PyramidError::Io {
             path: p.clone(),

@@ -1,0 +1,19 @@
+//! Fuzz target for z/x/y web tiles (a PNG or WebP named z/x/y.ext, placed
+//! by its Web-Mercator bounds): arbitrary bytes, named `12/2048/1361.png`,
+//! through `cota_io::read_dem_bytes`. Any result is fine; a panic,
+//! an abort or an out-of-memory is a bug. Seeds: `fuzz/corpus/read_tile/`,
+//! written by the ignored test `write_reader_fuzz_seeds` in
+//! crates/cota-io/tests/fuzz_corpus.rs.
+#![no_main]
+
+use std::path::Path;
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = cota_io::read_dem_bytes(
+        data,
+        Path::new("12/2048/1361.png"),
+        &cota_io::ReadOptions::DEFAULT,
+    );
+});
