@@ -672,7 +672,7 @@ fn text(r: &serde_json::Value) -> String {
         f("volume_m3")
     );
     print_strip_and_check(txt, r);
-    say!(txt, 
+    say!(txt,
         "time        read {:.1} ms, fill {:.1} ms, build {:.1} ms, extract {:.2} ms, measure {:.1} ms, write {:.1} ms, total {:.1} ms",
         f("read_ms"),
         f("fill_ms"),
@@ -708,7 +708,7 @@ fn print_strip_and_check(txt: &mut String, r: &serde_json::Value) {
         );
     }
     if let Some(s) = r["z_step_m"].as_f64() {
-        say!(txt, 
+        say!(txt,
             "quantized   KHR_mesh_quantization, height step {s} m, {} primitives; error and volume as written",
             r["primitives"]
         );

@@ -399,7 +399,7 @@ fn text(r: &Value) -> String {
         ),
     }
     let t = &r["timing"];
-    say!(txt, 
+    say!(txt,
         "time        read {:.1} ms, lists {:.1} ms, choose {:.1} us, every budget ({}) {:.1} us, write {:.1} ms",
         t["read_ms"].as_f64().unwrap_or(0.0),
         t["lists_ms"].as_f64().unwrap_or(0.0),
