@@ -379,3 +379,24 @@ fn zips_with_forged_sizes() {
     let msg = error(&p);
     assert_contains(&msg, &["expected", "N00E010.hgt"]);
 }
+
+/// A file larger than any DEM within the sample limit is refused from its
+/// size, before it is read: the message names the file, its size and the
+/// limit. (The file is sparse: 8 GiB on disk cost nothing, and reading it
+/// whole would need 8 GiB of memory.)
+#[test]
+fn file_over_the_byte_budget_is_refused_unread() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("huge.tif");
+    let f = std::fs::File::create(&path).unwrap();
+    if f.set_len(8 << 30).is_err() {
+        eprintln!("skipped: this file system refuses an 8 GiB sparse file");
+        return;
+    }
+    let opts = ReadOptions::DEFAULT.with_max_samples(Some(1_000_000));
+    let t0 = std::time::Instant::now();
+    let (msg, kind) = error_of(&path, &opts);
+    assert!(matches!(kind, ReadErrorKind::FileTooLarge { .. }), "{msg}");
+    assert_contains(&msg, &["too large", "8589934592 bytes", "1000000 samples", "--max-samples"]);
+    assert!(t0.elapsed() < std::time::Duration::from_secs(2), "{msg}");
+}

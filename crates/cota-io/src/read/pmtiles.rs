@@ -462,13 +462,12 @@ fn parse_directory(b: &[u8]) -> Result<Vec<Entry>, ReadErrorKind> {
     }
     for i in 0..n {
         let v = varint(b, &mut pos)?;
+        // 0 means "right after the previous entry", so the first cannot be 0.
         e[i].offset = match (v, i) {
-            (0, i) if i > 0 => e[i - 1].offset.saturating_add(e[i - 1].length),
+            (0, 0) => return Err(malformed("a first directory offset above 0", "0")),
+            (0, i) => e[i - 1].offset.saturating_add(e[i - 1].length),
             (v, _) => v - 1,
         };
-        if v == 0 && i == 0 {
-            return Err(malformed("a first directory offset above 0", "0"));
-        }
     }
     Ok(e)
 }

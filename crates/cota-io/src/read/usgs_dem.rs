@@ -284,7 +284,7 @@ fn to_grid(
     let start_row = |p: &Profile| ((p.y - y0) / dy).round() as u64;
     let rows = profiles
         .iter()
-        .map(|p| start_row(p) + p.values.len() as u64)
+        .map(|p| start_row(p).saturating_add(p.values.len() as u64))
         .max()
         .unwrap_or(1);
     let cols = profiles.len();
