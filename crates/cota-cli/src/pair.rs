@@ -172,10 +172,10 @@ pub fn run(a: &PairArgs) -> anyhow::Result<ExitCode> {
     drop(spinner);
     let read_ms = ms(t0);
     let t = Instant::now();
-    let spinner = crate::progress::spinner("textures");
+    let spinner = crate::progress::spinner("listing textures");
     let textures = texture_list(&texture, &a.texture_tolerances)?;
     drop(spinner);
-    let spinner = crate::progress::spinner("meshes");
+    let spinner = crate::progress::spinner("listing meshes");
     let mesher = Mesher::new(&grid);
     let meshes = meshes(a, &mesher)?;
     drop(spinner);

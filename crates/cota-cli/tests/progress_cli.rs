@@ -85,3 +85,80 @@ fn a_terminal_shows_progress_and_quiet_hides_it() {
         "progress with --quiet: {after:?}"
     );
 }
+
+/// Runs `cota ARGS` on a pseudo-terminal whatever its exit status: all it drew.
+fn on_terminal_any_status(args: &[&str]) -> Option<String> {
+    const SCRIPT: &str = "import os, pty, sys\n\
+        out = bytearray()\n\
+        def read(fd):\n    data = os.read(fd, 65536)\n    out.extend(data)\n    return data\n\
+        pty.spawn(sys.argv[1:], read)\n\
+        sys.stdout.write(out.decode('utf-8', 'replace'))\n";
+    let mut all = vec![env!("CARGO_BIN_EXE_cota")];
+    all.extend_from_slice(args);
+    python(SCRIPT, &all)
+}
+
+/// `args` draws each of `words` on a terminal, none of them with --quiet
+/// (so the control shows that the check can fail).
+fn shows_then_hides(args: &[&str], words: &[&str]) {
+    let Some(shown) = on_terminal_any_status(args) else {
+        return;
+    };
+    for w in words {
+        assert!(
+            shown.contains(w),
+            "{args:?}: no {w:?} on a terminal: {shown:?}"
+        );
+    }
+    let quiet = on_terminal_any_status(&[args, &["--quiet"]].concat()).unwrap();
+    for w in words {
+        assert!(!quiet.contains(w), "{args:?} --quiet drew {w:?}: {quiet:?}");
+    }
+}
+
+#[test]
+fn tiles_pair_stream_decode_and_serve_show_progress() {
+    let dir = tempfile::tempdir().unwrap();
+    let tiles = dir.path().join("tiles");
+    let t = tiles.to_str().unwrap();
+    shows_then_hides(
+        &["tiles", "--max-zoom", "7", "-o", t],
+        &["resampling", "preparing"],
+    );
+    let cs = dir.path().join("s.cstream");
+    let c = cs.to_str().unwrap();
+    let o = cota(&["stream", "encode", "--max-error", "5", "-o", c]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Off a terminal: nothing but the report.
+    assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+    let ply = dir.path().join("d.ply");
+    let p = ply.to_str().unwrap();
+    shows_then_hides(&["stream", "decode", c, "-o", p], &["decoding", "writing"]);
+    let dem = common::fixture("olinda_dem_utm25s.tif");
+    let img = common::fixture("L7_ETMs.tif");
+    let (d, i) = (dem.to_str().unwrap(), img.to_str().unwrap());
+    let pair = ["pair", d, i, "--bands", "3,2,1", "--budget-bytes", "200000"];
+    shows_then_hides(&pair, &["listing textures", "listing meshes"]);
+    // `cota serve` prepares, then fails to listen on an address this host
+    // lacks (TEST-NET-3): the preparation was shown all the same.
+    let serve = ["serve", "--addr", "203.0.113.1:9"];
+    shows_then_hides(&serve, &["encoding", "preparing tiles"]);
+}
+
+/// `-o -` refuses a binary format when stdout is a terminal, and writes
+/// text (OBJ) there.
+#[test]
+fn binary_output_is_refused_on_a_terminal() {
+    let Some(glb) =
+        on_terminal_any_status(&["mesh", "--max-error", "50", "-o", "-", "--format", "glb"])
+    else {
+        return;
+    };
+    assert!(
+        glb.contains("refusing to write binary .glb to a terminal"),
+        "{glb:?}"
+    );
+    assert!(!glb.contains("glTF"), "{glb:?}");
+    let obj = on_terminal(&["mesh", "--max-error", "50", "-o", "-", "--format", "obj"]).unwrap();
+    assert!(obj.lines().any(|l| l.starts_with("f ")), "{obj:?}");
+}

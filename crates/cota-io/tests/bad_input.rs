@@ -397,6 +397,14 @@ fn file_over_the_byte_budget_is_refused_unread() {
     let t0 = std::time::Instant::now();
     let (msg, kind) = error_of(&path, &opts);
     assert!(matches!(kind, ReadErrorKind::FileTooLarge { .. }), "{msg}");
-    assert_contains(&msg, &["too large", "8589934592 bytes", "1000000 samples", "--max-samples"]);
+    assert_contains(
+        &msg,
+        &[
+            "too large",
+            "8589934592 bytes",
+            "1000000 samples",
+            "--max-samples",
+        ],
+    );
     assert!(t0.elapsed() < std::time::Duration::from_secs(2), "{msg}");
 }
