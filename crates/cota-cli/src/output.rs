@@ -85,9 +85,15 @@ where
         return Ok(());
     }
     let mut w = std::io::BufWriter::with_capacity(1 << 20, std::io::stdout());
-    encode(&mut w).context("-: writing to standard output")?;
-    w.flush().context("-: writing to standard output")?;
-    Ok(())
+    let written = encode(&mut w).and_then(|()| w.flush().map_err(ExportError::Io));
+    match written {
+        // The reader went away (`cota mesh -o - ... | head`): not an error
+        // of cota's; stop quietly, as other Unix tools do.
+        Err(ExportError::Io(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+            std::process::exit(0)
+        }
+        r => r.context("-: writing to standard output"),
+    }
 }
 
 /// Prints a report: to stdout, or to stderr when the output itself goes to

@@ -168,3 +168,22 @@ fn stdout_needs_a_format_that_agrees() {
     assert!(o.stdout.starts_with(b"ply\n"));
     assert!(stderr(&o).contains("wrote       -"), "{}", stderr(&o));
 }
+
+/// A reader that stops early (`| head`) ends the run quietly, exit 0.
+#[test]
+fn a_closed_stdout_stops_quietly() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_cota"))
+        .args(["mesh", "--max-error", "1", "-o", "-", "--format", "obj"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = child.stdout.take().unwrap();
+    let mut head = [0u8; 16];
+    std::io::Read::read_exact(&mut out, &mut head).unwrap();
+    drop(out);
+    let o = child.wait_with_output().unwrap();
+    assert!(head.starts_with(b"# "));
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("error"), "{}", stderr(&o));
+}
