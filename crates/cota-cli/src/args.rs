@@ -824,7 +824,8 @@ pub enum Hierarchies {
 
 #[derive(Debug, Args)]
 pub struct PairArgs {
-    /// The DEM (any format `cota mesh` reads; voids filled harmonically).
+    /// The DEM (any format `cota mesh` reads; voids filled harmonically);
+    /// `-` reads it from standard input.
     pub dem: PathBuf,
     /// The image: GeoTIFF, or PNG/JPEG with a world file or over the DEM's extent.
     pub image: PathBuf,

@@ -68,7 +68,14 @@ fn read_pair(
     image: &Path,
     a: &ImageArgs,
 ) -> anyhow::Result<(HeightGrid, RgbImage, Value)> {
-    let region = cota_io::read_region(&[dem], &cota_io::RegionOptions::DEFAULT)?;
+    let region = if is_dash(dem) {
+        let name = Path::new(crate::input::STDIN_NAME);
+        let stdin = std::io::stdin().lock();
+        let one = cota_io::read_dem_from(stdin, name, &cota_io::ReadOptions::DEFAULT)?;
+        cota_io::read::join(vec![one], &cota_io::RegionOptions::DEFAULT)?
+    } else {
+        cota_io::read_region(&[dem], &cota_io::RegionOptions::DEFAULT)?
+    };
     let grid = region.grid;
     let (texture, about) = drape_image(&grid, image, a)?;
     Ok((grid, texture, about))

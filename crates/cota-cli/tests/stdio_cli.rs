@@ -187,3 +187,31 @@ fn a_closed_stdout_stops_quietly() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(!stderr(&o).contains("error"), "{}", stderr(&o));
 }
+
+/// `cota pair - IMAGE` reads the DEM from stdin; `-o -` writes the GLB to
+/// stdout, the report to stderr.
+#[test]
+fn pair_reads_the_dem_from_stdin_and_writes_stdout() {
+    let dem = std::fs::read(fixture("olinda_dem_utm25s.tif")).unwrap();
+    let img = fixture("L7_ETMs.tif");
+    let args = [
+        "pair",
+        "-",
+        img.to_str().unwrap(),
+        "--bands",
+        "3,2,1",
+        "--budget-bytes",
+        "100000",
+        "-o",
+        "-",
+    ];
+    let o = with_stdin(&args, &dem);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(o.stdout.starts_with(b"glTF"));
+    assert!(o.stdout.len() <= 100_000);
+    assert!(
+        stderr(&o).contains("<stdin>") || stderr(&o).contains("dem         -"),
+        "{}",
+        stderr(&o)
+    );
+}
