@@ -77,6 +77,14 @@ fn stdin_keeps_the_memory_limits_and_names_itself() {
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.contains("<stdin>") && err.contains("expected"), "{err}");
+    // A raw .hgt of another size needs the name that stdin lacks: said so.
+    let o = with_stdin(&["info", "-"], &vec![0u8; 2 * 100 * 100]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("no extension") && err.contains("1201"),
+        "{err}"
+    );
     let other = fixture("S29W072.hgt.zip");
     let o = with_stdin(&["info", "-", other.to_str().unwrap()], &sample());
     assert!(stderr(&o).contains("the only FILE"), "{}", stderr(&o));

@@ -100,6 +100,13 @@ pub(crate) fn name_hint(path: &Path) -> String {
         "npy" => "a NumPy array: no \\x93NUMPY signature",
         "pmtiles" => "a PMTiles archive: no PMTiles signature",
         "dem" => "a USGS ASCII DEM: no type A record (1024 bytes, level, pattern and unit codes)",
+        // No extension (standard input, `<stdin>`): only the content can
+        // tell, and a raw .hgt has no magic.
+        "" => {
+            return ", and no extension to go by (a raw .hgt is known without its name only as a \
+                    1201² or 3601² tile: name the file N45E006.hgt)"
+                .to_string()
+        }
         _ => return String::new(),
     };
     format!(", not {lacks} despite the .{ext} name")
