@@ -18,6 +18,7 @@ mod progress;
 mod serve;
 mod stream;
 mod tiles;
+mod tiles_part;
 mod window;
 
 fn main() -> ExitCode {
