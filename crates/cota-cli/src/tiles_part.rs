@@ -153,6 +153,11 @@ fn read_span(
         .collect();
     let mut args = a.input.clone();
     if !f.files.is_empty() {
+        if subset.is_empty() {
+            anyhow::bail!(
+                "expected input files covering samples {s:?} of the mosaic, found none in the plan step's frame; run --plan again"
+            );
+        }
         args.files = subset;
     }
     let mut inp = input::load(&args)?;
