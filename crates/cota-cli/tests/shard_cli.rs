@@ -183,3 +183,38 @@ fn shard_reads_only_the_files_of_its_part() {
         "4 shards over parts differ from the plain run"
     );
 }
+
+/// A shard refuses a plan step's frame of other settings, or a damaged
+/// one, naming it; it never panics.
+#[test]
+fn shard_refuses_a_frame_of_other_settings_or_a_damaged_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t");
+    let o = out.to_str().unwrap();
+    run_ok(&[
+        "tiles",
+        "--max-zoom",
+        "7",
+        "-o",
+        o,
+        "--plan",
+        "--shards",
+        "2",
+    ]);
+    let r = cota(&["tiles", "--max-zoom", "8", "-o", o, "--shard", "0/2"]);
+    assert!(!r.status.success());
+    assert!(stderr(&r).contains("other settings"), "{}", stderr(&r));
+    let frame = out.join(".cota-shards-2.json");
+    let text = std::fs::read_to_string(&frame).unwrap();
+    for bad in [
+        "{}".to_owned(),
+        "not json".to_owned(),
+        text.replace("\"tile_cells\":64", "\"tile_cells\":63"),
+        text.replace("\"source_size\":[1201,1201]", "\"source_size\":[0,0]"),
+    ] {
+        std::fs::write(&frame, &bad).unwrap();
+        let r = cota(&["tiles", "--max-zoom", "7", "-o", o, "--shard", "0/2"]);
+        assert_eq!(r.status.code(), Some(1), "{bad}: {}", stderr(&r));
+        assert!(stderr(&r).contains(".cota-shards-2.json"), "{}", stderr(&r));
+    }
+}

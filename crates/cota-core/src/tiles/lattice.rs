@@ -200,7 +200,16 @@ impl Lattice {
         source: SourcePart<'_>,
         region: [u64; 4],
     ) -> Result<Lattice, TilesError> {
-        let win = frame.window;
+        let (win, s) = (frame.window, &frame.scheme);
+        let [sw, sh] = frame.source_size;
+        let cells_ok = s.tile_cells.is_power_of_two() && (2..=4096).contains(&s.tile_cells);
+        let zoom_ok =
+            s.max_zoom <= (30 - s.tile_cells.trailing_zeros() as u8).min(super::scheme::MAX_ZOOM);
+        if sw < 2 || sh < 2 || !cells_ok || !zoom_ok || frame.align_zoom > s.max_zoom {
+            return Err(TilesError::BadOptions(format!(
+                "expected a lattice frame of a source of at least 2x2 samples and a valid scheme, found {frame:?}"
+            )));
+        }
         if region[0] < win[0]
             || region[1] < win[1]
             || region[2] > win[2]

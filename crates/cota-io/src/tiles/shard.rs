@@ -168,6 +168,11 @@ impl ShardFrame {
     }
 }
 
+/// A window inside the world, at least a cell wide and high.
+fn sane_window(w: [u64; 4], s: &GeographicScheme) -> bool {
+    w[0] < w[2] && w[1] < w[3] && w[2] <= 2 * s.root_cells() && w[3] <= s.root_cells()
+}
+
 /// Writes `frame` to [`shard_frame_path`] atomically.
 ///
 /// # Errors
@@ -188,10 +193,24 @@ pub fn read_shard_frame(out: &Path, shards: u32) -> Result<Option<ShardFrame>, P
     }
     let v = read_record(&path)?;
     ShardFrame::from_json(&v)
+        .filter(|f| {
+            let s = &f.frame.scheme;
+            f.band_zoom <= s.max_zoom
+                && f.frame.align_zoom <= f.band_zoom
+                && s.tile_cells.is_power_of_two()
+                && (2..=4096).contains(&s.tile_cells)
+                && s.max_zoom <= 30 - s.tile_cells.trailing_zeros() as u8
+                && f.shards > 0
+                && sane_window(f.frame.window, s)
+                && f.frame.source_size.iter().all(|&n| n >= 2)
+                && f.stats.lo_m.is_finite()
+                && f.stats.hi_m.is_finite()
+                && f.stats.max_step_m.is_finite()
+        })
         .map(Some)
         .ok_or_else(|| PyramidError::Shard {
             path,
-            message: "expected the plan step's frame (key, shards, band_zoom, window, source, stats, files), found another JSON object".into(),
+            message: "expected the plan step's frame (key, shards, band_zoom, window, source, stats, files, a valid scheme), found another JSON object".into(),
         })
 }
 
