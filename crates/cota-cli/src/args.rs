@@ -921,14 +921,18 @@ pub struct TilesArgs {
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
-    /// Print the shard plan (each shard's tiles, zoom by zoom) for --shards N and exit.
+    /// The plan step of --shards N shards: reads the whole input, writes the
+    /// tiles coarser than the band zoom and OUT/.cota-shards-N.json (what the
+    /// shards need of the whole), and prints each shard's tiles, zoom by zoom.
+    /// Shards run after it read only their files and hold only their part.
     #[arg(long, conflicts_with_all = ["shard", "reduce"])]
     pub plan: bool,
     /// Number of shards for --plan and --reduce.
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub shards: u32,
     /// Write only shard I of N (0-based) and its record OUT/.cota-shard-I-of-N.json;
-    /// idempotent. Then --reduce --shards N writes layer.json.
+    /// idempotent. After the plan step (--plan) only its part of the input and
+    /// lattice; without it the whole. Then --reduce --shards N writes layer.json.
     #[arg(long, value_name = "I/N", value_parser = parse_shard, conflicts_with = "reduce")]
     pub shard: Option<(u32, u32)>,
     /// Check the records of --shards N shards in OUT, write layer.json, remove

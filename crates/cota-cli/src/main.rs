@@ -27,6 +27,7 @@ mod progress;
 mod serve;
 mod stream;
 mod tiles;
+mod tiles_part;
 mod window;
 
 fn main() -> ExitCode {

@@ -5,26 +5,35 @@
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
     resampling_deviation, shard_plan, Deviation, ErrorSchedule, Lattice, LatticeOptions, Prepared,
     Shard, TilerOptions, ZoomPlan,
 };
 use cota_io::tiles::{
-    reduce_shards, write_pyramid, write_shard, PyramidOptions, PyramidReport, TileExtensions,
+    read_shard_frame, reduce_shards, write_coarse, write_pyramid, write_shard, write_shard_frame,
+    PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
 };
 use serde_json::json;
 
 use crate::args::TilesArgs;
-use crate::{input, progress};
+use crate::{input, progress, tiles_part};
 
 /// Runs `cota tiles`.
 pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     if a.reduce {
         return reduce(a);
     }
+    let opts = tiler_options(a);
+    if let Some((i, n)) = a.shard {
+        let frame = read_shard_frame(&a.output, n)
+            .with_context(|| format!("reading the plan step's frame in {}", a.output.display()))?;
+        if let Some(f) = frame {
+            return run_part(a, &f, &opts, i);
+        }
+    }
     let t0 = Instant::now();
     let mut inp = input::load(&a.input)?;
+    let voids = inp.grid.void_count();
     input::fill(&mut inp.grid, a.voids)?;
     let name = input::name(&inp.files);
     let lattice_opts = LatticeOptions::DEFAULT
@@ -34,52 +43,128 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     let lattice =
         Lattice::resample(&inp.grid, &lattice_opts).with_context(|| format!("tiling {name}"))?;
     let deviation = resampling_deviation(&inp.grid, &lattice);
-    drop((spinner, inp.grid));
+    drop(spinner);
+    let files = if a.plan {
+        tiles_part::file_extents(a, &inp, voids)
+    } else {
+        Vec::new()
+    };
+    drop(inp.grid);
+    let t_prep = Instant::now();
+    let spinner = progress::spinner("preparing");
+    let prepared = Prepared::new(&lattice, &opts).with_context(|| format!("tiling {name}"))?;
+    drop(spinner);
+    let prep_s = t_prep.elapsed().as_secs_f64();
+    if a.plan {
+        let frame = tiles_part::frame_of(a, &lattice, prepared.zooms(), files);
+        return plan_step(a, &prepared, &frame);
+    }
+    let report = write(a, &prepared, None)?;
+    let times = [prep_s, t0.elapsed().as_secs_f64()];
+    finish(a, &name, &prepared, &deviation, &report, times, json!(null));
+    Ok(std::process::ExitCode::SUCCESS)
+}
+
+/// The error schedule and zooms of the arguments.
+fn tiler_options(a: &TilesArgs) -> TilerOptions {
     let error = match (a.error_factor, a.max_error_m_at_max_zoom) {
         (_, Some(e)) => ErrorSchedule::AtMaxZoom { max_error_m: e },
         (q, None) => ErrorSchedule::Cesium {
             factor: q.unwrap_or(1.0),
         },
     };
-    let opts = TilerOptions::DEFAULT
+    TilerOptions::DEFAULT
         .with_min_zoom(a.min_zoom)
-        .with_error(error);
-    if a.plan {
-        let zooms = plan(&lattice, &opts).with_context(|| format!("tiling {name}"))?;
-        return print_plan(&zooms, a.shards, a.json);
-    }
-    let t_prep = Instant::now();
-    let spinner = progress::spinner("preparing");
-    let prepared = Prepared::new(&lattice, &opts).with_context(|| format!("tiling {name}"))?;
-    drop(spinner);
-    let prep_s = t_prep.elapsed().as_secs_f64();
-    let report = write(a, &prepared)?;
-    let total_s = t0.elapsed().as_secs_f64();
-    let times = [prep_s, total_s];
+        .with_error(error)
+}
+
+/// Prints the report (`part`: what a shard over a part read, or null).
+fn finish(
+    a: &TilesArgs,
+    name: &str,
+    prepared: &Prepared<'_>,
+    deviation: &Deviation,
+    report: &PyramidReport,
+    times: [f64; 2],
+    part: serde_json::Value,
+) {
     if a.json {
-        let mut v = report_json(&name, &prepared, &deviation, &report, times, a.check);
+        let mut v = report_json(name, prepared, deviation, report, times, a.check);
         if let Some((i, n)) = a.shard {
             v["shard"] = json!([i, n]);
         }
+        if !part.is_null() {
+            v["part"] = part;
+        }
         println!("{v}");
     } else {
-        print_report(
-            &name, &prepared, &deviation, &report, times, &a.output, a.check,
-        );
+        print_report(name, prepared, deviation, report, times, &a.output, a.check);
     }
+}
+
+/// `--shard I/N` after the plan step: only the shard's part of the lattice.
+fn run_part(
+    a: &TilesArgs,
+    f: &ShardFrame,
+    opts: &TilerOptions,
+    index: u32,
+) -> anyhow::Result<std::process::ExitCode> {
+    let t0 = Instant::now();
+    let part = tiles_part::load_part(a, f, opts, index)?;
+    let name = part.files_read.join(" + ");
+    let t_prep = Instant::now();
+    let prepared = Prepared::new_part(&part.lattice, part.zooms.clone())
+        .with_context(|| format!("tiling {name}"))?;
+    let prep_s = t_prep.elapsed().as_secs_f64();
+    let report = write(a, &prepared, Some(part.shard.clone()))?;
+    let times = [prep_s, t0.elapsed().as_secs_f64()];
+    let info = json!({
+        "band_zoom": f.band_zoom,
+        "region": part.lattice.stored(),
+        "files_read": part.files_read,
+    });
+    finish(a, &name, &prepared, &part.deviation, &report, times, info);
     Ok(std::process::ExitCode::SUCCESS)
 }
 
-/// Writes the pyramid, or with --shard one shard of it.
-fn write(a: &TilesArgs, prepared: &Prepared<'_>) -> anyhow::Result<PyramidReport> {
-    let pyramid = PyramidOptions::DEFAULT
+/// `--plan`: the tiles coarser than the band zoom, the frame, the plan.
+fn plan_step(
+    a: &TilesArgs,
+    prepared: &Prepared<'_>,
+    frame: &ShardFrame,
+) -> anyhow::Result<std::process::ExitCode> {
+    let band = frame.band_zoom;
+    let coarse = prepared.tiles().filter(|t| t.z < band).count() as u64;
+    let pb = progress::bar(coarse, "tiles");
+    write_coarse(prepared, &a.output, &pyramid_options(a), band, &|n| {
+        pb.set_position(n)
+    })
+    .and_then(|_| write_shard_frame(&a.output, frame))
+    .with_context(|| format!("writing {}", a.output.display()))?;
+    pb.finish_and_clear();
+    print_plan(prepared.zooms(), a.shards, band, coarse, a.json)
+}
+
+fn pyramid_options(a: &TilesArgs) -> PyramidOptions {
+    PyramidOptions::DEFAULT
         .with_extensions(TileExtensions::with(a.normals, a.watermask, a.metadata))
         .with_gzip(a.gzip)
         .with_force(a.force)
-        .with_check(a.check);
-    let shard = match a.shard {
-        Some((i, n)) => Some(shard_plan(prepared.zooms(), n)?.swap_remove(i as usize)),
-        None => None,
+        .with_check(a.check)
+}
+
+/// Writes the pyramid, or with --shard one shard of it (`part`: the shard's
+/// tiles when it holds only its part of the lattice).
+fn write(
+    a: &TilesArgs,
+    prepared: &Prepared<'_>,
+    part: Option<Shard>,
+) -> anyhow::Result<PyramidReport> {
+    let pyramid = pyramid_options(a);
+    let shard = match (part, a.shard) {
+        (Some(s), _) => Some(s),
+        (None, Some((i, n))) => Some(shard_plan(prepared.zooms(), n)?.swap_remove(i as usize)),
+        (None, None) => None,
     };
     let total = shard
         .as_ref()
@@ -111,13 +196,19 @@ fn reduce(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     Ok(std::process::ExitCode::SUCCESS)
 }
 
-/// `--plan`: each shard's tiles, zoom by zoom.
+/// `--plan`: each shard's tiles, zoom by zoom (the band zoom and finer; the
+/// plan step wrote the `coarse` tiles above it).
 fn print_plan(
     zooms: &[ZoomPlan],
     shards: u32,
+    band: u8,
+    coarse: u64,
     as_json: bool,
 ) -> anyhow::Result<std::process::ExitCode> {
-    let plan = shard_plan(zooms, shards)?;
+    let plan: Vec<Shard> = shard_plan(zooms, shards)?
+        .iter()
+        .map(|s| s.from_zoom(band))
+        .collect();
     if as_json {
         let v: Vec<serde_json::Value> = plan
             .iter()
@@ -130,9 +221,13 @@ fn print_plan(
                 json!({"shard": s.index, "shards": s.shards, "tiles": s.tile_count(), "ranges": ranges})
             })
             .collect();
-        println!("{}", json!({"shards": shards, "plan": v}));
+        println!(
+            "{}",
+            json!({"shards": shards, "band_zoom": band, "coarse_tiles": coarse, "plan": v})
+        );
         return Ok(std::process::ExitCode::SUCCESS);
     }
+    println!("plan step  {coarse:>6}  zooms below {band} (written)");
     println!("shard       tiles  zoom: columns x rows (TMS)");
     for s in &plan {
         let parts: Vec<String> = s

@@ -59,8 +59,11 @@ fn sharded_equals_plain(inputs: &[&str], settings: &[&str]) {
             .iter()
             .map(|s| s["tiles"].as_u64().unwrap())
             .sum();
-        // The plan lists every tile once: as many as the pyramid has (but layer.json and the run manifest).
-        assert_eq!(planned as usize, want.len() - 2, "{plan}");
+        // The plan step wrote the tiles above the band zoom; the shards
+        // list the others once: as many as the pyramid has (but layer.json
+        // and the run manifest).
+        let coarse = plan["coarse_tiles"].as_u64().unwrap();
+        assert_eq!((planned + coarse) as usize, want.len() - 2, "{plan}");
         for i in (0..n).rev() {
             let s = format!("{i}/{n}");
             run_ok(&[&args[..], &["-o", o, "--shard", &s]].concat());
@@ -122,4 +125,96 @@ fn shard_is_idempotent_and_reduce_needs_every_shard() {
     let bad = cota(&[&base[..], &["--shard", "2/2"]].concat());
     assert!(!bad.status.success());
     assert!(stderr(&bad).contains("expected I/N"), "{}", stderr(&bad));
+}
+
+/// After the plan step, a shard reads only the files its part of the
+/// lattice needs: with N=4 on the two-tile mosaic the westmost shard runs
+/// with the eastern tile gone, holds a lattice part narrower than the
+/// window, and the pyramid after the other shards and the reduce is still
+/// byte-identical to the plain run.
+#[test]
+fn shard_reads_only_the_files_of_its_part() {
+    let (Some(a), Some(b)) = (
+        common::shared("srtm/N00E010.hgt"),
+        common::shared("srtm/N00E011.hgt.zip"),
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (wa, eb) = (
+        dir.path().join("N00E010.hgt"),
+        dir.path().join("N00E011.hgt.zip"),
+    );
+    std::fs::copy(&a, &wa).unwrap();
+    std::fs::copy(&b, &eb).unwrap();
+    let (west, east) = (wa.to_str().unwrap(), eb.to_str().unwrap());
+    let plain = dir.path().join("plain");
+    let out = dir.path().join("sharded");
+    let (p, o) = (plain.to_str().unwrap(), out.to_str().unwrap());
+    let base = ["tiles", west, east, "--max-zoom", "10"];
+    let whole = run_ok(&[&base[..], &["-o", p, "--json"]].concat());
+    let whole: serde_json::Value = serde_json::from_str(&whole).unwrap();
+    run_ok(&[&base[..], &["-o", o, "--plan", "--shards", "4"]].concat());
+    let hidden = dir.path().join("elsewhere.zip");
+    std::fs::rename(&eb, &hidden).unwrap();
+    let first = run_ok(&[&base[..], &["-o", o, "--shard", "0/4", "--json"]].concat());
+    let first: serde_json::Value = serde_json::from_str(&first).unwrap();
+    assert_eq!(
+        first["part"]["files_read"],
+        serde_json::json!([west]),
+        "{first}"
+    );
+    let (part_w, whole_w) = (
+        first["lattice"]["window"][0].as_u64().unwrap(),
+        whole["lattice"]["window"][0].as_u64().unwrap(),
+    );
+    assert!(part_w * 2 < whole_w, "part {part_w} of {whole_w} columns");
+    // The eastern shard needs the eastern tile: a clear error without it.
+    let r = cota(&[&base[..], &["-o", o, "--shard", "3/4"]].concat());
+    assert!(!r.status.success());
+    assert!(stderr(&r).contains("N00E011"), "{}", stderr(&r));
+    std::fs::rename(&hidden, &eb).unwrap();
+    for i in 1..4 {
+        run_ok(&[&base[..], &["-o", o, "--shard", &format!("{i}/4")]].concat());
+    }
+    run_ok(&["tiles", "-o", o, "--reduce", "--shards", "4"]);
+    assert!(
+        files(&out) == files(&plain),
+        "4 shards over parts differ from the plain run"
+    );
+}
+
+/// A shard refuses a plan step's frame of other settings, or a damaged
+/// one, naming it; it never panics.
+#[test]
+fn shard_refuses_a_frame_of_other_settings_or_a_damaged_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t");
+    let o = out.to_str().unwrap();
+    run_ok(&[
+        "tiles",
+        "--max-zoom",
+        "7",
+        "-o",
+        o,
+        "--plan",
+        "--shards",
+        "2",
+    ]);
+    let r = cota(&["tiles", "--max-zoom", "8", "-o", o, "--shard", "0/2"]);
+    assert!(!r.status.success());
+    assert!(stderr(&r).contains("other settings"), "{}", stderr(&r));
+    let frame = out.join(".cota-shards-2.json");
+    let text = std::fs::read_to_string(&frame).unwrap();
+    for bad in [
+        "{}".to_owned(),
+        "not json".to_owned(),
+        text.replace("\"tile_cells\":64", "\"tile_cells\":63"),
+        text.replace("\"source_size\":[1201,1201]", "\"source_size\":[0,0]"),
+    ] {
+        std::fs::write(&frame, &bad).unwrap();
+        let r = cota(&["tiles", "--max-zoom", "7", "-o", o, "--shard", "0/2"]);
+        assert_eq!(r.status.code(), Some(1), "{bad}: {}", stderr(&r));
+        assert!(stderr(&r).contains(".cota-shards-2.json"), "{}", stderr(&r));
+    }
 }

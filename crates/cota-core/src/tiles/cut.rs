@@ -100,6 +100,12 @@ impl<'l> Prepared<'l> {
     /// The window's [`Bitree::build`] (`O(n log n)`) plus `O(n)` per coarse
     /// level, for `n` window samples.
     pub fn new(lattice: &'l Lattice, opts: &TilerOptions) -> Result<Self, TilesError> {
+        if lattice.is_part() {
+            return Err(TilesError::BadOptions(
+                "expected a lattice over its whole window, found a part (use Prepared::new_part)"
+                    .into(),
+            ));
+        }
         let zooms = plan(lattice, opts)?;
         let tree = Bitree::build(lattice.grid())?;
         let cap = Cap::build(lattice, &tree);
@@ -109,6 +115,57 @@ impl<'l> Prepared<'l> {
             cap,
             zooms,
         })
+    }
+
+    /// Builds the bitree of a part of the lattice ([`Lattice::resample_part`])
+    /// with the whole pyramid's plan `zooms` (from
+    /// [`super::plan::plan_with`] and the whole lattice's statistics). It
+    /// cuts exactly the tiles a whole lattice cuts, for the tiles of zooms at
+    /// or finer than the alignment zoom whose square, grown by half a tile,
+    /// lies in the part (the split points a tile reads lie in that square,
+    /// and their errors depend only on the heights there); [`Prepared::cut`]
+    /// refuses the others.
+    ///
+    /// # Errors
+    /// [`TilesError::Mesh`].
+    ///
+    /// # Runtime
+    /// The part's [`Bitree::build`].
+    pub fn new_part(lattice: &'l Lattice, zooms: Vec<ZoomPlan>) -> Result<Self, TilesError> {
+        let tree = Bitree::build(lattice.grid())?;
+        Ok(Prepared {
+            lattice,
+            tree,
+            cap: Cap::default(),
+            zooms,
+        })
+    }
+
+    /// True when this hierarchy cuts tile `t` exactly: always for a whole
+    /// lattice; for a part, when `t` is at or finer than the alignment zoom
+    /// and its square grown by half a tile (clipped to the window) is stored.
+    pub fn holds(&self, t: TileId) -> bool {
+        let lat = self.lattice;
+        if !lat.is_part() {
+            return true;
+        }
+        if t.z < lat.align_zoom() {
+            return false;
+        }
+        let s = lat.scheme();
+        let (cells, [x, y]) = (s.cells_at(t.z), s.tile_origin(t));
+        let (w, st) = (lat.window(), lat.stored());
+        // The part's bitree has the global diagonals at this zoom's squares.
+        let aligned = st[0] % cells == 0
+            && st[1] % cells == 0
+            && (st[0] / cells + st[1] / cells).is_multiple_of(2);
+        let lo = |v: u64, min: u64| v.saturating_sub(cells / 2).max(min);
+        let hi = |v: u64, max: u64| (v + cells + cells / 2).min(max);
+        aligned
+            && lo(x, w[0]) >= st[0]
+            && lo(y, w[1]) >= st[1]
+            && hi(x, w[2]) <= st[2]
+            && hi(y, w[3]) <= st[3]
     }
 
     /// The lattice.
@@ -160,7 +217,8 @@ impl<'l> Prepared<'l> {
     /// Cuts tile `t`, with per-vertex normals and a water mask on request.
     ///
     /// # Errors
-    /// [`TilesError::NoSuchTile`] for a tile outside the pyramid.
+    /// [`TilesError::NoSuchTile`] for a tile outside the pyramid or, for a
+    /// part, one it does not hold ([`Prepared::holds`]).
     ///
     /// # Runtime
     /// Proportional to the tile's triangles (plus 256² lattice reads for the
@@ -168,7 +226,7 @@ impl<'l> Prepared<'l> {
     pub fn cut(&self, t: TileId, normals: bool, water: bool) -> Result<TileMesh, TilesError> {
         let plan = self
             .zoom(t.z)
-            .filter(|p| p.range.contains(t.x, t.y))
+            .filter(|p| p.range.contains(t.x, t.y) && self.holds(t))
             .ok_or(TilesError::NoSuchTile {
                 tile: t,
                 min_zoom: self.zooms.first().map_or(0, |p| p.zoom),
@@ -224,7 +282,9 @@ impl<'l> Prepared<'l> {
         if u64::from(size) > top {
             return f64::from(self.cap.error(m)) > f64::from(rule.threshold);
         }
-        let [x0, y0, x1, y1] = self.lattice.window();
+        // Beyond the window every error is 0; a part holds the split points
+        // its tiles read ([`Prepared::holds`]).
+        let [x0, y0, x1, y1] = self.lattice.stored();
         let (x, y) = (u64::from(m[0]), u64::from(m[1]));
         if x < x0 || x > x1 || y < y0 || y > y1 {
             return false;

@@ -75,30 +75,47 @@ impl Default for LatticeOptions {
 }
 
 /// The terrain on the tiling's lattice: a window of heights, 0 m outside it.
+/// A *part* ([`Lattice::resample_part`]) stores only a region of the window;
+/// its heights elsewhere are not known.
 #[derive(Debug, Clone)]
 pub struct Lattice {
-    scheme: GeographicScheme,
+    frame: LatticeFrame,
     grid: HeightGrid,
     origin: [u64; 2],
-    align_zoom: u8,
-    footprint: [f64; 4],
 }
 
 /// The window of a footprint at one alignment zoom: `[x0, y0, x1, y1]`
 /// global lattice coordinates of its corner samples (inclusive).
 type Window = [u64; 4];
 
-impl Lattice {
-    /// Resamples `source` (geographic, no voids) onto the lattice.
+/// Where the lattice lies, decided by the whole source: the scheme, the
+/// footprint, the window and its alignment zoom, and how lattice positions
+/// map to the whole source's samples. Every part of one lattice is
+/// resampled in the same frame, so its heights are those of the whole
+/// lattice bit for bit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LatticeFrame {
+    /// The tiling scheme (maximum zoom, tile size in cells).
+    pub scheme: GeographicScheme,
+    /// The source's footprint, `[west col, north row, east col, south row]`.
+    pub footprint: [f64; 4],
+    /// The window, `[x0, y0, x1, y1]` inclusive.
+    pub window: [u64; 4],
+    /// The zoom whose tiles the window is made of.
+    pub align_zoom: u8,
+    /// The whole source's georeference.
+    pub source_georef: GeoRef,
+    /// The whole source's size in samples, `[width, height]`.
+    pub source_size: [usize; 2],
+}
+
+impl LatticeFrame {
+    /// The frame of `source` (geographic) under `opts`.
     ///
     /// # Errors
-    /// [`TilesError::NotGeographic`], [`TilesError::Voids`],
-    /// [`TilesError::OutsideWorld`], [`TilesError::BadOptions`],
-    /// [`TilesError::TooLarge`].
-    ///
-    /// # Runtime
-    /// `O(window samples)`, in parallel over rows.
-    pub fn resample(source: &HeightGrid, opts: &LatticeOptions) -> Result<Lattice, TilesError> {
+    /// [`TilesError::NotGeographic`], [`TilesError::OutsideWorld`],
+    /// [`TilesError::BadOptions`].
+    pub fn of(source: &HeightGrid, opts: &LatticeOptions) -> Result<LatticeFrame, TilesError> {
         let g = source.georef();
         if !g.crs.is_geographic() || !g.known {
             return Err(TilesError::NotGeographic {
@@ -116,25 +133,110 @@ impl Lattice {
                 source.height()
             )));
         }
-        if let Some((col, row)) = source.first_void() {
-            return Err(TilesError::Voids { col, row });
-        }
         let scheme = scheme_for(g, opts)?;
         let footprint = footprint(source, &scheme)?;
         let (align_zoom, window) = choose_window(&scheme, footprint);
-        let (w, h) = (window[2] - window[0] + 1, window[3] - window[1] + 1);
+        Ok(LatticeFrame {
+            scheme,
+            footprint,
+            window,
+            align_zoom,
+            source_georef: g.clone(),
+            source_size: [source.width(), source.height()],
+        })
+    }
+
+    /// The whole source's columns and rows that resampling `region` reads:
+    /// `[c0, r0, c1, r1]` inclusive, `None` when it reads none (all 0 m).
+    pub fn source_span(&self, region: [u64; 4]) -> Option<[usize; 4]> {
+        let (cols, rows) = axes(self, region);
+        let (c0, c1) = read_span(&cols)?;
+        let (r0, r1) = read_span(&rows)?;
+        Some([c0, r0, c1, r1])
+    }
+}
+
+/// A part of the whole source: `grid` holds the whole source's samples from
+/// column `offset[0]` and row `offset[1]` on.
+#[derive(Debug, Clone, Copy)]
+pub struct SourcePart<'a> {
+    /// The samples.
+    pub grid: &'a HeightGrid,
+    /// Where they sit in the whole source, `[column, row]`.
+    pub offset: [usize; 2],
+}
+
+impl Lattice {
+    /// Resamples `source` (geographic, no voids) onto the lattice.
+    ///
+    /// # Errors
+    /// [`TilesError::NotGeographic`], [`TilesError::Voids`],
+    /// [`TilesError::OutsideWorld`], [`TilesError::BadOptions`],
+    /// [`TilesError::TooLarge`].
+    ///
+    /// # Runtime
+    /// `O(window samples)`, in parallel over rows.
+    pub fn resample(source: &HeightGrid, opts: &LatticeOptions) -> Result<Lattice, TilesError> {
+        let frame = LatticeFrame::of(source, opts)?;
+        let window = frame.window;
+        let part = SourcePart {
+            grid: source,
+            offset: [0, 0],
+        };
+        Lattice::resample_part(&frame, part, window)
+    }
+
+    /// Resamples only `region` (global lattice `[x0, y0, x1, y1]`, inside the
+    /// frame's window) of the lattice of `frame`, from the part of the source
+    /// that `frame.source_span(region)` names (or more): its heights are
+    /// those of the whole lattice there.
+    ///
+    /// # Errors
+    /// [`TilesError::Voids`], [`TilesError::TooLarge`],
+    /// [`TilesError::BadOptions`] for a region outside the window or a source
+    /// part that does not cover what the region reads.
+    pub fn resample_part(
+        frame: &LatticeFrame,
+        source: SourcePart<'_>,
+        region: [u64; 4],
+    ) -> Result<Lattice, TilesError> {
+        let (win, s) = (frame.window, &frame.scheme);
+        let [sw, sh] = frame.source_size;
+        let cells_ok = s.tile_cells.is_power_of_two() && (2..=4096).contains(&s.tile_cells);
+        let zoom_ok =
+            s.max_zoom <= (30 - s.tile_cells.trailing_zeros() as u8).min(super::scheme::MAX_ZOOM);
+        if sw < 2 || sh < 2 || !cells_ok || !zoom_ok || frame.align_zoom > s.max_zoom {
+            return Err(TilesError::BadOptions(format!(
+                "expected a lattice frame of a source of at least 2x2 samples and a valid scheme, found {frame:?}"
+            )));
+        }
+        if region[0] < win[0]
+            || region[1] < win[1]
+            || region[2] > win[2]
+            || region[3] > win[3]
+            || region[0] >= region[2]
+            || region[1] >= region[3]
+        {
+            return Err(TilesError::BadOptions(format!(
+                "expected a region inside the lattice window {win:?}, found {region:?}"
+            )));
+        }
+        if let Some((col, row)) = source.grid.first_void() {
+            return Err(TilesError::Voids { col, row });
+        }
+        let (w, h) = (region[2] - region[0] + 1, region[3] - region[1] + 1);
         if w.checked_mul(h).is_none_or(|n| n > MAX_SAMPLES) {
             return Err(TilesError::TooLarge {
                 width: w,
                 height: h,
             });
         }
-        let heights = fill(source, &scheme, footprint, window, align_zoom);
-        let d = scheme.cell_deg();
+        let heights = fill(frame, source, region)?;
+        let d = frame.scheme.cell_deg();
         let georef = GeoRef {
             crs: Crs::WGS84,
-            origin_x: scheme.lon_of(window[0] as f64),
-            origin_y: scheme.lat_of(window[1] as f64),
+            origin_x: frame.scheme.lon_of(region[0] as f64),
+            origin_y: frame.scheme.lat_of(region[1] as f64),
             pixel_x: d,
             pixel_y: -d,
             pixel_is: PixelIs::Point,
@@ -143,42 +245,30 @@ impl Lattice {
         let grid = HeightGrid::new(w as usize, h as usize, heights, georef)
             .map_err(|e| TilesError::BadOptions(e.to_string()))?;
         Ok(Lattice {
-            scheme,
+            frame: frame.clone(),
             grid,
-            origin: [window[0], window[1]],
-            align_zoom,
-            footprint,
+            origin: [region[0], region[1]],
         })
+    }
+
+    /// The frame (scheme, footprint, window, source mapping).
+    pub fn frame(&self) -> &LatticeFrame {
+        &self.frame
     }
 
     /// The tiling scheme (maximum zoom, tile size in cells).
     pub fn scheme(&self) -> &GeographicScheme {
-        &self.scheme
+        &self.frame.scheme
     }
 
-    /// The window's heights (EPSG:4326, pixel-is-point).
-    pub fn grid(&self) -> &HeightGrid {
-        &self.grid
+    /// True when only a part of the window is stored.
+    pub fn is_part(&self) -> bool {
+        self.stored() != self.frame.window
     }
 
-    /// Global lattice column and row of the window's sample (0, 0).
-    pub fn origin(&self) -> [u64; 2] {
-        self.origin
-    }
-
-    /// The zoom whose tiles the window is made of (see the module docs).
-    pub fn align_zoom(&self) -> u8 {
-        self.align_zoom
-    }
-
-    /// The source's footprint in global lattice coordinates (fractional):
-    /// `[west col, north row, east col, south row]`.
-    pub fn footprint(&self) -> [f64; 4] {
-        self.footprint
-    }
-
-    /// The window in global lattice coordinates: `[x0, y0, x1, y1]`, inclusive.
-    pub fn window(&self) -> [u64; 4] {
+    /// The stored region in global lattice coordinates: `[x0, y0, x1, y1]`,
+    /// inclusive (the window, unless a part).
+    pub fn stored(&self) -> [u64; 4] {
         let [x0, y0] = self.origin;
         [
             x0,
@@ -188,8 +278,35 @@ impl Lattice {
         ]
     }
 
-    /// The height at global lattice position `(col, row)`: the window's, 0 m
-    /// outside it.
+    /// The stored heights (EPSG:4326, pixel-is-point): the window's, or the
+    /// part's.
+    pub fn grid(&self) -> &HeightGrid {
+        &self.grid
+    }
+
+    /// Global lattice column and row of the stored sample (0, 0).
+    pub fn origin(&self) -> [u64; 2] {
+        self.origin
+    }
+
+    /// The zoom whose tiles the window is made of (see the module docs).
+    pub fn align_zoom(&self) -> u8 {
+        self.frame.align_zoom
+    }
+
+    /// The source's footprint in global lattice coordinates (fractional):
+    /// `[west col, north row, east col, south row]`.
+    pub fn footprint(&self) -> [f64; 4] {
+        self.frame.footprint
+    }
+
+    /// The window in global lattice coordinates: `[x0, y0, x1, y1]`, inclusive.
+    pub fn window(&self) -> [u64; 4] {
+        self.frame.window
+    }
+
+    /// The height at global lattice position `(col, row)`: the stored one,
+    /// 0 m outside the stored region (for a part, only its region is known).
     #[inline]
     pub fn height_at(&self, col: u64, row: u64) -> f32 {
         let (c, r) = (
@@ -366,58 +483,88 @@ fn axis(
         .collect()
 }
 
-/// The window's heights: bilinear inside the footprint, the edge value
-/// ramped to 0 at the window's border outside it.
-fn fill(
-    source: &HeightGrid,
-    s: &GeographicScheme,
-    fp: [f64; 4],
-    win: Window,
-    align_zoom: u8,
-) -> Vec<f32> {
-    let g = source.georef();
+/// The columns and rows of `region` as [`Axis`] entries of the whole source.
+fn axes(frame: &LatticeFrame, region: Window) -> (Vec<Axis>, Vec<Axis>) {
+    let (s, fp, g) = (&frame.scheme, frame.footprint, &frame.source_georef);
     let half = match g.pixel_is {
         PixelIs::Area => 0.5,
         PixelIs::Point => 0.0,
     };
     let (w, h) = (
-        (win[2] - win[0] + 1) as usize,
-        (win[3] - win[1] + 1) as usize,
+        (region[2] - region[0] + 1) as usize,
+        (region[3] - region[1] + 1) as usize,
     );
-    let band = zero_band(s, win, align_zoom);
+    let band = zero_band(s, frame.window, frame.align_zoom);
     let cols = axis(
         w,
-        win[0],
+        region[0],
         |gx| (s.lon_of(gx) - g.origin_x) / g.pixel_x - half,
         [fp[0], fp[2]],
         [band[0], band[2]],
-        source.width(),
+        frame.source_size[0],
     );
     let rows = axis(
         h,
-        win[1],
+        region[1],
         |gy| (s.lat_of(gy) - g.origin_y) / g.pixel_y - half,
         [fp[1], fp[3]],
         [band[1], band[3]],
-        source.height(),
+        frame.source_size[1],
     );
-    let (sw, src) = (source.width(), source.heights());
-    let mut out = vec![0f32; w * h];
+    (cols, rows)
+}
+
+/// The source indices an axis reads (`i0` and `i0 + 1` where its ramp is
+/// not 0), `None` when it reads none.
+fn read_span(axis: &[Axis]) -> Option<(usize, usize)> {
+    let read = axis.iter().filter(|a| a.ramp != 0.0);
+    let lo = read.clone().map(|a| a.i0).min()?;
+    let hi = read.map(|a| a.i0 + 1).max()?;
+    Some((lo, hi))
+}
+
+/// The heights of `region`: bilinear inside the footprint, the edge value
+/// ramped to 0 at the window's border outside it.
+fn fill(
+    frame: &LatticeFrame,
+    source: SourcePart<'_>,
+    region: Window,
+) -> Result<Vec<f32>, TilesError> {
+    let (cols, rows) = axes(frame, region);
+    let (sw, sh) = (source.grid.width(), source.grid.height());
+    let [ox, oy] = source.offset;
+    let covers = |span: Option<(usize, usize)>, o: usize, n: usize| {
+        span.is_none_or(|(lo, hi)| lo >= o && hi < o + n)
+    };
+    if !covers(read_span(&cols), ox, sw) || !covers(read_span(&rows), oy, sh) {
+        return Err(TilesError::BadOptions(format!(
+            "expected a source part covering the samples lattice region {region:?} reads, found {sw}x{sh} samples at {:?} of the whole source",
+            source.offset
+        )));
+    }
+    let src = source.grid.heights();
+    let w = cols.len();
+    let mut out = vec![0f32; w * rows.len()];
     out.par_chunks_mut(w).zip(&rows).for_each(|(line, ry)| {
-        let (top, bottom) = (&src[ry.i0 * sw..], &src[(ry.i0 + 1) * sw..]);
+        if ry.ramp == 0.0 {
+            return;
+        }
+        let r = ry.i0 - oy;
+        let (top, bottom) = (&src[r * sw..], &src[(r + 1) * sw..]);
         for (o, cx) in line.iter_mut().zip(&cols) {
             let ramp = cx.ramp * ry.ramp;
             if ramp == 0.0 {
                 continue;
             }
-            let (a, b) = (top[cx.i0] as f64, top[cx.i0 + 1] as f64);
-            let (c, d) = (bottom[cx.i0] as f64, bottom[cx.i0 + 1] as f64);
+            let c = cx.i0 - ox;
+            let (a, b) = (top[c] as f64, top[c + 1] as f64);
+            let (c, d) = (bottom[c] as f64, bottom[c + 1] as f64);
             let upper = a + (b - a) * cx.frac;
             let lower = c + (d - c) * cx.frac;
             *o = ((upper + (lower - upper) * ry.frac) * ramp) as f32;
         }
     });
-    out
+    Ok(out)
 }
 
 /// How far the lattice's surface is from the source, at the source's samples.
@@ -436,7 +583,8 @@ pub struct Deviation {
 /// diagonals, the surface of a tile at error 0) against the source height.
 /// A tile within `e` of the lattice at every lattice sample is therefore
 /// within `e` plus this of the source at every source sample: both surfaces
-/// are linear on each unit triangle of the lattice.
+/// are linear on each unit triangle of the lattice. For a part
+/// ([`Lattice::resample_part`]), over the source samples inside it.
 pub fn resampling_deviation(source: &HeightGrid, lattice: &Lattice) -> Deviation {
     let g = source.georef();
     let s = lattice.scheme();
@@ -444,19 +592,26 @@ pub fn resampling_deviation(source: &HeightGrid, lattice: &Lattice) -> Deviation
     let [ox, oy] = lattice.origin();
     let grid = lattice.grid();
     let (sw, src) = (source.width(), source.heights());
+    let (gw, gh) = ((grid.width() - 1) as f64, (grid.height() - 1) as f64);
+    // A part's lattice: only the source samples inside it.
+    let part = lattice.is_part();
     let (max, sum, n) = (0..source.height())
         .into_par_iter()
         .map(|row| {
-            let (mut max, mut sum) = (0f64, 0f64);
+            let (mut max, mut sum, mut n) = (0f64, 0f64, 0);
             for col in 0..sw {
                 let (lon, lat) = g.sample_xy(col as f64, row as f64);
                 let x = (lon + 180.0) / d - ox as f64;
                 let y = (90.0 - lat) / d - oy as f64;
+                if part && (!(0.0..=gw).contains(&x) || !(0.0..=gh).contains(&y)) {
+                    continue;
+                }
                 let dz = unit_surface(grid, [ox, oy], x, y) - src[row * sw + col] as f64;
                 max = max.max(dz.abs());
                 sum += dz * dz;
+                n += 1;
             }
-            (max, sum, sw)
+            (max, sum, n)
         })
         .reduce(
             || (0.0, 0.0, 0),

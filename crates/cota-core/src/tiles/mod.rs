@@ -36,10 +36,12 @@ pub mod shard;
 
 pub use cut::{Prepared, TileMesh, WaterMask};
 pub use error::TilesError;
-pub use lattice::{resampling_deviation, Deviation, Lattice, LatticeOptions};
-pub use plan::{TileRange, TilerOptions, ZoomPlan};
+pub use lattice::{
+    resampling_deviation, Deviation, Lattice, LatticeFrame, LatticeOptions, SourcePart,
+};
+pub use plan::{LatticeStats, TileRange, TilerOptions, ZoomPlan};
 pub use scheme::{ErrorSchedule, GeographicScheme, TileId};
-pub use shard::{shard_plan, Shard};
+pub use shard::{band_zoom, part_region, shard_plan, Shard};
 
 /// The largest `u`, `v` or height value of quantized-mesh-1.0.
 pub const QUANTIZED_MAX: u32 = 32767;

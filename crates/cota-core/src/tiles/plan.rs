@@ -159,9 +159,51 @@ pub fn max_step_m(lattice: &Lattice) -> f64 {
     gx + gy
 }
 
-/// The plan of every zoom from `opts.min_zoom` to the lattice's maximum.
+/// What the plan needs of the whole lattice: its height range and `G` (a
+/// minimum, a maximum and a maximum, so a sharded run can reduce them from
+/// its parts, whose regions overlap by a sample).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LatticeStats {
+    /// The lowest height, metres (0 for an empty lattice).
+    pub lo_m: f32,
+    /// The highest height, metres (0 for an empty lattice).
+    pub hi_m: f32,
+    /// `G` of the module docs ([`max_step_m`]), metres per cell.
+    pub max_step_m: f64,
+}
+
+impl LatticeStats {
+    /// The statistics of `lattice`'s stored heights.
+    pub fn of(lattice: &Lattice) -> LatticeStats {
+        let (lo_m, hi_m) = lattice.grid().valid_range().unwrap_or((0.0, 0.0));
+        LatticeStats {
+            lo_m,
+            hi_m,
+            max_step_m: max_step_m(lattice),
+        }
+    }
+}
+
+/// The plan of every zoom from `opts.min_zoom` to the lattice's maximum
+/// (the lattice holds its whole window).
 pub fn plan(lattice: &Lattice, opts: &TilerOptions) -> Result<Vec<ZoomPlan>, TilesError> {
-    let s = *lattice.scheme();
+    plan_with(
+        lattice.scheme(),
+        lattice.window(),
+        &LatticeStats::of(lattice),
+        opts,
+    )
+}
+
+/// The plan of every zoom from `opts.min_zoom` to the scheme's maximum, for
+/// a lattice over `window` whose statistics are `stats`.
+pub fn plan_with(
+    scheme: &GeographicScheme,
+    window: [u64; 4],
+    stats: &LatticeStats,
+    opts: &TilerOptions,
+) -> Result<Vec<ZoomPlan>, TilesError> {
+    let s = *scheme;
     if opts.min_zoom > s.max_zoom {
         return Err(TilesError::BadOptions(format!(
             "expected a minimum zoom of at most the maximum zoom {}, found {}",
@@ -174,10 +216,10 @@ pub fn plan(lattice: &Lattice, opts: &TilerOptions) -> Result<Vec<ZoomPlan>, Til
             opts.error
         )));
     }
-    let (lo, hi) = lattice.grid().valid_range().unwrap_or((0.0, 0.0));
+    let (lo, hi) = (stats.lo_m, stats.hi_m);
     let range_m = f64::from(hi.max(0.0)) - f64::from(lo.min(0.0));
     let q = f64::from(QUANTIZED_MAX);
-    let step = max_step_m(lattice);
+    let step = stats.max_step_m;
     let slack = 1e-6 * f64::from(hi.abs().max(lo.abs())).max(1.0);
     (opts.min_zoom..=s.max_zoom)
         .map(|z| {
@@ -193,7 +235,7 @@ pub fn plan(lattice: &Lattice, opts: &TilerOptions) -> Result<Vec<ZoomPlan>, Til
             }
             Ok(ZoomPlan {
                 zoom: z,
-                range: range_at(&s, lattice.window(), z),
+                range: range_at(&s, window, z),
                 max_error_m,
                 margin_m,
                 threshold_m: max_error_m - margin_m,

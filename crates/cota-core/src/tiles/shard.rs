@@ -15,10 +15,19 @@
 //! tiles at each zoom are one rectangle (a [`TileRange`]). The plan depends
 //! only on the zooms' ranges and `N`: every process computes the same one.
 //! A shard may be empty when `N` exceeds the bands the range allows.
+//!
+//! # Parts of the lattice
+//! The tiles of the *band zoom* ([`band_zoom`]: the coarsest zoom whose
+//! tiles are at most a quarter of a band, and not coarser than the lattice's
+//! alignment zoom) and finer are cut by each shard from its own part of the
+//! lattice ([`part_region`]): the squares of its tiles there, grown by half a
+//! band-zoom tile (the reach of their split points' diamonds) and rounded
+//! outwards to band-zoom tiles with the global diagonals. The tiles coarser
+//! than the band zoom straddle bands; they need the whole lattice.
 
 use super::error::TilesError;
 use super::plan::{TileRange, ZoomPlan};
-use super::scheme::TileId;
+use super::scheme::{GeographicScheme, TileId};
 
 /// One shard's part of the pyramid.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -52,6 +61,84 @@ impl Shard {
             (r.y0..=r.y1).flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z, x, y }))
         })
     }
+}
+
+impl Shard {
+    /// The same shard without its tiles coarser than zoom `z`.
+    pub fn from_zoom(&self, z: u8) -> Shard {
+        Shard {
+            ranges: self
+                .ranges
+                .iter()
+                .filter(|(k, _)| *k >= z)
+                .copied()
+                .collect(),
+            ..self.clone()
+        }
+    }
+}
+
+/// The band zoom of `shards` shards over `zooms` (coarse to fine) on a
+/// lattice of alignment zoom `align_zoom`: the coarsest zoom, not coarser
+/// than `align_zoom` nor the first of `zooms`, whose tiles span at most a
+/// quarter of the narrowest band (at least the finest zoom).
+pub fn band_zoom(zooms: &[ZoomPlan], align_zoom: u8, shards: u32) -> u8 {
+    let (Some(first), Some(finest)) = (zooms.first(), zooms.last()) else {
+        return align_zoom;
+    };
+    let f = finest.range;
+    let len = (f.x1 - f.x0).max(f.y1 - f.y0) + 1;
+    let band = len / shards.max(1);
+    let mut z = finest.zoom;
+    while z > first.zoom.max(align_zoom) && (1u32 << (finest.zoom - z + 1)) <= band / 4 {
+        z -= 1;
+    }
+    z
+}
+
+/// The region (`[x0, y0, x1, y1]` global lattice, inclusive) of the window
+/// `window` that `shard`'s tiles of zoom `band` and finer need (see the
+/// module docs), `None` when it has none there.
+pub fn part_region(
+    shard: &Shard,
+    scheme: &GeographicScheme,
+    window: [u64; 4],
+    band: u8,
+) -> Option<[u64; 4]> {
+    let t = scheme.cells_at(band);
+    let mut bbox: Option<[u64; 4]> = None;
+    for &(z, r) in shard.ranges.iter().filter(|(z, _)| *z >= band) {
+        let c = scheme.cells_at(z);
+        let ny = u64::from(GeographicScheme::tiles_at(z)[1]);
+        let sq = [
+            u64::from(r.x0) * c,
+            (ny - 1 - u64::from(r.y1)) * c,
+            (u64::from(r.x1) + 1) * c,
+            (ny - u64::from(r.y0)) * c,
+        ];
+        bbox = Some(bbox.map_or(sq, |b| {
+            [
+                b[0].min(sq[0]),
+                b[1].min(sq[1]),
+                b[2].max(sq[2]),
+                b[3].max(sq[3]),
+            ]
+        }));
+    }
+    let b = bbox?;
+    let lo = |v: u64, min: u64| (v.saturating_sub(t / 2) / t * t).max(min);
+    let hi = |v: u64, max: u64| ((v + t / 2).div_ceil(t) * t).min(max);
+    let (mut x0, mut y0) = (lo(b[0], window[0]), lo(b[1], window[1]));
+    let (x1, y1) = (hi(b[2], window[2]), hi(b[3], window[3]));
+    // The global diagonals: `(x0 + y0) / t` even (the window's origin is).
+    if !(x0 / t + y0 / t).is_multiple_of(2) {
+        if x0 >= window[0] + t {
+            x0 -= t;
+        } else {
+            y0 -= t;
+        }
+    }
+    Some([x0, y0, x1, y1])
 }
 
 /// The band of each position along the cut axis at the finest zoom:

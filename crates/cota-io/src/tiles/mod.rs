@@ -43,4 +43,7 @@ pub use pyramid::{
 };
 pub use quantized_mesh::{encode, encode_tile, EncodeError, Extensions, TileExtensions, TileFrame};
 pub use seams::{compare_border, edge_lists_match, BorderCheck, Neighbour};
-pub use shard::{reduce_shards, shard_record_path, write_shard, ReduceReport};
+pub use shard::{
+    read_shard_frame, reduce_shards, shard_frame_path, shard_record_path, write_coarse,
+    write_shard, write_shard_frame, ReduceReport, ShardFrame,
+};

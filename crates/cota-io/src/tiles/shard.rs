@@ -2,14 +2,22 @@
 //! ([`cota_core::tiles::shard_plan`]) into one directory and records it in a
 //! small file; the reduce checks the `N` records and writes `layer.json`.
 //!
-//! Every shard prepares the same global hierarchy from the whole input (the
-//! tiles of a zoom depend on the errors of the whole lattice, and its plan
-//! on the lattice's height range and steps), then cuts only its own tiles:
-//! each tile is therefore byte for byte the tile a single process writes,
-//! and the directory after the reduce is byte-identical to
-//! [`super::write_pyramid`]'s. What the shards divide is the cutting,
-//! encoding, checking and writing of the tiles, not the memory of the
-//! hierarchy.
+//! Two ways to run a shard, both byte for byte the tiles a single process
+//! writes, so the directory after the reduce is byte-identical to
+//! [`super::write_pyramid`]'s:
+//!
+//! * **Parts** (after the plan step): the plan step reads the whole input
+//!   once, writes the tiles coarser than the band zoom
+//!   ([`cota_core::tiles::band_zoom`]: they straddle bands and need the
+//!   whole lattice) with [`write_coarse`], and records in
+//!   `OUT/.cota-shards-N.json` ([`ShardFrame`]) what every shard needs of the
+//!   whole: the lattice's frame, its statistics (height range, largest
+//!   step: they set every zoom's threshold) and where each input file lies.
+//!   A shard then reads only the files its part of the lattice reads
+//!   ([`cota_core::tiles::part_region`]), resamples and builds the bitree of
+//!   that part only, and cuts its tiles of the band zoom and finer.
+//! * **Whole** (no plan step): every shard prepares the whole hierarchy from
+//!   the whole input and cuts only its own tiles (all zooms).
 //!
 //! * A shard is **idempotent**: it skips the tiles already there (written
 //!   atomically, so complete), and its record is written atomically after
@@ -17,12 +25,13 @@
 //! * The record `OUT/.cota-shard-I-of-N.json` holds the run manifest and the
 //!   text of `layer.json`; the reduce refuses records that disagree or are
 //!   missing (naming them), removes the temporary files a killed process
-//!   left, writes `layer.json` and removes the records.
+//!   left, writes `layer.json` and removes the records and the frame.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use cota_core::tiles::{Prepared, Shard};
+use cota_core::tiles::{GeographicScheme, LatticeFrame, LatticeStats, Prepared, Shard, TileId};
+use cota_core::{Crs, GeoRef, PixelIs};
 use serde_json::{json, Value};
 
 use super::layer::run_manifest;
@@ -34,6 +43,196 @@ use super::pyramid::{
 /// The record of shard `index` of `shards` under `out`.
 pub fn shard_record_path(out: &Path, index: u32, shards: u32) -> PathBuf {
     out.join(format!(".cota-shard-{index}-of-{shards}.json"))
+}
+
+/// What the plan step records for shards that hold only their part of the
+/// lattice: `OUT/.cota-shards-N.json`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShardFrame {
+    /// The settings it was made with (a shard with other settings refuses it).
+    pub key: String,
+    /// The number of shards.
+    pub shards: u32,
+    /// The band zoom: the tiles coarser than it were written by the plan step.
+    pub band_zoom: u8,
+    /// The whole lattice's frame.
+    pub frame: LatticeFrame,
+    /// The whole lattice's statistics.
+    pub stats: LatticeStats,
+    /// Each input file and its samples in the whole source, `[c0, r0, c1,
+    /// r1]` inclusive; empty when a shard must read every file (voids to
+    /// fill, a `--bbox`, a single file).
+    pub files: Vec<(String, [usize; 4])>,
+}
+
+/// The path of the frame of `shards` shards under `out`.
+pub fn shard_frame_path(out: &Path, shards: u32) -> PathBuf {
+    out.join(format!(".cota-shards-{shards}.json"))
+}
+
+/// An `f64` as the hexadecimal of its bits: JSON numbers do not round-trip
+/// every `f64` exactly through serde_json's parser.
+fn bits(v: f64) -> String {
+    format!("{:016x}", v.to_bits())
+}
+
+fn unbits(v: &Value) -> Option<f64> {
+    u64::from_str_radix(v.as_str()?, 16)
+        .ok()
+        .map(f64::from_bits)
+}
+
+impl ShardFrame {
+    fn to_json(&self) -> Value {
+        let (f, g) = (&self.frame, &self.frame.source_georef);
+        json!({
+            "key": self.key,
+            "shards": self.shards,
+            "band_zoom": self.band_zoom,
+            "max_zoom": f.scheme.max_zoom,
+            "tile_cells": f.scheme.tile_cells,
+            "footprint": f.footprint.map(bits),
+            "window": f.window,
+            "align_zoom": f.align_zoom,
+            "source": [bits(g.origin_x), bits(g.origin_y), bits(g.pixel_x), bits(g.pixel_y)],
+            "source_area": matches!(g.pixel_is, PixelIs::Area),
+            "source_size": f.source_size,
+            "stats": [bits(f64::from(self.stats.lo_m)), bits(f64::from(self.stats.hi_m)), bits(self.stats.max_step_m)],
+            "files": self.files.iter().map(|(p, e)| json!([p, e])).collect::<Vec<_>>(),
+        })
+    }
+
+    fn from_json(v: &Value) -> Option<ShardFrame> {
+        let f64s = |k: &str, n: usize| -> Option<Vec<f64>> {
+            let a = v[k].as_array()?;
+            (a.len() == n).then_some(())?;
+            a.iter().map(unbits).collect()
+        };
+        let u64s =
+            |v: &Value| -> Option<Vec<u64>> { v.as_array()?.iter().map(Value::as_u64).collect() };
+        let small = |k: &str| v[k].as_u64().and_then(|n| u8::try_from(n).ok());
+        let fp = f64s("footprint", 4)?;
+        let src = f64s("source", 4)?;
+        let st = f64s("stats", 3)?;
+        let win = u64s(&v["window"])?;
+        let size = u64s(&v["source_size"])?;
+        let files = v["files"]
+            .as_array()?
+            .iter()
+            .map(|f| {
+                let e = u64s(&f[1])?;
+                let e: Vec<usize> = e
+                    .iter()
+                    .map(|&n| usize::try_from(n).ok())
+                    .collect::<Option<_>>()?;
+                Some((f[0].as_str()?.to_owned(), <[usize; 4]>::try_from(e).ok()?))
+            })
+            .collect::<Option<Vec<_>>>()?;
+        Some(ShardFrame {
+            key: v["key"].as_str()?.to_owned(),
+            shards: u32::try_from(v["shards"].as_u64()?).ok()?,
+            band_zoom: small("band_zoom")?,
+            frame: LatticeFrame {
+                scheme: GeographicScheme {
+                    max_zoom: small("max_zoom")?,
+                    tile_cells: u32::try_from(v["tile_cells"].as_u64()?).ok()?,
+                },
+                footprint: [fp[0], fp[1], fp[2], fp[3]],
+                window: <[u64; 4]>::try_from(win).ok()?,
+                align_zoom: small("align_zoom")?,
+                source_georef: GeoRef {
+                    crs: Crs::Epsg(4326),
+                    origin_x: src[0],
+                    origin_y: src[1],
+                    pixel_x: src[2],
+                    pixel_y: src[3],
+                    pixel_is: if v["source_area"].as_bool()? {
+                        PixelIs::Area
+                    } else {
+                        PixelIs::Point
+                    },
+                    known: true,
+                },
+                source_size: [
+                    usize::try_from(size.first().copied()?).ok()?,
+                    usize::try_from(size.get(1).copied()?).ok()?,
+                ],
+            },
+            stats: LatticeStats {
+                lo_m: st[0] as f32,
+                hi_m: st[1] as f32,
+                max_step_m: st[2],
+            },
+            files,
+        })
+    }
+}
+
+/// A window inside the world, at least a cell wide and high.
+fn sane_window(w: [u64; 4], s: &GeographicScheme) -> bool {
+    w[0] < w[2] && w[1] < w[3] && w[2] <= 2 * s.root_cells() && w[3] <= s.root_cells()
+}
+
+/// Writes `frame` to [`shard_frame_path`] atomically.
+///
+/// # Errors
+/// [`PyramidError::Io`].
+pub fn write_shard_frame(out: &Path, frame: &ShardFrame) -> Result<(), PyramidError> {
+    let text = format!("{}\n", frame.to_json());
+    write_file_atomically(&shard_frame_path(out, frame.shards), text.as_bytes(), false)
+}
+
+/// The frame of `shards` shards under `out`, `None` when there is none.
+///
+/// # Errors
+/// [`PyramidError::Shard`] for a file that is not a frame.
+pub fn read_shard_frame(out: &Path, shards: u32) -> Result<Option<ShardFrame>, PyramidError> {
+    let path = shard_frame_path(out, shards);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let v = read_record(&path)?;
+    ShardFrame::from_json(&v)
+        .filter(|f| {
+            let s = &f.frame.scheme;
+            f.band_zoom <= s.max_zoom
+                && f.frame.align_zoom <= f.band_zoom
+                && s.tile_cells.is_power_of_two()
+                && (2..=4096).contains(&s.tile_cells)
+                && s.max_zoom <= 30 - s.tile_cells.trailing_zeros() as u8
+                && f.shards > 0
+                && sane_window(f.frame.window, s)
+                && f.frame.source_size.iter().all(|&n| n >= 2)
+                && f.stats.lo_m.is_finite()
+                && f.stats.hi_m.is_finite()
+                && f.stats.max_step_m.is_finite()
+        })
+        .map(Some)
+        .ok_or_else(|| PyramidError::Shard {
+            path,
+            message: "expected the plan step's frame (key, shards, band_zoom, window, source, stats, files, a valid scheme), found another JSON object".into(),
+        })
+}
+
+/// Writes every tile of `prep` coarser than zoom `band` (the plan step of
+/// sharded runs over parts; skipping those already there unless `force`).
+///
+/// # Errors
+/// As [`super::write_pyramid`].
+pub fn write_coarse(
+    prep: &Prepared<'_>,
+    out: &Path,
+    opts: &PyramidOptions,
+    band: u8,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<PyramidReport, PyramidError> {
+    let t0 = Instant::now();
+    let tiles: Vec<TileId> = prep.tiles().filter(|t| t.z < band).collect();
+    let outcomes = write_tiles(prep, out, opts, &tiles, progress)?;
+    Ok(PyramidReport {
+        zooms: fold(prep, &outcomes),
+        seconds: t0.elapsed().as_secs_f64(),
+    })
 }
 
 /// Writes the tiles of `shard` under `out` (skipping those already there
@@ -185,7 +384,8 @@ pub fn reduce_shards(
     let (layer, tiles) = agreed(&paths, &records, &run, &manifest)?;
     remove_temporaries(out)?;
     write_file_atomically(&out.join("layer.json"), layer.as_bytes(), replace_read_only)?;
-    for p in &paths {
+    let frame = shard_frame_path(out, shards);
+    for p in paths.iter().chain(frame.is_file().then_some(&frame)) {
         std::fs::remove_file(p).map_err(|source| PyramidError::Io {
             path: p.clone(),
             source,

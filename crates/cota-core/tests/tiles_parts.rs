@@ -1,0 +1,134 @@
+//! Sharded tiling over parts of the lattice (issue 20): a part resampled
+//! from a crop of the source holds the whole lattice's heights bit for bit,
+//! and its bitree cuts every tile it holds exactly as the whole hierarchy
+//! does, for every shard of 1 to 4.
+#![allow(clippy::unwrap_used, clippy::panic)]
+
+use cota_core::tiles::plan::plan;
+use cota_core::tiles::{
+    band_zoom, part_region, shard_plan, Lattice, LatticeOptions, LatticeStats, Prepared,
+    SourcePart, TilerOptions,
+};
+use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
+
+/// A 1.2°×0.6° geographic grid at 0.002° with ridges at several scales.
+fn source() -> HeightGrid {
+    let (w, h) = (601, 301);
+    let heights = (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            400.0
+                + 150.0 * (x * 0.031).sin() * (y * 0.043).cos()
+                + 25.0 * (x * 0.37 + y * 0.21).sin()
+                + 4.0 * ((x * 1.7).sin() * (y * 2.3).cos())
+        })
+        .collect();
+    let georef = GeoRef {
+        crs: Crs::WGS84,
+        origin_x: 10.3,
+        origin_y: 0.9,
+        pixel_x: 0.002,
+        pixel_y: -0.002,
+        pixel_is: PixelIs::Point,
+        known: true,
+    };
+    HeightGrid::new(w, h, heights, georef).unwrap()
+}
+
+/// Columns `c0..=c1` and rows `r0..=r1` of `g` as a grid of their own.
+fn crop(g: &HeightGrid, [c0, r0, c1, r1]: [usize; 4]) -> HeightGrid {
+    let heights = (r0..=r1)
+        .flat_map(|r| (c0..=c1).map(move |c| (r, c)))
+        .map(|(r, c)| g.get(c, r))
+        .collect();
+    let mut geo = g.georef().clone();
+    geo.origin_x += c0 as f64 * geo.pixel_x;
+    geo.origin_y += r0 as f64 * geo.pixel_y;
+    HeightGrid::new(c1 - c0 + 1, r1 - r0 + 1, heights, geo).unwrap()
+}
+
+#[test]
+fn parts_cut_the_tiles_of_the_whole_hierarchy() {
+    let src = source();
+    let whole = Lattice::resample(&src, &LatticeOptions::DEFAULT).unwrap();
+    let opts = TilerOptions::DEFAULT.with_min_zoom(3);
+    let prep = Prepared::new(&whole, &opts).unwrap();
+    let zooms = plan(&whole, &opts).unwrap();
+    let stats = LatticeStats::of(&whole);
+    let frame = whole.frame().clone();
+    let mut parts_seen = 0;
+    for n in 1..=4 {
+        let band = band_zoom(&zooms, whole.align_zoom(), n);
+        for shard in shard_plan(&zooms, n).unwrap() {
+            let shard = shard.from_zoom(band);
+            let Some(region) = part_region(&shard, &frame.scheme, frame.window, band) else {
+                continue;
+            };
+            let span = frame.source_span(region).unwrap();
+            let sub = crop(&src, span);
+            let part = SourcePart {
+                grid: &sub,
+                offset: [span[0], span[1]],
+            };
+            let lat = Lattice::resample_part(&frame, part, region).unwrap();
+            parts_seen += usize::from(lat.is_part());
+            // Bit for bit the whole lattice's heights.
+            for r in region[1]..=region[3] {
+                for c in region[0]..=region[2] {
+                    assert_eq!(
+                        lat.height_at(c, r).to_bits(),
+                        whole.height_at(c, r).to_bits(),
+                        "({c}, {r})"
+                    );
+                }
+            }
+            let zs = cota_core::tiles::plan::plan_with(&frame.scheme, frame.window, &stats, &opts)
+                .unwrap();
+            assert_eq!(zs, zooms);
+            let part_prep = Prepared::new_part(&lat, zs).unwrap();
+            for t in shard.tiles() {
+                assert!(part_prep.holds(t), "{t} n={n}");
+                let (a, b) = (
+                    prep.cut(t, true, true).unwrap(),
+                    part_prep.cut(t, true, true).unwrap(),
+                );
+                assert_eq!(
+                    format!("{:?}", a.mesh),
+                    format!("{:?}", b.mesh),
+                    "{t} n={n}"
+                );
+                assert_eq!(a.normals_enu, b.normals_enu, "{t} n={n}");
+                assert_eq!(a.water_mask, b.water_mask, "{t} n={n}");
+            }
+            if lat.is_part() {
+                // A tile above the band zoom straddles parts: refused.
+                let coarse = prep.tiles().find(|t| t.z < whole.align_zoom());
+                if let Some(t) = coarse {
+                    assert!(part_prep.cut(t, false, false).is_err(), "{t}");
+                }
+            }
+        }
+    }
+    assert!(
+        parts_seen >= 4,
+        "only {parts_seen} parts smaller than the window"
+    );
+}
+
+#[test]
+fn a_part_refuses_a_source_crop_that_misses_what_it_reads() {
+    let src = source();
+    let whole = Lattice::resample(&src, &LatticeOptions::DEFAULT).unwrap();
+    let frame = whole.frame().clone();
+    let w = frame.window;
+    let t = frame.scheme.cells_at(whole.align_zoom());
+    let region = [w[0], w[1], w[2].min(w[0] + 4 * t), w[3]];
+    let span = frame.source_span(region).unwrap();
+    let sub = crop(&src, [span[0] + 2, span[1], span[2], span[3]]);
+    let part = SourcePart {
+        grid: &sub,
+        offset: [span[0] + 2, span[1]],
+    };
+    let err = Lattice::resample_part(&frame, part, region).unwrap_err();
+    assert!(err.to_string().contains("covering"), "{err}");
+}
