@@ -125,7 +125,7 @@ impl<'a> Fine<'a> {
     /// largest change of an unknown.
     pub(super) fn sweep(&mut self) -> f32 {
         let (mask, w, h, wx, wy) = (&self.mask, self.w, self.h, self.wx, self.wy);
-        two_pass(&mut self.rows, |first, band, above, below| {
+        two_pass(&mut self.rows, w, |first, band, above, below| {
             let mut change = 0f32;
             for colour in 0..2 {
                 for i in 0..band.len() {

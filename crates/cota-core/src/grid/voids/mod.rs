@@ -83,7 +83,6 @@ mod fine;
 mod harmonic;
 mod idw;
 mod interp;
-mod pyramid;
 
 use rayon::prelude::*;
 
