@@ -14,7 +14,7 @@ use rayon::prelude::*;
 pub(super) const BAND_ROWS: usize = 32;
 
 /// Levels of fewer cells than this are worked on by one thread: the small
-/// coarse levels are visited thousands of times per cycle (W-cycles), where
+/// coarse levels are visited hundreds of times per cycle (W-cycles), where
 /// handing out the work would cost more than the work.
 pub(super) const PARALLEL_CELLS: usize = 1 << 15;
 
