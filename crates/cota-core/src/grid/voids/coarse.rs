@@ -115,7 +115,7 @@ impl Coarse {
 
     /// The next coarser level.
     pub(super) fn coarsen(&self) -> Coarse {
-        let prev = &*self;
+        let prev = self;
         let mut c = Coarse::empty(prev.w.div_ceil(2), prev.h.div_ceil(2));
         c.fill_blocks(|cx, cy| {
             let (mut unknown, mut known) = (false, false);

@@ -47,7 +47,7 @@ pub(super) fn harmonic(fine: &mut Fine<'_>, tolerance_m: f64, max_iterations: us
         return s;
     }
     let mut levels = vec![Coarse::from_fine(fine)];
-    while let Some(last) = levels.last_mut() {
+    while let Some(last) = levels.last() {
         if last.unknowns <= COARSEST_UNKNOWNS {
             break;
         }
