@@ -10,6 +10,9 @@
 //! the median of the per-round ratios. The fill's copy of the grid is not
 //! timed.
 //!
+//! `--tolerance-m T` and `--max-cycles N` set [`FillOptions::tolerance_m`]
+//! and [`FillOptions::max_iterations`] (to make a converged reference).
+//!
 //! `--write-void OUT.f32` and `--write-filled OUT.f32` write the blanked and
 //! the filled grid as raw little-endian `f32` (row-major from the north-west
 //! corner, NaN for voids), to compare fills between versions;
@@ -77,13 +80,20 @@ fn flag<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let rounds: usize = flag(&args, "--rounds").unwrap_or("7").parse()?;
+    let mut opts = FillOptions::DEFAULT;
+    if let Some(t) = flag(&args, "--tolerance-m") {
+        opts = opts.with_tolerance_m(t.parse()?);
+    }
+    if let Some(n) = flag(&args, "--max-cycles") {
+        opts = opts.with_max_iterations(n.parse()?);
+    }
     let void = blanked_3601()?;
     if let Some(out) = flag(&args, "--write-void") {
         write_raw(&void, Path::new(out))?;
     }
     let (mut fill_s, mut build_s, mut ratios) = (vec![], vec![], vec![]);
     let mut filled = void.clone();
-    let report = fill_voids(&mut filled, &FillOptions::DEFAULT)?;
+    let report = fill_voids(&mut filled, &opts)?;
     println!(
         "grid {}x{}: {} voids in {} components, largest {}; {} cycles, converged {}, last change {:.2e} m",
         void.width(),
@@ -99,7 +109,7 @@ fn main() -> anyhow::Result<()> {
         let mut g = void.clone();
         let mut time_fill = || -> anyhow::Result<f64> {
             let t = Instant::now();
-            fill_voids(&mut g, &FillOptions::DEFAULT)?;
+            fill_voids(&mut g, &opts)?;
             Ok(t.elapsed().as_secs_f64())
         };
         let time_build = || -> anyhow::Result<f64> {

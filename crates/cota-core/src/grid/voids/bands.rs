@@ -13,14 +13,31 @@ use rayon::prelude::*;
 /// Rows per band.
 pub(super) const BAND_ROWS: usize = 32;
 
+/// Levels of fewer cells than this are worked on by one thread: the small
+/// coarse levels are visited hundreds of times per cycle (W-cycles), where
+/// handing out the work would cost more than the work.
+pub(super) const PARALLEL_CELLS: usize = 1 << 15;
+
+/// Rows of `width` cells per parallel task for a level's row-wise loops: a
+/// level of fewer than [`PARALLEL_CELLS`] cells is one task.
+pub(super) fn min_rows(width: usize) -> usize {
+    PARALLEL_CELLS.div_ceil(width.max(1))
+}
+
 /// Calls `f(first_row, band, above, below)` for every band of `rows`, even
 /// bands in parallel, then odd ones; `above` is the row just above the band
 /// (`None` for the first), `below` the row just below (`None` for the last).
-/// Returns the largest value `f` returned.
+/// Returns the largest value `f` returned. Rows of `width` cells: a level
+/// of fewer than [`PARALLEL_CELLS`] cells is done on this thread, in the
+/// same order (so with the same result).
 pub(super) fn two_pass<T: Send + Sync>(
     rows: &mut [T],
+    width: usize,
     f: impl Fn(usize, &mut [T], Option<&T>, Option<&T>) -> f32 + Sync,
 ) -> f32 {
+    if rows.len() * width < PARALLEL_CELLS {
+        return one_thread(rows, f);
+    }
     let mut max = 0f32;
     for parity in 0..2 {
         let mut work: Vec<(usize, &mut [T])> = Vec::new();
@@ -49,6 +66,26 @@ pub(super) fn two_pass<T: Send + Sync>(
     max
 }
 
+/// [`two_pass`] on this thread: the even bands, then the odd ones.
+fn one_thread<T>(
+    rows: &mut [T],
+    f: impl Fn(usize, &mut [T], Option<&T>, Option<&T>) -> f32,
+) -> f32 {
+    let mut max = 0f32;
+    let n = rows.len();
+    for parity in 0..2 {
+        let mut first = parity * BAND_ROWS;
+        while first < n {
+            let last = (first + BAND_ROWS).min(n);
+            let (head, tail) = rows.split_at_mut(first);
+            let (band, rest) = tail.split_at_mut(last - first);
+            max = max.max(f(first, band, head.last(), rest.first()));
+            first += 2 * BAND_ROWS;
+        }
+    }
+    max
+}
+
 /// Row `i` of `band` mutably, with the rows just above and below it (from the
 /// band, else `above` / `below`).
 pub(super) fn row_with_neighbours<'b, T>(
@@ -70,9 +107,16 @@ mod test {
 
     #[test]
     fn every_row_once_with_its_neighbours() {
+        // Width 1: on this thread; the whole width: in parallel.
+        for width in [1, PARALLEL_CELLS] {
+            rows_once(width);
+        }
+    }
+
+    fn rows_once(width: usize) {
         let mut rows: Vec<Vec<f32>> = (0..100).map(|y| vec![y as f32]).collect();
         let seen = std::sync::Mutex::new(Vec::new());
-        two_pass(&mut rows, |first, band, above, below| {
+        two_pass(&mut rows, width, |first, band, above, below| {
             assert_eq!(above.map(|r| r[0] as usize), first.checked_sub(1));
             let last = first + band.len() - 1;
             assert_eq!(

@@ -11,8 +11,9 @@
 //! place and strength on every level, and no coarse problem is singular.
 //! Each level stores per cell its value, right-hand side, the couplings to
 //! its east and south neighbours (the west and north ones are its
-//! neighbours'), its diagonal and its state: 21 bytes, so all coarse levels
-//! together take about 7 bytes per sample of the component's box.
+//! neighbours'), the Dirichlet part of its diagonal (the diagonal is summed
+//! when used) and its state: 21 bytes, so all coarse levels together take
+//! about 7 bytes per sample of the component's box.
 //!
 //! Briggs, Henson & McCormick, *A Multigrid Tutorial* (2nd ed., SIAM 2000):
 //! Galerkin coarse operators, full-weighting-like summed restriction,
@@ -20,10 +21,10 @@
 
 use rayon::prelude::*;
 
-use super::bands::{row_with_neighbours, two_pass};
+use super::bands::{min_rows, row_with_neighbours, two_pass, PARALLEL_CELLS};
 use super::dense::solve_dense;
 use super::fine::{for_each_bit, Cell, Fine};
-use super::interp::{bilinear, ABSENT, KNOWN, UNKNOWN};
+use super::interp::{ABSENT, KNOWN, UNKNOWN};
 
 /// Scale of the couplings between coarse cells: 1/2 makes the product with
 /// piecewise-constant interpolation agree, away from the boundary, with the
@@ -42,9 +43,8 @@ pub(super) struct Coarse {
     rhs: Vec<f32>,
     east: Vec<f32>,
     south: Vec<f32>,
-    /// The diagonal at unknowns, 0 elsewhere.
-    diag: Vec<f32>,
-    /// The Dirichlet part of the diagonal, kept until the next level is built.
+    /// The Dirichlet part of the diagonal at unknowns, 0 elsewhere (the
+    /// diagonal is this plus the cell's four couplings, summed when used).
     dirichlet: Vec<f32>,
     /// Number of unknown cells.
     pub(super) unknowns: usize,
@@ -72,7 +72,6 @@ impl Coarse {
             rhs: vec![0.0; n],
             east: vec![0.0; n],
             south: vec![0.0; n],
-            diag: vec![0.0; n],
             dirichlet: vec![0.0; n],
             unknowns: 0,
         }
@@ -114,9 +113,9 @@ impl Coarse {
         c
     }
 
-    /// The next coarser level. Frees this level's Dirichlet parts.
-    pub(super) fn coarsen(&mut self) -> Coarse {
-        let prev = &*self;
+    /// The next coarser level.
+    pub(super) fn coarsen(&self) -> Coarse {
+        let prev = self;
         let mut c = Coarse::empty(prev.w.div_ceil(2), prev.h.div_ceil(2));
         c.fill_blocks(|cx, cy| {
             let (mut unknown, mut known) = (false, false);
@@ -144,12 +143,11 @@ impl Coarse {
             }
             (state_of(unknown, known), coef)
         });
-        self.dirichlet = Vec::new();
         c
     }
 
     /// Sets every cell from `block(x, y)` (in parallel over rows), then the
-    /// diagonals and the unknown count.
+    /// unknown count.
     fn fill_blocks(&mut self, block: impl Fn(usize, usize) -> (u8, BlockCoef) + Sync) {
         let (s, w, h) = (self.stride, self.w, self.h);
         self.state
@@ -159,6 +157,7 @@ impl Coarse {
             .zip(self.dirichlet.par_chunks_mut(s))
             .skip(1)
             .take(h)
+            .with_min_len(min_rows(s))
             .enumerate()
             .for_each(|(y, (((state, east), south), dirichlet))| {
                 for x in 0..w {
@@ -171,19 +170,15 @@ impl Coarse {
                     }
                 }
             });
-        let mut unknowns = 0;
-        for i in s..s * (h + 1) {
-            if self.state[i] == UNKNOWN {
-                unknowns += 1;
-                let sum = f64::from(self.dirichlet[i])
-                    + f64::from(self.east[i])
-                    + f64::from(self.east[i - 1])
-                    + f64::from(self.south[i])
-                    + f64::from(self.south[i - s]);
-                self.diag[i] = sum as f32;
-            }
-        }
-        self.unknowns = unknowns;
+        self.unknowns = self.state.iter().filter(|&&st| st == UNKNOWN).count();
+    }
+
+    /// The diagonal of the framed cell `j` (an unknown): its Dirichlet part
+    /// plus its four couplings.
+    #[inline]
+    fn diag(&self, j: usize) -> f32 {
+        let s = self.stride;
+        self.dirichlet[j] + self.east[j - 1] + self.east[j] + self.south[j - s] + self.south[j]
     }
 
     /// The residual of the framed cell `j`: `rhs + Σ c·v_nb − diag·v`.
@@ -195,42 +190,72 @@ impl Coarse {
             + self.east[j] * v[j + 1]
             + self.south[j - s] * v[j - s]
             + self.south[j] * v[j + s]
-            - self.diag[j] * v[j]
+            - self.diag(j) * v[j]
     }
 
-    /// One red–black Gauss–Seidel sweep (by bands); returns the largest change.
+    /// One red–black Gauss–Seidel sweep (by bands); returns the largest
+    /// change. Inside a band the two colours go as one wavefront (the red
+    /// cells of a row, then the black ones of the row above, whose
+    /// neighbours are all updated by then): the same result as all red
+    /// cells, then all black ones, in one pass over the memory.
     pub(super) fn sweep(&mut self) -> f32 {
-        let (s, w) = (self.stride, self.w);
-        let (rhs, east, south, diag) = (&self.rhs, &self.east, &self.south, &self.diag);
-        let mut rows: Vec<&mut [f32]> = self.value[s..s * (self.h + 1)].chunks_mut(s).collect();
-        two_pass(&mut rows, |first, band, above, below| {
+        let s = self.stride;
+        let zeros = vec![0f32; s];
+        let (rows_start, rows_end) = (s, s * (self.h + 1));
+        // The values are taken out for the while: `relax_row` reads the
+        // level's coefficients only.
+        let mut values = std::mem::take(&mut self.value);
+        let this = &*self;
+        let mut rows: Vec<&mut [f32]> = values[rows_start..rows_end].chunks_mut(s).collect();
+        let change = two_pass(&mut rows, s, |first, band, above, below| {
             let mut change = 0f32;
-            for colour in 0..2 {
-                for i in 0..band.len() {
-                    let y = first + i;
-                    let (mid, up, down) = row_with_neighbours(band, i, above, below);
-                    let base = (y + 1) * s;
-                    for x in ((y + colour) % 2..w).step_by(2) {
-                        let j = base + x + 1;
-                        let d = diag[j];
-                        if d <= 0.0 {
-                            continue;
-                        }
-                        let mut t = rhs[j] + east[j - 1] * mid[x] + east[j] * mid[x + 2];
-                        if let Some(u) = up {
-                            t += south[j - s] * u[x + 1];
-                        }
-                        if let Some(dn) = down {
-                            t += south[j] * dn[x + 1];
-                        }
-                        let new = t / d;
-                        change = change.max((new - mid[x + 1]).abs());
-                        mid[x + 1] = new;
+            for step in 0..=band.len() {
+                for (i, colour) in [(step, 0), (step.wrapping_sub(1), 1)] {
+                    if i >= band.len() {
+                        continue;
                     }
+                    let (mid, up, down) = row_with_neighbours(band, i, above, below);
+                    let (up, down) = (up.map_or(&zeros[..], |r| r), down.map_or(&zeros[..], |r| r));
+                    change = change.max(this.relax_row(first + i, colour, mid, up, down));
                 }
             }
             change
-        })
+        });
+        self.value = values;
+        change
+    }
+
+    /// Relaxes the unknowns of row `y` (`mid`, framed) whose `(x + y) % 2`
+    /// is `colour`, with the framed rows `up` and `down` around it; returns
+    /// the largest change.
+    #[inline]
+    fn relax_row(&self, y: usize, colour: usize, mid: &mut [f32], up: &[f32], down: &[f32]) -> f32 {
+        let s = self.stride;
+        let base = (y + 1) * s;
+        let rhs = &self.rhs[base..base + s];
+        let east = &self.east[base..base + s];
+        let south = &self.south[base..base + s];
+        let north = &self.south[base - s..base];
+        let state = &self.state[base..base + s];
+        let dirichlet = &self.dirichlet[base..base + s];
+        let (up, down) = (&up[..s], &down[..s]);
+        let mid = &mut mid[..s];
+        let mut change = 0f32;
+        for j in ((y + colour) % 2 + 1..s - 1).step_by(2) {
+            if state[j] != UNKNOWN {
+                continue;
+            }
+            let d = dirichlet[j] + east[j - 1] + east[j] + north[j] + south[j];
+            let t = rhs[j]
+                + east[j - 1] * mid[j - 1]
+                + east[j] * mid[j + 1]
+                + north[j] * up[j]
+                + south[j] * down[j];
+            let new = t / d;
+            change = change.max((new - mid[j]).abs());
+            mid[j] = new;
+        }
+        change
     }
 
     /// Sets `next` (the level above) to the error equation of this one:
@@ -238,25 +263,31 @@ impl Coarse {
     pub(super) fn restrict(&self, next: &mut Coarse) {
         let (ns, nw) = (next.stride, next.w);
         next.value.fill(0.0);
-        next.rhs
-            .par_chunks_mut(ns)
-            .skip(1)
-            .take(next.h)
-            .enumerate()
-            .for_each(|(cy, rhs)| {
-                for cx in 0..nw {
-                    let mut r = 0f32;
-                    for py in 2 * cy..(2 * cy + 2).min(self.h) {
-                        for px in 2 * cx..(2 * cx + 2).min(self.w) {
-                            let j = self.at(px, py);
-                            if self.state[j] == UNKNOWN {
-                                r += self.residual(j);
-                            }
+        let task = |cy: usize, rhs: &mut [f32]| {
+            for cx in 0..nw {
+                let mut r = 0f32;
+                for py in 2 * cy..(2 * cy + 2).min(self.h) {
+                    for px in 2 * cx..(2 * cx + 2).min(self.w) {
+                        let j = self.at(px, py);
+                        if self.state[j] == UNKNOWN {
+                            r += self.residual(j);
                         }
                     }
-                    rhs[cx + 1] = r;
                 }
-            });
+                rhs[cx + 1] = r;
+            }
+        };
+        let rows = &mut next.rhs[ns..ns * (next.h + 1)];
+        if rows.len() < PARALLEL_CELLS {
+            rows.chunks_mut(ns)
+                .enumerate()
+                .for_each(|(cy, r)| task(cy, r));
+        } else {
+            rows.par_chunks_mut(ns)
+                .with_min_len(min_rows(ns))
+                .enumerate()
+                .for_each(|(cy, r)| task(cy, r));
+        }
     }
 
     /// Sets this level (the first coarse one) to the error equation of
@@ -268,6 +299,7 @@ impl Coarse {
             .par_chunks_mut(s)
             .skip(1)
             .take(self.h)
+            .with_min_len(min_rows(s))
             .enumerate()
             .for_each(|(cy, rhs)| {
                 rhs.fill(0.0);
@@ -281,41 +313,139 @@ impl Coarse {
     }
 
     /// Adds the interpolated correction of `next` (the level above) to this
-    /// level's unknowns.
+    /// level's unknowns (as [`Coarse::correct_fine`] does, one direction at
+    /// a time).
     pub(super) fn correct_from(&mut self, next: &Coarse) {
-        let (s, w) = (self.stride, self.w);
+        self.add_from(next, ABSENT);
+    }
+
+    /// Sets this level's unknowns to the interpolation of `next`'s unknowns
+    /// (its known cells left out: they hold no height): the full
+    /// multigrid's start on this level, from the solution on `next`.
+    pub(super) fn start_from(&mut self, next: &Coarse) {
+        self.value.fill(0.0);
+        self.add_from(next, KNOWN);
+    }
+
+    /// Sets `fine`'s unknowns to the interpolation of this level's unknowns
+    /// (as [`Coarse::start_from`]).
+    pub(super) fn start_fine(&self, fine: &mut Fine<'_>) {
+        self.add_to_fine(fine, KNOWN, true);
+    }
+
+    /// Adds to this level's unknowns the interpolation of `next`, leaving
+    /// out its cells whose state is `skip` (and the absent ones).
+    fn add_from(&mut self, next: &Coarse, skip: u8) {
+        let (s, ns) = (self.stride, next.stride);
         let state = &self.state;
-        self.value
-            .par_chunks_mut(s)
-            .skip(1)
-            .take(self.h)
-            .enumerate()
-            .for_each(|(y, row)| {
-                for x in 0..w {
-                    if state[(y + 1) * s + x + 1] == UNKNOWN {
-                        row[x + 1] += bilinear(&next.state, &next.value, next.stride, x, y);
-                    }
+        let task = |y: usize, row: &mut [f32], num: &mut Vec<f32>, den: &mut Vec<f32>| {
+            next.blend_rows_of(y, num, den, skip);
+            let st = &state[(y + 1) * s..(y + 2) * s];
+            for j in 1..s - 1 {
+                if st[j] != UNKNOWN {
+                    continue;
                 }
-            });
+                let x = j - 1;
+                let (x0, tx) = if x.is_multiple_of(2) {
+                    (x / 2, 0.75f32)
+                } else {
+                    (x / 2 + 1, 0.25)
+                };
+                let d = (1.0 - tx) * den[x0] + tx * den[x0 + 1];
+                let n = (1.0 - tx) * num[x0] + tx * num[x0 + 1];
+                row[j] += if d > 0.0 { n / d } else { 0.0 };
+            }
+        };
+        let rows = &mut self.value[s..s * (self.h + 1)];
+        if rows.len() < PARALLEL_CELLS {
+            let (mut num, mut den) = (vec![0f32; ns], vec![0f32; ns]);
+            for (y, row) in rows.chunks_mut(s).enumerate() {
+                task(y, row, &mut num, &mut den);
+            }
+        } else {
+            rows.par_chunks_mut(s)
+                .with_min_len(min_rows(s))
+                .enumerate()
+                .for_each_init(
+                    || (vec![0f32; ns], vec![0f32; ns]),
+                    |(num, den), (y, row)| task(y, row, num, den),
+                );
+        }
     }
 
     /// Adds the interpolated correction of this level to `fine`'s unknowns;
-    /// returns the largest correction.
+    /// returns the largest correction. The bilinear weights of
+    /// [`Coarse::blend_rows_of`], one direction at a time: each fine row
+    /// first blends its two coarse rows (values of present cells, and their
+    /// weights), then each unknown blends two columns of that and divides.
     pub(super) fn correct_fine(&self, fine: &mut Fine<'_>) -> f32 {
+        self.add_to_fine(fine, ABSENT, false)
+    }
+
+    /// Adds (or with `set`, writes) to `fine`'s unknowns the interpolation
+    /// of this level, leaving out its cells whose state is `skip`; returns
+    /// the largest value interpolated.
+    fn add_to_fine(&self, fine: &mut Fine<'_>, skip: u8, set: bool) -> f32 {
         let mask = &fine.mask;
         fine.rows
             .par_iter_mut()
+            .with_min_len(min_rows(fine.w))
             .enumerate()
-            .map(|(y, row)| {
-                let mut most = 0f32;
-                for_each_bit(mask.row(y), |x| {
-                    let c = bilinear(&self.state, &self.value, self.stride, x, y);
-                    row[x] += c;
-                    most = most.max(c.abs());
-                });
-                most
-            })
+            .map_init(
+                || (vec![0f32; self.stride], vec![0f32; self.stride]),
+                |(num, den), (y, row)| {
+                    self.blend_rows_of(y, num, den, skip);
+                    let mut most = 0f32;
+                    for_each_bit(mask.row(y), |x| {
+                        let (x0, tx) = if x.is_multiple_of(2) {
+                            (x / 2, 0.75f32)
+                        } else {
+                            (x / 2 + 1, 0.25)
+                        };
+                        let d = (1.0 - tx) * den[x0] + tx * den[x0 + 1];
+                        let n = (1.0 - tx) * num[x0] + tx * num[x0 + 1];
+                        let c = if d > 0.0 { n / d } else { 0.0 };
+                        row[x] = if set { c } else { row[x] + c };
+                        most = most.max(c.abs());
+                    });
+                    most
+                },
+            )
             .reduce(|| 0f32, f32::max)
+    }
+
+    /// For row `y` of the level below: the blend of this level's two framed
+    /// rows around it, per framed column, of the present cells' values
+    /// (`num`) and weights (`den`). Row `y` lies at coarse coordinate
+    /// `(y − 0.5)/2`, between the centres of blocks `y/2 − 1` and `y/2`
+    /// (weights 1/4, 3/4) when `y` is even, `y/2` and `y/2 + 1` (3/4, 1/4)
+    /// when odd; columns likewise (in the callers). Cells left out drop
+    /// out and the weights are renormalised; a cell's own block always
+    /// takes part, so an unknown always gets a value.
+    /// Cells whose state is `ABSENT` or `skip` are left out.
+    fn blend_rows_of(&self, y: usize, num: &mut [f32], den: &mut [f32], skip: u8) {
+        let (y0, ty) = if y.is_multiple_of(2) {
+            (y / 2, 0.75f32)
+        } else {
+            (y / 2 + 1, 0.25)
+        };
+        let s = self.stride;
+        let (upper, lower) = (y0 * s, (y0 + 1) * s);
+        for c in 0..s {
+            let present = |st: u8| st != ABSENT && st != skip;
+            let pu = if present(self.state[upper + c]) {
+                1.0 - ty
+            } else {
+                0.0
+            };
+            let pl = if present(self.state[lower + c]) {
+                ty
+            } else {
+                0.0
+            };
+            num[c] = pu * self.value[upper + c] + pl * self.value[lower + c];
+            den[c] = pu + pl;
+        }
     }
 
     /// Solves the level exactly (at most a few unknowns: dense Cholesky);
@@ -344,7 +474,7 @@ impl Coarse {
         let n = cells.len();
         let (mut a, mut b) = (vec![0f64; n * n], vec![0f64; n]);
         for (k, &j) in cells.iter().enumerate() {
-            a[k * n + k] = f64::from(self.diag[j]);
+            a[k * n + k] = f64::from(self.diag(j));
             b[k] = f64::from(self.rhs[j]);
             for (nb, c) in [
                 (j - 1, self.east[j - 1]),

@@ -122,13 +122,19 @@ impl<'a> Fine<'a> {
     }
 
     /// One red–black Gauss–Seidel sweep (by bands, see `bands`); returns the
-    /// largest change of an unknown.
+    /// largest change of an unknown. The same result as all red cells, then
+    /// all black ones.
     pub(super) fn sweep(&mut self) -> f32 {
         let (mask, w, h, wx, wy) = (&self.mask, self.w, self.h, self.wx, self.wy);
-        two_pass(&mut self.rows, |first, band, above, below| {
+        two_pass(&mut self.rows, w, |first, band, above, below| {
             let mut change = 0f32;
-            for colour in 0..2 {
-                for i in 0..band.len() {
+            // One wavefront (as `Coarse::sweep`): the red cells of a row,
+            // then the black ones of the row above.
+            for step in 0..=band.len() {
+                for (i, colour) in [(step, 0), (step.wrapping_sub(1), 1)] {
+                    if i >= band.len() {
+                        continue;
+                    }
                     let y = first + i;
                     let (mid, up, down) = row_with_neighbours(band, i, above, below);
                     let parity = (y + colour) % 2;
