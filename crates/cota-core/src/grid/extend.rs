@@ -1,0 +1,93 @@
+//! The clamp-to-edge extension of a grid whose span is odd (web tiles: 256
+//! or 512 samples wide), so that its hierarchy meets no unit-resolution
+//! border.
+//!
+//! The bitree of paper `000_ebf7e3a88dffd361.txt` §2 lives on a `2^k + 1`
+//! square; cota pads any grid to the smallest one and clips
+//! ([`crate::hierarchy`]), which meshes the east and south borders at the
+//! largest power of two dividing `W − 1` (`H − 1`): one sample when the span
+//! is odd. Martini (Agafonkin 2019, <https://github.com/mapbox/martini>)
+//! meshes a 256² tile as a 257² grid whose last row and column repeat the
+//! tile's. cota does the same on the side that needs it
+//! ([`extended_size`]), builds the hierarchy on the extended grid, and then
+//! clips the mesh back to the real rectangle ([`crate::mesh::clip`]), so the
+//! output covers exactly the real samples and the bound is proved on them.
+
+use super::HeightGrid;
+
+/// The size of the extended grid for a `width × height` grid, or `None`
+/// when no extension is needed (both spans even, or a `2^k + 1` grid).
+///
+/// An odd span `W − 1` is extended to the hierarchy's square, `N + 1` samples
+/// (`N = 2^k ≥ max(W − 1, H − 1)`), where its border is as coarse as a
+/// `2^k + 1` grid's. When that would more than double the samples, the side
+/// grows by one sample only (its span becomes even, the border at least two
+/// samples). The square's side `N` never changes.
+pub fn extended_size(width: usize, height: usize) -> Option<(usize, usize)> {
+    let odd = |n: usize| n >= 2 && (n - 1) % 2 == 1;
+    if !odd(width) && !odd(height) {
+        return None;
+    }
+    let span = width.max(height).saturating_sub(1).max(1);
+    let side = span.checked_next_power_of_two()? + 1;
+    let full = |n: usize| if odd(n) { side } else { n };
+    let (w, h) = (full(width), full(height));
+    if (w as u128) * (h as u128) <= 2 * (width as u128) * (height as u128) {
+        return Some((w, h));
+    }
+    let one = |n: usize| if odd(n) { n + 1 } else { n };
+    Some((one(width), one(height)))
+}
+
+/// `grid` extended to `width × height` samples: sample `(c, r)` beyond the
+/// grid repeats `(min(c, W − 1), min(r, H − 1))`. The georeference is the
+/// grid's (same origin and pixel size).
+///
+/// # Panics
+/// Never for sizes from [`extended_size`]; the sizes must not be smaller
+/// than the grid's.
+pub fn extend_clamped(grid: &HeightGrid, width: usize, height: usize) -> HeightGrid {
+    let (w, h) = (grid.width(), grid.height());
+    debug_assert!(width >= w && height >= h);
+    let src = grid.heights();
+    let mut out = Vec::with_capacity(width * height);
+    for r in 0..height {
+        let row = &src[r.min(h - 1) * w..][..w];
+        out.extend_from_slice(row);
+        let last = row[w - 1];
+        out.extend(std::iter::repeat_n(last, width - w));
+    }
+    HeightGrid {
+        width,
+        height,
+        heights: out,
+        georef: grid.georef().clone(),
+    }
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+    use crate::grid::GeoRef;
+
+    #[test]
+    fn sizes() {
+        assert_eq!(extended_size(513, 513), None);
+        assert_eq!(extended_size(1201, 1201), None);
+        assert_eq!(extended_size(512, 512), Some((513, 513)));
+        assert_eq!(extended_size(256, 256), Some((257, 257)));
+        assert_eq!(extended_size(512, 300), Some((513, 513)));
+        assert_eq!(extended_size(512, 301), Some((513, 301)));
+        // The square would be 1025² for 2050 samples: one more column only.
+        assert_eq!(extended_size(2, 1025), Some((3, 1025)));
+        assert_eq!(extended_size(1, 8), Some((1, 9)));
+    }
+
+    #[test]
+    fn repeats_the_last_row_and_column() {
+        let g = HeightGrid::new(2, 2, vec![1.0, 2.0, 3.0, 4.0], GeoRef::unreferenced(1.0)).unwrap();
+        let e = extend_clamped(&g, 3, 3);
+        assert_eq!(e.heights(), &[1.0, 2.0, 2.0, 3.0, 4.0, 4.0, 3.0, 4.0, 4.0]);
+        assert_eq!(e.georef(), g.georef());
+    }
+}
