@@ -208,6 +208,10 @@ pub struct Meshed {
     /// splits, valid for any criterion ([`crate::quadtree::QuadExtraction`]);
     /// `None` for the bitree.
     pub split_points: Option<PointCounts>,
+    /// The size of the clamp-extended grid the mesh was made on and clipped
+    /// from ([`MeshPlan::extend_odd_spans`]); `None` when it is the grid's
+    /// own hierarchy.
+    pub extended_to: Option<[usize; 2]>,
 }
 
 /// What the plans of one grid share, each part built the first time a plan
@@ -366,14 +370,14 @@ impl<'g> Mesher<'g> {
             Some(n) => ExtractOptions::max_triangles(n),
             None => ExtractOptions::max_error_m(bound_m),
         };
-        let (x, clipped) = match self.extended_with(plan, &|_, _| {})? {
+        let (x, extended_to) = match self.extended_with(plan, &|_, _| {})? {
             Some(t) => {
                 let x = t.extract(&opts)?;
-                let g = self.grid;
+                let (g, e) = (self.grid, t.grid());
                 let mesh = clip_to(&x.mesh, g.width() as u32, g.height() as u32);
-                (Extraction { mesh, ..x }, true)
+                (Extraction { mesh, ..x }, Some([e.width(), e.height()]))
             }
-            None => (self.bitree()?.extract(&opts)?, false),
+            None => (self.bitree()?.extract(&opts)?, None),
         };
         let vertices = x.mesh.vertex_count();
         Ok(Meshed {
@@ -389,8 +393,9 @@ impl<'g> Mesher<'g> {
             rounds: None,
             check: Mode::Conforming
                 .check_options(Some(x.threshold_m))
-                .with_clipped_border(clipped),
+                .with_clipped_border(extended_to.is_some()),
             split_points: None,
+            extended_to,
         })
     }
 
@@ -416,6 +421,7 @@ impl<'g> Mesher<'g> {
             rounds: None,
             check: CheckOptions::tin(x.threshold_m),
             split_points: None,
+            extended_to: None,
         })
     }
 
@@ -436,6 +442,7 @@ impl<'g> Mesher<'g> {
             rounds: Some(r.rounds),
             check: plan.mode.check_options(bound_m),
             split_points: None,
+            extended_to: None,
         })
     }
 
@@ -454,6 +461,7 @@ impl<'g> Mesher<'g> {
             rounds: Some(1),
             check: Mode::Conforming.check_options(bound_m),
             split_points: Some(x.points),
+            extended_to: None,
         })
     }
 }

@@ -18,25 +18,54 @@ use super::HeightGrid;
 /// The size of the extended grid for a `width × height` grid, or `None`
 /// when no extension is needed (both spans even, or a `2^k + 1` grid).
 ///
-/// An odd span `W − 1` is extended to the hierarchy's square, `N + 1` samples
-/// (`N = 2^k ≥ max(W − 1, H − 1)`), where its border is as coarse as a
-/// `2^k + 1` grid's. When that would more than double the samples, the side
-/// grows by one sample only (its span becomes even, the border at least two
-/// samples). The square's side `N` never changes.
+/// Only a side whose span is odd grows, so grids with even spans (SRTM's
+/// 1201 and 3601) mesh as before. It grows to the hierarchy's square,
+/// `N + 1` samples (`N = 2^k ≥ max(W − 1, H − 1)`), where its border is as
+/// coarse as a `2^k + 1` grid's, when the extended grid has at most twice
+/// the samples. Otherwise each odd side grows to the next multiple of the
+/// largest power of two `2^j` (plus one) within a factor 2 of its length
+/// (`√2` when both sides grow), at least by one sample (its span becomes
+/// even). The square's side `N` never changes.
 pub fn extended_size(width: usize, height: usize) -> Option<(usize, usize)> {
     let odd = |n: usize| n >= 2 && (n - 1) % 2 == 1;
     if !odd(width) && !odd(height) {
         return None;
     }
     let span = width.max(height).saturating_sub(1).max(1);
-    let side = span.checked_next_power_of_two()? + 1;
-    let full = |n: usize| if odd(n) { side } else { n };
+    let side = span.checked_next_power_of_two()?;
+    let full = |n: usize| if odd(n) { side + 1 } else { n };
     let (w, h) = (full(width), full(height));
     if (w as u128) * (h as u128) <= 2 * (width as u128) * (height as u128) {
         return Some((w, h));
     }
-    let one = |n: usize| if odd(n) { n + 1 } else { n };
-    Some((one(width), one(height)))
+    let growth = if odd(width) && odd(height) {
+        std::f64::consts::SQRT_2
+    } else {
+        2.0
+    };
+    let grow = |n: usize| {
+        if odd(n) {
+            grow_span(n, side, growth)
+        } else {
+            n
+        }
+    };
+    Some((grow(width), grow(height)))
+}
+
+/// `n` samples (an odd span) grown to `m − 1` a multiple of the largest
+/// power of two up to `side` with `m ≤ growth · n`, or to `n + 1`.
+fn grow_span(n: usize, side: usize, growth: f64) -> usize {
+    let limit = (n as f64 * growth) as usize;
+    let mut step = side;
+    while step > 2 {
+        let m = (n - 1).next_multiple_of(step) + 1;
+        if m <= limit {
+            return m;
+        }
+        step /= 2;
+    }
+    n + 1
 }
 
 /// `grid` extended to `width × height` samples: sample `(c, r)` beyond the
@@ -80,6 +109,10 @@ mod test {
         assert_eq!(extended_size(512, 301), Some((513, 301)));
         // The square would be 1025² for 2050 samples: one more column only.
         assert_eq!(extended_size(2, 1025), Some((3, 1025)));
+        // 513 rows would be 2.35× the samples: 257 (a multiple of 256, + 1).
+        assert_eq!(extended_size(333, 218), Some((333, 257)));
+        // Both sides grow, each within √2: 1000 → 1025, 300 → 385 (3·128 + 1).
+        assert_eq!(extended_size(1000, 300), Some((1025, 385)));
         assert_eq!(extended_size(1, 8), Some((1, 9)));
     }
 
