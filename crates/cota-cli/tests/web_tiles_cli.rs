@@ -31,7 +31,11 @@ fn terrarium_fixture_256_is_extended_to_257() {
     assert_eq!(new["checked"], true);
     // The text report says so.
     let o = cota(&["mesh", png, "--max-error", "50"]);
-    assert!(stdout(&o).contains("extended to 257 x 257"), "{}", stdout(&o));
+    assert!(
+        stdout(&o).contains("extended to 257 x 257"),
+        "{}",
+        stdout(&o)
+    );
 }
 
 #[test]

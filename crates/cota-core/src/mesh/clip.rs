@@ -25,7 +25,9 @@ type P = (i64, i64);
 
 /// `mesh` (vertices at integer samples, triangles with axis-aligned or
 /// diagonal edges, such as a bitree mesh) clipped to the `width × height`
-/// rectangle of samples from (0, 0). A mesh inside it comes back unchanged.
+/// rectangle of samples from (0, 0). A mesh inside it comes back unchanged;
+/// otherwise the triangles keep their order, each cut one replaced by its
+/// pieces.
 pub fn clip_to(mesh: &Mesh, width: u32, height: u32) -> Mesh {
     let (xm, ym) = (i64::from(width) - 1, i64::from(height) - 1);
     let inside = |v: &MeshVertex| i64::from(v.col) <= xm && i64::from(v.row) <= ym;
@@ -39,6 +41,7 @@ pub fn clip_to(mesh: &Mesh, width: u32, height: u32) -> Mesh {
         vertices: Vec::with_capacity(mesh.vertices.len()),
         triangles: Vec::with_capacity(mesh.triangles.len()),
         max: (xm, ym),
+        orphans: false,
     };
     for (k, v) in mesh.vertices.iter().enumerate() {
         if inside(v) {
@@ -46,13 +49,26 @@ pub fn clip_to(mesh: &Mesh, width: u32, height: u32) -> Mesh {
             out.vertices.push(*v);
         }
     }
-    for t in &mesh.triangles {
-        out.triangle(*t);
+    for &t in &mesh.triangles {
+        let r = t.map(|i| out.remap[i as usize]);
+        if r.contains(&u32::MAX) {
+            out.cut_triangle(t);
+        } else {
+            out.triangles.push(r);
+        }
     }
-    compact(Mesh {
+    let clipped = Mesh {
         vertices: out.vertices,
         triangles: out.triangles,
-    })
+    };
+    // A conforming mesh leaves no vertex unused (every vertex in the
+    // rectangle has a triangle around it meeting the rectangle's interior);
+    // only a cut-away triangle with a vertex inside could.
+    if out.orphans {
+        compact(clipped)
+    } else {
+        clipped
+    }
 }
 
 /// The clipping state: old → new vertex numbers, the added vertices by
@@ -64,6 +80,8 @@ struct Clipper<'m> {
     vertices: Vec<MeshVertex>,
     triangles: Vec<[u32; 3]>,
     max: P,
+    /// A triangle with a vertex in the rectangle was cut away entirely.
+    orphans: bool,
 }
 
 impl Clipper<'_> {
@@ -72,11 +90,8 @@ impl Clipper<'_> {
         (i64::from(v.col), i64::from(v.row))
     }
 
-    fn triangle(&mut self, t: [u32; 3]) {
-        if t.iter().all(|&i| self.remap[i as usize] != u32::MAX) {
-            self.triangles.push(t.map(|i| self.remap[i as usize]));
-            return;
-        }
+    /// Cuts `t`, which has a vertex outside the rectangle.
+    fn cut_triangle(&mut self, t: [u32; 3]) {
         let corners = t.map(|i| self.pos(i));
         let (xm, ym) = self.max;
         let poly = cut(&corners, |p| p.0 <= xm, |a, b| cross_x(a, b, xm));
@@ -86,6 +101,7 @@ impl Clipper<'_> {
             poly.pop();
         }
         if poly.len() < 3 {
+            self.orphans |= t.iter().any(|&i| self.remap[i as usize] != u32::MAX);
             return;
         }
         let ids: Vec<u32> = poly
