@@ -374,7 +374,7 @@ impl<'g> Mesher<'g> {
             Some(t) => {
                 let x = t.extract(&opts)?;
                 let (g, e) = (self.grid, t.grid());
-                let mesh = clip_to(&x.mesh, g.width() as u32, g.height() as u32);
+                let mesh = clip_to(x.mesh, g.width() as u32, g.height() as u32);
                 (Extraction { mesh, ..x }, Some([e.width(), e.height()]))
             }
             None => (self.bitree()?.extract(&opts)?, None),

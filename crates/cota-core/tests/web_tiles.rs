@@ -37,7 +37,10 @@ fn flat_web_tiles_need_a_handful_of_triangles() {
             assert!(n <= 8, "{w}x{h} flat at {e} m: {n} triangles");
         }
         // The unit-resolution border of the grid's own hierarchy.
-        assert!(mesh(&g, 1.0, false).mesh.triangle_count() > 500);
+        let (old, new) = (mesh(&g, 1.0, false), mesh(&g, 1.0, true));
+        let (old, new) = (old.mesh.triangle_count(), new.mesh.triangle_count());
+        eprintln!("flat {w}x{h}: {old} -> {new} triangles");
+        assert!(old > 500);
     }
 }
 
@@ -114,4 +117,45 @@ fn two_to_the_k_plus_one_grids_unchanged() {
         let want = tree.extract(&ExtractOptions::max_error_m(e)).unwrap().mesh;
         assert_eq!(mesh(&g, e, true).mesh, want);
     }
+}
+
+#[test]
+fn checker_rejects_what_clipping_must_not_do() {
+    use cota_core::mesh::check::Violation;
+    let tile = common::tile();
+    let (w, h) = (256, 256);
+    let g = HeightGrid::new(
+        w,
+        h,
+        cota_fixtures::crop(tile.heights(), tile.width(), 600, 600, w, h),
+        GeoRef::unreferenced(90.0),
+    )
+    .unwrap();
+    let m = mesh(&g, 10.0, true);
+    assert_eq!(m.extended_to, Some([257, 257]));
+    assert!(m.check.clipped_border);
+    // Without the option, the border's interpolated heights are wrong heights.
+    let strict = m.check.with_clipped_border(false);
+    let err = check_mesh(&g, &m.mesh, &strict).unwrap_err();
+    assert!(err
+        .violations
+        .iter()
+        .any(|v| matches!(v, Violation::WrongHeight { .. })));
+    // A border vertex moved past the bound breaks check 5.
+    let mut bad = m.mesh.clone();
+    let k = bad
+        .vertices
+        .iter()
+        .position(|v| v.col as usize == w - 1 && v.row > 0 && (v.row as usize) < h - 1)
+        .unwrap();
+    bad.vertices[k].z_m += 25.0;
+    let err = check_mesh(&g, &bad, &m.check).unwrap_err();
+    assert!(err
+        .violations
+        .iter()
+        .any(|v| matches!(v, Violation::ErrorBound { .. })));
+    // A piece of a cut triangle left out leaves a hole.
+    let mut holed = m.mesh.clone();
+    holed.triangles.pop();
+    assert!(check_mesh(&g, &holed, &m.check).is_err());
 }

@@ -25,41 +25,65 @@ type P = (i64, i64);
 
 /// `mesh` (vertices at integer samples, triangles with axis-aligned or
 /// diagonal edges, such as a bitree mesh) clipped to the `width × height`
-/// rectangle of samples from (0, 0). A mesh inside it comes back unchanged;
-/// otherwise the triangles keep their order, each cut one replaced by its
-/// pieces.
-pub fn clip_to(mesh: &Mesh, width: u32, height: u32) -> Mesh {
+/// rectangle of samples from (0, 0), in place. A mesh inside it comes back
+/// unchanged; otherwise the vertices and triangles keep their order, each
+/// cut triangle replaced by one of its pieces, its other pieces and the new
+/// vertices appended.
+pub fn clip_to(mut mesh: Mesh, width: u32, height: u32) -> Mesh {
     let (xm, ym) = (i64::from(width) - 1, i64::from(height) - 1);
     let inside = |v: &MeshVertex| i64::from(v.col) <= xm && i64::from(v.row) <= ym;
     if mesh.vertices.iter().all(inside) {
-        return mesh.clone();
+        return mesh;
     }
+    let mut remap = vec![u32::MAX; mesh.vertices.len()];
+    let mut next = 0;
+    for (k, v) in mesh.vertices.iter().enumerate() {
+        if inside(v) {
+            remap[k] = next;
+            next += 1;
+        }
+    }
+    // The cut triangles' corners, before the vertices outside go.
+    let cuts: Vec<Corners> = mesh
+        .triangles
+        .iter()
+        .filter(|t| t.iter().any(|&i| remap[i as usize] == u32::MAX))
+        .map(|t| Corners {
+            ids: t.map(|i| remap[i as usize]),
+            at: t.map(|i| {
+                let v = mesh.vertices[i as usize];
+                (i64::from(v.col), i64::from(v.row))
+            }),
+            z_m: t.map(|i| f64::from(mesh.vertices[i as usize].z_m)),
+        })
+        .collect();
+    mesh.vertices.retain(inside);
     let mut out = Clipper {
-        mesh,
-        remap: vec![u32::MAX; mesh.vertices.len()],
+        vertices: mesh.vertices,
         added: HashMap::new(),
-        vertices: Vec::with_capacity(mesh.vertices.len()),
-        triangles: Vec::with_capacity(mesh.triangles.len()),
         max: (xm, ym),
         orphans: false,
     };
-    for (k, v) in mesh.vertices.iter().enumerate() {
-        if inside(v) {
-            out.remap[k] = out.vertices.len() as u32;
-            out.vertices.push(*v);
+    let (mut kept, mut extra, mut cuts) = (0, Vec::new(), cuts.iter());
+    for k in 0..mesh.triangles.len() {
+        let t = mesh.triangles[k].map(|i| remap[i as usize]);
+        if !t.contains(&u32::MAX) {
+            mesh.triangles[kept] = t;
+            kept += 1;
+            continue;
+        }
+        let mut pieces = cuts.next().map_or_else(Vec::new, |c| out.cut(c));
+        if !pieces.is_empty() {
+            mesh.triangles[kept] = pieces.swap_remove(0);
+            kept += 1;
+            extra.append(&mut pieces);
         }
     }
-    for &t in &mesh.triangles {
-        let r = t.map(|i| out.remap[i as usize]);
-        if r.contains(&u32::MAX) {
-            out.cut_triangle(t);
-        } else {
-            out.triangles.push(r);
-        }
-    }
+    mesh.triangles.truncate(kept);
+    mesh.triangles.append(&mut extra);
     let clipped = Mesh {
         vertices: out.vertices,
-        triangles: out.triangles,
+        triangles: mesh.triangles,
     };
     // A conforming mesh leaves no vertex unused (every vertex in the
     // rectangle has a triangle around it meeting the rectangle's interior);
@@ -71,60 +95,54 @@ pub fn clip_to(mesh: &Mesh, width: u32, height: u32) -> Mesh {
     }
 }
 
-/// The clipping state: old → new vertex numbers, the added vertices by
-/// position, the output.
-struct Clipper<'m> {
-    mesh: &'m Mesh,
-    remap: Vec<u32>,
-    added: HashMap<P, u32>,
+/// A triangle to cut: its corners' new vertex numbers (`u32::MAX` outside
+/// the rectangle), positions and heights.
+struct Corners {
+    ids: [u32; 3],
+    at: [P; 3],
+    z_m: [f64; 3],
+}
+
+/// The clipping state: the output vertices, those added by position.
+struct Clipper {
     vertices: Vec<MeshVertex>,
-    triangles: Vec<[u32; 3]>,
+    added: HashMap<P, u32>,
     max: P,
     /// A triangle with a vertex in the rectangle was cut away entirely.
     orphans: bool,
 }
 
-impl Clipper<'_> {
-    fn pos(&self, i: u32) -> P {
-        let v = self.mesh.vertices[i as usize];
-        (i64::from(v.col), i64::from(v.row))
-    }
-
-    /// Cuts `t`, which has a vertex outside the rectangle.
-    fn cut_triangle(&mut self, t: [u32; 3]) {
-        let corners = t.map(|i| self.pos(i));
+impl Clipper {
+    /// The pieces of `t`, which has a vertex outside the rectangle.
+    fn cut(&mut self, t: &Corners) -> Vec<[u32; 3]> {
         let (xm, ym) = self.max;
-        let poly = cut(&corners, |p| p.0 <= xm, |a, b| cross_x(a, b, xm));
+        let poly = cut(&t.at, |p| p.0 <= xm, |a, b| cross_x(a, b, xm));
         let mut poly = cut(&poly, |p| p.1 <= ym, |a, b| cross_y(a, b, ym));
         poly.dedup();
         while poly.len() > 1 && poly.first() == poly.last() {
             poly.pop();
         }
         if poly.len() < 3 {
-            self.orphans |= t.iter().any(|&i| self.remap[i as usize] != u32::MAX);
-            return;
+            self.orphans |= t.ids.iter().any(|&i| i != u32::MAX);
+            return Vec::new();
         }
-        let ids: Vec<u32> = poly
-            .iter()
-            .map(|&p| self.vertex_at(t, &corners, p))
-            .collect();
-        for k in 1..ids.len() - 1 {
-            let tri = [ids[0], ids[k], ids[k + 1]];
-            if area2(poly[0], poly[k], poly[k + 1]) != 0 {
-                self.triangles.push(tri);
-            }
-        }
+        let ids: Vec<u32> = poly.iter().map(|&p| self.vertex_at(t, p)).collect();
+        (1..ids.len() - 1)
+            .filter(|&k| area2(poly[0], poly[k], poly[k + 1]) != 0)
+            .map(|k| [ids[0], ids[k], ids[k + 1]])
+            .collect()
     }
 
-    /// The output vertex at `p`, a point of triangle `t` (corners `c`).
-    fn vertex_at(&mut self, t: [u32; 3], c: &[P; 3], p: P) -> u32 {
+    /// The output vertex at `p`, a point of triangle `t`.
+    fn vertex_at(&mut self, t: &Corners, p: P) -> u32 {
+        let c = &t.at;
         if let Some(k) = c.iter().position(|&q| q == p) {
-            return self.remap[t[k] as usize];
+            return t.ids[k];
         }
         if let Some(&id) = self.added.get(&p) {
             return id;
         }
-        let z = |k: usize| f64::from(self.mesh.vertices[t[k] as usize].z_m);
+        let z = |k: usize| t.z_m[k];
         let on_edge = (0..3).find(|&k| on_segment(c[k], c[(k + 1) % 3], p));
         let z_m = match on_edge {
             Some(k) => {
@@ -254,7 +272,7 @@ mod test {
             ],
             triangles: vec![[0, 3, 1], [3, 0, 2]],
         };
-        let c = clip_to(&mesh, 512, 512);
+        let c = clip_to(mesh, 512, 512);
         assert_eq!(c.triangle_count(), 2);
         assert!(c.triangles.iter().all(|&t| c.signed_area2(t) > 0));
         let corner = c.vertices.iter().find(|v| v.col == 511 && v.row == 511);
@@ -267,6 +285,6 @@ mod test {
             vertices: vec![v(0, 0, 1.0), v(1, 0, 2.0), v(0, 1, 3.0)],
             triangles: vec![[0, 2, 1]],
         };
-        assert_eq!(clip_to(&mesh, 2, 2), mesh);
+        assert_eq!(clip_to(mesh.clone(), 2, 2), mesh);
     }
 }

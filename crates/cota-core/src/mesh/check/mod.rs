@@ -7,7 +7,9 @@
 //!    sample's true height (or, where allowed, a *fictitious point*'s height,
 //!    paper `000_ebf7e3a88dffd361.txt` §2.2: exactly the midpoint interpolation
 //!    of its bitree diagonal, found from its position, whose two ends must be
-//!    vertices; within `f32` rounding);
+//!    vertices; within `f32` rounding; or, for a mesh clipped from an
+//!    extended grid, [`CheckOptions::clipped_border`], any height on the east
+//!    and south borders, which check 5 bounds);
 //! 2. **no degenerate or flipped triangle**: every triangle has positive area
 //!    counter-clockwise seen from above;
 //! 3. **conformity**: no directed edge appears twice (no overlap, no edge used by
