@@ -44,19 +44,7 @@ pub fn clip_to(mut mesh: Mesh, width: u32, height: u32) -> Mesh {
         }
     }
     // The cut triangles' corners, before the vertices outside go.
-    let cuts: Vec<Corners> = mesh
-        .triangles
-        .iter()
-        .filter(|t| t.iter().any(|&i| remap[i as usize] == u32::MAX))
-        .map(|t| Corners {
-            ids: t.map(|i| remap[i as usize]),
-            at: t.map(|i| {
-                let v = mesh.vertices[i as usize];
-                (i64::from(v.col), i64::from(v.row))
-            }),
-            z_m: t.map(|i| f64::from(mesh.vertices[i as usize].z_m)),
-        })
-        .collect();
+    let cuts = cut_corners(&mesh, &remap);
     mesh.vertices.retain(inside);
     let mut out = Clipper {
         vertices: mesh.vertices,
@@ -64,26 +52,10 @@ pub fn clip_to(mut mesh: Mesh, width: u32, height: u32) -> Mesh {
         max: (xm, ym),
         orphans: false,
     };
-    let (mut kept, mut extra, mut cuts) = (0, Vec::new(), cuts.iter());
-    for k in 0..mesh.triangles.len() {
-        let t = mesh.triangles[k].map(|i| remap[i as usize]);
-        if !t.contains(&u32::MAX) {
-            mesh.triangles[kept] = t;
-            kept += 1;
-            continue;
-        }
-        let mut pieces = cuts.next().map_or_else(Vec::new, |c| out.cut(c));
-        if !pieces.is_empty() {
-            mesh.triangles[kept] = pieces.swap_remove(0);
-            kept += 1;
-            extra.append(&mut pieces);
-        }
-    }
-    mesh.triangles.truncate(kept);
-    mesh.triangles.append(&mut extra);
+    let triangles = out.triangles(mesh.triangles, &remap, &cuts);
     let clipped = Mesh {
         vertices: out.vertices,
-        triangles: mesh.triangles,
+        triangles,
     };
     // A conforming mesh leaves no vertex unused (every vertex in the
     // rectangle has a triangle around it meeting the rectangle's interior);
@@ -93,6 +65,24 @@ pub fn clip_to(mut mesh: Mesh, width: u32, height: u32) -> Mesh {
     } else {
         clipped
     }
+}
+
+/// The triangles of `mesh` with a vertex outside (`remap` gives
+/// `u32::MAX`), in order.
+fn cut_corners(mesh: &Mesh, remap: &[u32]) -> Vec<Corners> {
+    let corner = |i: u32| {
+        let v = mesh.vertices[i as usize];
+        ((i64::from(v.col), i64::from(v.row)), f64::from(v.z_m))
+    };
+    mesh.triangles
+        .iter()
+        .filter(|t| t.iter().any(|&i| remap[i as usize] == u32::MAX))
+        .map(|t| Corners {
+            ids: t.map(|i| remap[i as usize]),
+            at: t.map(|i| corner(i).0),
+            z_m: t.map(|i| corner(i).1),
+        })
+        .collect()
 }
 
 /// A triangle to cut: its corners' new vertex numbers (`u32::MAX` outside
@@ -113,6 +103,34 @@ struct Clipper {
 }
 
 impl Clipper {
+    /// `triangles` renumbered by `remap` in place, each with a vertex
+    /// outside replaced by its pieces (`cuts`, in the same order).
+    fn triangles(
+        &mut self,
+        mut triangles: Vec<[u32; 3]>,
+        remap: &[u32],
+        cuts: &[Corners],
+    ) -> Vec<[u32; 3]> {
+        let (mut kept, mut extra, mut cuts) = (0, Vec::new(), cuts.iter());
+        for k in 0..triangles.len() {
+            let t = triangles[k].map(|i| remap[i as usize]);
+            if !t.contains(&u32::MAX) {
+                triangles[kept] = t;
+                kept += 1;
+                continue;
+            }
+            let mut pieces = cuts.next().map_or_else(Vec::new, |c| self.cut(c));
+            if !pieces.is_empty() {
+                triangles[kept] = pieces.swap_remove(0);
+                kept += 1;
+                extra.append(&mut pieces);
+            }
+        }
+        triangles.truncate(kept);
+        triangles.append(&mut extra);
+        triangles
+    }
+
     /// The pieces of `t`, which has a vertex outside the rectangle.
     fn cut(&mut self, t: &Corners) -> Vec<[u32; 3]> {
         let (xm, ym) = self.max;
@@ -142,30 +160,7 @@ impl Clipper {
         if let Some(&id) = self.added.get(&p) {
             return id;
         }
-        let z = |k: usize| t.z_m[k];
-        let on_edge = (0..3).find(|&k| on_segment(c[k], c[(k + 1) % 3], p));
-        let z_m = match on_edge {
-            Some(k) => {
-                let (i, j) = (k, (k + 1) % 3);
-                // From the end first in row-major order: the same bits from
-                // both triangles of the edge.
-                let (u, v) = if (c[i].1, c[i].0) <= (c[j].1, c[j].0) {
-                    (i, j)
-                } else {
-                    (j, i)
-                };
-                let n = (c[v].0 - c[u].0).abs().max((c[v].1 - c[u].1).abs()) as f64;
-                let s = (p.0 - c[u].0).abs().max((p.1 - c[u].1).abs()) as f64;
-                (z(u) * (n - s) + z(v) * s) / n
-            }
-            None => {
-                let a = area2(c[0], c[1], c[2]) as f64;
-                (z(0) * area2(p, c[1], c[2]) as f64
-                    + z(1) * area2(c[0], p, c[2]) as f64
-                    + z(2) * area2(c[0], c[1], p) as f64)
-                    / a
-            }
-        };
+        let z_m = height_at(t, p);
         let id = self.vertices.len() as u32;
         self.vertices.push(MeshVertex {
             col: p.0 as u32,
@@ -174,6 +169,33 @@ impl Clipper {
         });
         self.added.insert(p, id);
         id
+    }
+}
+
+/// The height at `p` of triangle `t`: interpolated along the edge it lies on
+/// (from the end first in row-major order: the same bits from both
+/// triangles of the edge), else on the triangle's plane.
+fn height_at(t: &Corners, p: P) -> f64 {
+    let (c, z) = (&t.at, &t.z_m);
+    match (0..3).find(|&k| on_segment(c[k], c[(k + 1) % 3], p)) {
+        Some(k) => {
+            let (i, j) = (k, (k + 1) % 3);
+            let (u, v) = if (c[i].1, c[i].0) <= (c[j].1, c[j].0) {
+                (i, j)
+            } else {
+                (j, i)
+            };
+            let n = (c[v].0 - c[u].0).abs().max((c[v].1 - c[u].1).abs()) as f64;
+            let s = (p.0 - c[u].0).abs().max((p.1 - c[u].1).abs()) as f64;
+            (z[u] * (n - s) + z[v] * s) / n
+        }
+        None => {
+            let a = area2(c[0], c[1], c[2]) as f64;
+            (z[0] * area2(p, c[1], c[2]) as f64
+                + z[1] * area2(c[0], p, c[2]) as f64
+                + z[2] * area2(c[0], c[1], p) as f64)
+                / a
+        }
     }
 }
 
