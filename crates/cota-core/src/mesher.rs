@@ -311,7 +311,11 @@ impl<'g> Mesher<'g> {
         if let Some(t) = self.extended.get() {
             return Ok(Some(t));
         }
-        let t = Bitree::build_owned(extend_clamped(self.grid, w, h), progress)?;
+        // An extension too large for a grid: the grid's own hierarchy.
+        let Ok(extended) = extend_clamped(self.grid, w, h) else {
+            return Ok(None);
+        };
+        let t = Bitree::build_owned(extended, progress)?;
         Ok(Some(self.extended.get_or_init(|| t)))
     }
 

@@ -27,8 +27,8 @@ use super::HeightGrid;
 /// (`√2` when both sides grow), at least by one sample (its span becomes
 /// even). The square's side `N` never changes.
 pub fn extended_size(width: usize, height: usize) -> Option<(usize, usize)> {
-    let odd = |n: usize| n >= 2 && (n - 1) % 2 == 1;
-    if !odd(width) && !odd(height) {
+    let odd = |n: usize| (n - 1) % 2 == 1;
+    if width < 2 || height < 2 || (!odd(width) && !odd(height)) {
         return None;
     }
     let span = width.max(height).saturating_sub(1).max(1);
@@ -72,12 +72,17 @@ fn grow_span(n: usize, side: usize, growth: f64) -> usize {
 /// grid repeats `(min(c, W − 1), min(r, H − 1))`. The georeference is the
 /// grid's (same origin and pixel size).
 ///
-/// # Panics
-/// Never for sizes from [`extended_size`]; the sizes must not be smaller
-/// than the grid's.
-pub fn extend_clamped(grid: &HeightGrid, width: usize, height: usize) -> HeightGrid {
+/// # Errors
+/// As [`HeightGrid::new`] (the extended grid too large); the sizes must not
+/// be smaller than the grid's.
+pub fn extend_clamped(
+    grid: &HeightGrid,
+    width: usize,
+    height: usize,
+) -> Result<HeightGrid, super::GridError> {
     let (w, h) = (grid.width(), grid.height());
     debug_assert!(width >= w && height >= h);
+    super::check_dimensions(width as u64, height as u64)?;
     let src = grid.heights();
     let mut out = Vec::with_capacity(width * height);
     for r in 0..height {
@@ -86,12 +91,12 @@ pub fn extend_clamped(grid: &HeightGrid, width: usize, height: usize) -> HeightG
         let last = row[w - 1];
         out.extend(std::iter::repeat_n(last, width - w));
     }
-    HeightGrid {
+    Ok(HeightGrid {
         width,
         height,
         heights: out,
         georef: grid.georef().clone(),
-    }
+    })
 }
 
 #[cfg(test)]
@@ -113,13 +118,13 @@ mod test {
         assert_eq!(extended_size(333, 218), Some((333, 257)));
         // Both sides grow, each within √2: 1000 → 1025, 300 → 385 (3·128 + 1).
         assert_eq!(extended_size(1000, 300), Some((1025, 385)));
-        assert_eq!(extended_size(1, 8), Some((1, 9)));
+        assert_eq!(extended_size(1, 8), None);
     }
 
     #[test]
     fn repeats_the_last_row_and_column() {
         let g = HeightGrid::new(2, 2, vec![1.0, 2.0, 3.0, 4.0], GeoRef::unreferenced(1.0)).unwrap();
-        let e = extend_clamped(&g, 3, 3);
+        let e = extend_clamped(&g, 3, 3).unwrap();
         assert_eq!(e.heights(), &[1.0, 2.0, 2.0, 3.0, 4.0, 4.0, 3.0, 4.0, 4.0]);
         assert_eq!(e.georef(), g.georef());
     }
