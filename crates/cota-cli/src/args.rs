@@ -254,6 +254,14 @@ pub struct MeshArgs {
     /// side and meshed at the same bound share their vertices there exactly.
     #[arg(long)]
     pub lock_border: bool,
+    /// A grid whose width or height minus one is odd (web tiles: 256, 512):
+    /// `extend` meshes it on its grid extended by repeating the last row and
+    /// column up to the hierarchy's 2^k+1 square, then clips the mesh back to
+    /// the real samples (a border as coarse as a 2^k+1 grid's; bitree,
+    /// conforming, --max-error only); `keep` meshes the grid's own hierarchy
+    /// (a border at unit resolution).
+    #[arg(long, value_enum, default_value_t = OddSpansArg::Extend)]
+    pub odd_spans: OddSpansArg,
     /// The hierarchy: the bitree, or the restricted quadtree baseline (Pajarola
     /// 1998; --criterion max-error with --mode conforming only, no budget).
     #[arg(long, value_enum, default_value_t = HierarchyArg::Bitree)]
@@ -362,6 +370,15 @@ impl StripMethodArg {
             StripMethodArg::Traversal => StripMethod::Traversal,
         }
     }
+}
+
+/// What `cota mesh` does with a grid whose span is odd.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum OddSpansArg {
+    /// Extend the grid to its hierarchy's square and clip the mesh back.
+    Extend,
+    /// Mesh the grid's own hierarchy.
+    Keep,
 }
 
 /// The kind of mesh `cota mesh` makes.

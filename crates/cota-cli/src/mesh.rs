@@ -17,7 +17,9 @@ use cota_core::{
 use cota_io::export::{write_mesh_to, Coords, ExportOptions, GlbQuantization, MeshFormat};
 use serde_json::json;
 
-use crate::args::{CoordsArg, CriterionArg, HierarchyArg, MeshArgs, MeshKindArg, StripMethodArg};
+use crate::args::{
+    CoordsArg, CriterionArg, HierarchyArg, MeshArgs, MeshKindArg, OddSpansArg, StripMethodArg,
+};
 use crate::hole::Holes;
 use crate::input::load;
 use crate::progress;
@@ -252,7 +254,11 @@ fn mesh_grid(
     let plan = MeshPlan::new(criterion)
         .with_hierarchy(hierarchy)
         .with_mode(a.refine.mode.mode())
-        .with_max_triangles(a.max_triangles);
+        .with_max_triangles(a.max_triangles)
+        // Strips follow the hierarchy's own triangles, not the clipped ones.
+        .with_extend_odd_spans(
+            a.odd_spans == OddSpansArg::Extend && !(a.strip || a.strip_method.is_some()),
+        );
     let criterion_ms = ms(t);
     let t = Instant::now();
     if plan.error_map_bound_m().is_some() {
@@ -522,6 +528,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         "hierarchy": if a.hierarchy == HierarchyArg::Quadtree { "quadtree" } else { "bitree" },
         "mesh": if a.mesh == MeshKindArg::Tin { "tin" } else { "bitree" },
         "lock_border": a.lock_border,
+        "extended_to": m.extended_to,
         "mode": a.refine.mode.mode().name(),
         "criterion": m.criterion,
         "refine_rounds": m.rounds,
@@ -659,6 +666,12 @@ fn text(r: &serde_json::Value) -> String {
         r["mode"].as_str().unwrap_or(""),
         r["criterion"].as_str().unwrap_or("")
     );
+    if let Some([w, h]) = r["extended_to"].as_array().map(|a| [&a[0], &a[1]]) {
+        say!(
+            txt,
+            "border      odd span: meshed on the grid extended to {w} x {h}, clipped back"
+        );
+    }
     say!(
         txt,
         "points      {} transmitted, {} fictitious, {} line triangles",

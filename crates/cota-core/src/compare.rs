@@ -297,7 +297,12 @@ impl Comparer<'_, '_> {
         let crit = MaxVerticalError { max_error_m: e };
         let mut entries = Vec::new();
         for &mode in self.modes {
-            let m = self.mesher.mesh(&MeshPlan::new(&crit).with_mode(mode))?;
+            // The hierarchy's own triangles: the points and strips are
+            // counted on them (paper 000), so no extension for odd spans.
+            let plan = MeshPlan::new(&crit)
+                .with_mode(mode)
+                .with_extend_odd_spans(false);
+            let m = self.mesher.mesh(&plan)?;
             entries.push(self.bitree_entry(mode, &m, e)?);
         }
         for &q in self.quads {

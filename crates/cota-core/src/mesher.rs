@@ -22,13 +22,15 @@
 
 use std::sync::OnceLock;
 
-use crate::bitree::{Bitree, ExtractOptions, PointCounts, Progress};
+use crate::bitree::{Bitree, ExtractOptions, Extraction, PointCounts, Progress};
 use crate::criteria::{
     Criterion, CriterionError, CriterionKind, CriterionOptions, CurvatureMap, MaxVerticalError,
 };
 use crate::error::{MeshError, Result};
+use crate::grid::extend::{extend_clamped, extended_size};
 use crate::grid::HeightGrid;
 use crate::mesh::check::CheckOptions;
+use crate::mesh::clip::clip_to;
 use crate::mesh::Mesh;
 use crate::quadtree::{QuadOptions, QuadTree};
 use crate::refine::{refine, Mode, RefineOptions};
@@ -81,6 +83,16 @@ pub struct MeshPlan<'c> {
     /// (the bitree in conforming mode with a pure vertical bound only, whose
     /// value it replaces). Default: `None`.
     pub max_triangles: Option<usize>,
+    /// Mesh a grid with an odd span (web tiles: 256 or 512 wide) on its
+    /// clamp-extended grid and clip the mesh back to the real rectangle
+    /// ([`crate::grid::extend`], [`crate::mesh::clip`]), so that its border
+    /// is as coarse as a `2^k + 1` grid's. Only the error map's extraction
+    /// by error follows (the bitree in conforming mode with a vertical bound
+    /// and no budget); every other plan meshes the grid as it is, and so
+    /// does every grid whose spans are even. Set it to false for a mesh made
+    /// of the grid's own hierarchy triangles (strips, paper 000's
+    /// accounting). Default: true.
+    pub extend_odd_spans: bool,
 }
 
 impl<'c> MeshPlan<'c> {
@@ -91,6 +103,7 @@ impl<'c> MeshPlan<'c> {
             mode: Mode::Conforming,
             criterion,
             max_triangles: None,
+            extend_odd_spans: true,
         }
     }
 
@@ -103,6 +116,12 @@ impl<'c> MeshPlan<'c> {
     /// Sets [`MeshPlan::mode`].
     pub fn with_mode(mut self, mode: Mode) -> Self {
         self.mode = mode;
+        self
+    }
+
+    /// Sets [`MeshPlan::extend_odd_spans`].
+    pub fn with_extend_odd_spans(mut self, yes: bool) -> Self {
+        self.extend_odd_spans = yes;
         self
     }
 
@@ -122,6 +141,18 @@ impl<'c> MeshPlan<'c> {
             }
             _ => None,
         }
+    }
+
+    /// Whether this plan meshes `grid` on its clamp-extended grid
+    /// ([`MeshPlan::extend_odd_spans`]): the size to extend to, if so.
+    pub fn extension_for(&self, grid: &HeightGrid) -> Option<(usize, usize)> {
+        let follows = self.extend_odd_spans
+            && self.hierarchy == HierarchyKind::Bitree
+            && self.max_triangles.is_none()
+            && self.error_map_bound_m().is_some();
+        follows
+            .then(|| extended_size(grid.width(), grid.height()))
+            .flatten()
     }
 
     /// Refuses the combinations no hierarchy offers.
@@ -177,6 +208,10 @@ pub struct Meshed {
     /// splits, valid for any criterion ([`crate::quadtree::QuadExtraction`]);
     /// `None` for the bitree.
     pub split_points: Option<PointCounts>,
+    /// The size of the clamp-extended grid the mesh was made on and clipped
+    /// from ([`MeshPlan::extend_odd_spans`]); `None` when it is the grid's
+    /// own hierarchy.
+    pub extended_to: Option<[usize; 2]>,
 }
 
 /// What the plans of one grid share, each part built the first time a plan
@@ -203,6 +238,8 @@ pub struct Meshed {
 pub struct Mesher<'g> {
     grid: &'g HeightGrid,
     bitree: OnceLock<Bitree<'g>>,
+    /// The bitree of the clamp-extended grid ([`MeshPlan::extend_odd_spans`]).
+    extended: OnceLock<Bitree<'static>>,
     quadtree: OnceLock<QuadTree<'g>>,
     curvature: OnceLock<CurvatureMap>,
 }
@@ -213,6 +250,7 @@ impl<'g> Mesher<'g> {
         Mesher {
             grid,
             bitree: OnceLock::new(),
+            extended: OnceLock::new(),
             quadtree: OnceLock::new(),
             curvature: OnceLock::new(),
         }
@@ -232,6 +270,9 @@ impl<'g> Mesher<'g> {
     pub fn prepare(&self, plan: &MeshPlan<'_>, progress: Progress<'_>) -> Result<()> {
         match plan.hierarchy {
             HierarchyKind::Quadtree(_) => self.quadtree().map(|_| ()),
+            HierarchyKind::Bitree if plan.extension_for(self.grid).is_some() => {
+                self.extended_with(plan, progress).map(|_| ())
+            }
             HierarchyKind::Bitree | HierarchyKind::Tin { .. }
                 if plan.error_map_bound_m().is_some() =>
             {
@@ -255,6 +296,27 @@ impl<'g> Mesher<'g> {
         }
         let t = Bitree::build_with_progress(self.grid, progress)?;
         Ok(self.bitree.get_or_init(|| t))
+    }
+
+    /// The bitree of the clamp-extended grid, built on first use (`None`
+    /// when `plan` does not extend this grid).
+    fn extended_with(
+        &self,
+        plan: &MeshPlan<'_>,
+        progress: Progress<'_>,
+    ) -> Result<Option<&Bitree<'static>>> {
+        let Some((w, h)) = plan.extension_for(self.grid) else {
+            return Ok(None);
+        };
+        if let Some(t) = self.extended.get() {
+            return Ok(Some(t));
+        }
+        // An extension too large for a grid: the grid's own hierarchy.
+        let Ok(extended) = extend_clamped(self.grid, w, h) else {
+            return Ok(None);
+        };
+        let t = Bitree::build_owned(extended, progress)?;
+        Ok(Some(self.extended.get_or_init(|| t)))
     }
 
     /// The restricted quadtree, built on first use.
@@ -312,7 +374,15 @@ impl<'g> Mesher<'g> {
             Some(n) => ExtractOptions::max_triangles(n),
             None => ExtractOptions::max_error_m(bound_m),
         };
-        let x = self.bitree()?.extract(&opts)?;
+        let (x, extended_to) = match self.extended_with(plan, &|_, _| {})? {
+            Some(t) => {
+                let x = t.extract(&opts)?;
+                let (g, e) = (self.grid, t.grid());
+                let mesh = clip_to(x.mesh, g.width() as u32, g.height() as u32);
+                (Extraction { mesh, ..x }, Some([e.width(), e.height()]))
+            }
+            None => (self.bitree()?.extract(&opts)?, None),
+        };
         let vertices = x.mesh.vertex_count();
         Ok(Meshed {
             mesh: x.mesh,
@@ -325,8 +395,11 @@ impl<'g> Mesher<'g> {
             fictitious_points: 0,
             line_triangles: 0,
             rounds: None,
-            check: Mode::Conforming.check_options(Some(x.threshold_m)),
+            check: Mode::Conforming
+                .check_options(Some(x.threshold_m))
+                .with_clipped_border(extended_to.is_some()),
             split_points: None,
+            extended_to,
         })
     }
 
@@ -352,6 +425,7 @@ impl<'g> Mesher<'g> {
             rounds: None,
             check: CheckOptions::tin(x.threshold_m),
             split_points: None,
+            extended_to: None,
         })
     }
 
@@ -372,6 +446,7 @@ impl<'g> Mesher<'g> {
             rounds: Some(r.rounds),
             check: plan.mode.check_options(bound_m),
             split_points: None,
+            extended_to: None,
         })
     }
 
@@ -390,6 +465,7 @@ impl<'g> Mesher<'g> {
             rounds: Some(1),
             check: Mode::Conforming.check_options(bound_m),
             split_points: Some(x.points),
+            extended_to: None,
         })
     }
 }

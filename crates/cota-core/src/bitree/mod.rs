@@ -116,7 +116,8 @@ pub use points::PointCounts;
 /// ```
 #[derive(Debug, Clone)]
 pub struct Bitree<'g> {
-    grid: &'g HeightGrid,
+    /// The grid, or (for [`Bitree::build_owned`]) the grid the tree owns.
+    grid: std::borrow::Cow<'g, HeightGrid>,
     hier: Hierarchy,
     codes: Vec<u16>,
     /// The largest hierarchy triangles inside the grid, depth-first: where
@@ -150,8 +151,43 @@ impl<'g> Bitree<'g> {
         grid: &'g HeightGrid,
         progress: Progress<'_>,
     ) -> Result<Self, MeshError> {
+        Self::from_grid(std::borrow::Cow::Borrowed(grid), progress)
+    }
+
+    /// [`Bitree::build_with_progress`] on a grid the tree keeps: the
+    /// clamp-extended grid of [`crate::grid::extend`], which only the tree
+    /// needs.
+    ///
+    /// # Errors
+    /// As [`Bitree::build`].
+    pub(crate) fn build_owned(
+        grid: HeightGrid,
+        progress: Progress<'_>,
+    ) -> Result<Bitree<'static>, MeshError> {
+        Bitree::from_grid(std::borrow::Cow::Owned(grid), progress)
+    }
+
+    fn from_grid(
+        grid: std::borrow::Cow<'g, HeightGrid>,
+        progress: Progress<'_>,
+    ) -> Result<Self, MeshError> {
+        let (hier, codes) = Self::codes_for(&grid, progress)?;
+        let inside = hier.inside_roots();
+        Ok(Bitree {
+            grid,
+            hier,
+            codes,
+            inside,
+        })
+    }
+
+    /// The hierarchy and the error codes of `grid`.
+    fn codes_for(
+        grid: &HeightGrid,
+        progress: Progress<'_>,
+    ) -> Result<(Hierarchy, Vec<u16>), MeshError> {
         // One pool entry for the whole build, the void check included.
-        let (hier, codes) = crate::par::on_pool(|| -> Result<_, MeshError> {
+        crate::par::on_pool(|| -> Result<_, MeshError> {
             let hier = hierarchy_for(grid)?;
             let mut codes = vec![0u16; grid.len()];
             let levels = levels(hier.size());
@@ -196,19 +232,12 @@ impl<'g> Bitree<'g> {
                 progress(levels.len(), levels.len());
             }
             Ok((hier, codes))
-        })?;
-        let inside = hier.inside_roots();
-        Ok(Bitree {
-            grid,
-            hier,
-            codes,
-            inside,
         })
     }
 
     /// The grid this bitree was built on.
-    pub fn grid(&self) -> &'g HeightGrid {
-        self.grid
+    pub fn grid(&self) -> &HeightGrid {
+        &self.grid
     }
 
     /// The hierarchy's shape.

@@ -14,6 +14,7 @@
 //!   *sample-centre* coordinates when [`PixelIs::Point`]. [`GeoRef::sample_xy`]
 //!   hides the difference and gives the position of a sample.
 
+pub mod extend;
 mod frame;
 pub mod mosaic;
 pub mod voids;

@@ -11,6 +11,7 @@
 //! over every sample ([`metrics`]) and the one invariant checker ([`check`]).
 
 pub mod check;
+pub mod clip;
 pub mod holes;
 pub mod metrics;
 pub mod raster;

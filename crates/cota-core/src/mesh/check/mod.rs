@@ -7,7 +7,9 @@
 //!    sample's true height (or, where allowed, a *fictitious point*'s height,
 //!    paper `000_ebf7e3a88dffd361.txt` §2.2: exactly the midpoint interpolation
 //!    of its bitree diagonal, found from its position, whose two ends must be
-//!    vertices; within `f32` rounding);
+//!    vertices; within `f32` rounding; or, for a mesh clipped from an
+//!    extended grid, [`CheckOptions::clipped_border`], any height on the east
+//!    and south borders, which check 5 bounds);
 //! 2. **no degenerate or flipped triangle**: every triangle has positive area
 //!    counter-clockwise seen from above;
 //! 3. **conformity**: no directed edge appears twice (no overlap, no edge used by
@@ -84,6 +86,11 @@ pub struct CheckOptions {
     /// reverse may also lie next to a void (a void among the corners of the
     /// cells on either side of it). Default: false.
     pub holes: bool,
+    /// The mesh was clipped from a clamp-extended grid ([`crate::mesh::clip`]):
+    /// a vertex on the east or south border (column `W − 1`, row `H − 1`)
+    /// may carry the clipped mesh's height there instead of its sample's.
+    /// Check 5 still bounds it, since that vertex is a sample. Default: false.
+    pub clipped_border: bool,
 }
 
 impl CheckOptions {
@@ -95,6 +102,7 @@ impl CheckOptions {
         height_tolerance_m: 0.0,
         general: false,
         holes: false,
+        clipped_border: false,
     };
 
     /// Conforming, true heights, and `|Δz| ≤ max_error_m` everywhere.
@@ -106,6 +114,7 @@ impl CheckOptions {
             height_tolerance_m: 0.0,
             general: false,
             holes: false,
+            clipped_border: false,
         }
     }
 
@@ -137,6 +146,12 @@ impl CheckOptions {
     /// Sets [`CheckOptions::holes`].
     pub const fn with_holes(mut self, yes: bool) -> Self {
         self.holes = yes;
+        self
+    }
+
+    /// Sets [`CheckOptions::clipped_border`].
+    pub const fn with_clipped_border(mut self, yes: bool) -> Self {
+        self.clipped_border = yes;
         self
     }
 
@@ -501,7 +516,8 @@ fn check_vertices(
             continue;
         }
         let within = (f64::from(v.z_m) - f64::from(truth)).abs() <= opts.height_tolerance_m;
-        if v.z_m.to_bits() != truth.to_bits() && !opts.allow_fictitious && !within {
+        let clipped = opts.clipped_border && (v.col as usize + 1 == w || v.row as usize + 1 == h);
+        if v.z_m.to_bits() != truth.to_bits() && !opts.allow_fictitious && !within && !clipped {
             found.push(Violation::WrongHeight {
                 vertex: k,
                 col: v.col,
