@@ -345,15 +345,7 @@ impl Coarse {
                 if st[j] != UNKNOWN {
                     continue;
                 }
-                let x = j - 1;
-                let (x0, tx) = if x.is_multiple_of(2) {
-                    (x / 2, 0.75f32)
-                } else {
-                    (x / 2 + 1, 0.25)
-                };
-                let d = (1.0 - tx) * den[x0] + tx * den[x0 + 1];
-                let n = (1.0 - tx) * num[x0] + tx * num[x0 + 1];
-                row[j] += if d > 0.0 { n / d } else { 0.0 };
+                row[j] += blend_columns(j - 1, num, den);
             }
         };
         let rows = &mut self.value[s..s * (self.h + 1)];
@@ -397,14 +389,7 @@ impl Coarse {
                     self.blend_rows_of(y, num, den, skip);
                     let mut most = 0f32;
                     for_each_bit(mask.row(y), |x| {
-                        let (x0, tx) = if x.is_multiple_of(2) {
-                            (x / 2, 0.75f32)
-                        } else {
-                            (x / 2 + 1, 0.25)
-                        };
-                        let d = (1.0 - tx) * den[x0] + tx * den[x0 + 1];
-                        let n = (1.0 - tx) * num[x0] + tx * num[x0 + 1];
-                        let c = if d > 0.0 { n / d } else { 0.0 };
+                        let c = blend_columns(x, num, den);
                         row[x] = if set { c } else { row[x] + c };
                         most = most.max(c.abs());
                     });
@@ -527,4 +512,24 @@ fn fine_dirichlet(fine: &Fine<'_>, x: usize, y: usize, wx: f64, wy: f64) -> f64 
         d += wy;
     }
     d
+}
+
+/// The value at fine column `x` of a row whose two coarse rows were blended
+/// into `num` (weighted values) and `den` (weights): the bilinear weights
+/// 3/4 and 1/4 of its two coarse columns, divided by their weight (0 where
+/// neither coarse cell is present).
+#[inline]
+fn blend_columns(x: usize, num: &[f32], den: &[f32]) -> f32 {
+    let (x0, tx) = if x.is_multiple_of(2) {
+        (x / 2, 0.75f32)
+    } else {
+        (x / 2 + 1, 0.25)
+    };
+    let d = (1.0 - tx) * den[x0] + tx * den[x0 + 1];
+    let n = (1.0 - tx) * num[x0] + tx * num[x0 + 1];
+    if d > 0.0 {
+        n / d
+    } else {
+        0.0
+    }
 }
