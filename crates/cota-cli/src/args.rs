@@ -766,12 +766,18 @@ impl StreamModeArg {
 
 #[derive(Debug, Args)]
 pub struct StreamDecodeArgs {
-    /// The stream to decode.
+    /// The stream to decode; `-` reads standard input (frame by frame: bytes
+    /// past --max-bytes or --max-error are read and dropped, never held).
     #[arg(value_name = "IN.cstream")]
     pub input: std::path::PathBuf,
     /// Use only the steps that fit in the first N bytes of the file.
     #[arg(long, value_name = "N", conflicts_with = "max_error")]
     pub max_bytes: Option<u64>,
+    /// Largest grid the stream's head may announce, in samples; a larger one
+    /// is refused before anything is allocated. Default: from the machine's
+    /// memory (16 bytes per sample, at most 2^30).
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    pub max_samples: Option<u64>,
     /// Stop at the first step whose stated max error is at most M metres.
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
     pub max_error: Option<f64>,

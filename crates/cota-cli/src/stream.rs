@@ -9,6 +9,8 @@
 //! rebuild the mesh and a grid of the decoded surface for the exporters, write
 //! the mesh, report bytes per triangle and per point at each step used.
 
+use std::io::IsTerminal;
+use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -16,7 +18,9 @@ use anyhow::Context;
 use cota_core::stream::{encode, encode_marks_progressive, StreamOptions};
 use cota_core::HeightGrid;
 use cota_io::export::{write_mesh_to, Coords, ExportOptions};
-use cota_io::stream_file::{read_stream, step_end_offsets, stream_bytes, StreamLimit};
+use cota_io::stream_file::{
+    read_stream, read_stream_from, step_end_offsets, stream_bytes, DecodedStream, StreamLimit,
+};
 use serde_json::json;
 
 use crate::args::{CoordsArg, StreamCommand, StreamDecodeArgs, StreamEncodeArgs, StreamModeArg};
@@ -225,6 +229,21 @@ fn write_decoded(
     Ok(())
 }
 
+/// Reads the stream of `input` (`-`: standard input) up to `limit`.
+fn decode_input(input: &Path, limit: &StreamLimit) -> anyhow::Result<DecodedStream> {
+    if !crate::input::is_dash(input) {
+        return Ok(read_stream(input, limit)?);
+    }
+    let stdin = std::io::stdin();
+    if stdin.is_terminal() {
+        anyhow::bail!(
+            "-: expected a cota stream on standard input, found a terminal (pipe or redirect one: cota stream decode - < IN.cstream)"
+        );
+    }
+    let name = Path::new(crate::input::STDIN_NAME);
+    Ok(read_stream_from(stdin.lock(), name, limit)?)
+}
+
 fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
     if let Some(e) = a.max_error {
         if e.is_nan() || e < 0.0 {
@@ -236,10 +255,11 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
     }
     let limit = StreamLimit::ALL
         .with_max_bytes(a.max_bytes)
-        .with_max_error_m(a.max_error);
+        .with_max_error_m(a.max_error)
+        .with_max_samples(a.max_samples);
     let d = {
         let _spinner = crate::progress::spinner("decoding");
-        read_stream(&a.input, &limit)?
+        decode_input(&a.input, &limit)?
     };
     let h = d.decoder.header().clone();
     let mesh = d.decoder.mesh();

@@ -223,3 +223,39 @@ fn pair_reads_the_dem_from_stdin_and_writes_stdout() {
         stderr(&o)
     );
 }
+
+#[test]
+fn stream_decode_reads_standard_input_within_its_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let cs = dir.path().join("s.cstream");
+    let c = cs.to_str().unwrap();
+    let o = common::cota(&["stream", "encode", "--max-error", "10", "-o", c]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&cs).unwrap();
+    let from_file = common::cota(&["stream", "decode", c, "-o", "-", "--format", "obj"]);
+    assert!(from_file.status.success(), "{}", stderr(&from_file));
+    let o = with_stdin(
+        &["stream", "decode", "-", "-o", "-", "--format", "obj"],
+        &bytes,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(o.stdout.len() > 1000);
+    assert_eq!(o.stdout, from_file.stdout);
+    // A prefix by bytes, and the whole input still counted.
+    let o = with_stdin(
+        &["stream", "decode", "-", "--max-bytes", "20000", "--json"],
+        &bytes,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["file_bytes"].as_u64(), Some(bytes.len() as u64), "{v}");
+    // The head's grid (1201² samples) over --max-samples: refused by name.
+    let o = with_stdin(&["stream", "decode", "-", "--max-samples", "1000"], &bytes);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("<stdin>") && e.contains("too large"), "{e}");
+    assert!(
+        e.contains("1201×1201") && e.contains("--max-samples"),
+        "{e}"
+    );
+}

@@ -30,6 +30,7 @@
 //! A file holds exactly the announced number of steps: fewer (even cut at a
 //! frame boundary) is reported as truncated, and so is a partial frame.
 
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use cota_core::stream::{EncodedStream, StepInfo, StreamDecoder, StreamError, StreamHeader};
@@ -91,6 +92,18 @@ pub enum StreamFileError {
         expected: String,
         /// What was found.
         found: String,
+    },
+    /// The head announces a grid over the sample limit.
+    #[error("too large: the head announces a {width}×{height} grid ({samples} samples), over the limit of {limit} samples (raise it with --max-samples)")]
+    TooLarge {
+        /// Grid width announced.
+        width: u32,
+        /// Grid height announced.
+        height: u32,
+        /// Samples announced.
+        samples: u64,
+        /// The limit.
+        limit: u64,
     },
     /// The core decoder rejected a header or step.
     #[error(transparent)]
@@ -362,12 +375,23 @@ pub struct StreamReader {
     decoder: Option<StreamDecoder>,
     georef: Option<GeoRef>,
     announced: u32,
+    max_samples: Option<u64>,
 }
 
 impl StreamReader {
-    /// A reader waiting for the first byte.
+    /// A reader waiting for the first byte, taking a grid of any size the
+    /// format allows.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// A reader that refuses a head announcing more than `max_samples` grid
+    /// samples ([`StreamFileError::TooLarge`]) before the decoder allocates.
+    pub fn with_max_samples(max_samples: u64) -> Self {
+        StreamReader {
+            max_samples: Some(max_samples),
+            ..Self::default()
+        }
     }
 
     /// The decoder, once the head has arrived.
@@ -487,6 +511,15 @@ impl StreamReader {
                 });
             }
             let (header, announced, georef) = parse_head(head)?;
+            let samples = u64::from(header.width) * u64::from(header.height);
+            if let Some(limit) = self.max_samples.filter(|&l| samples > l) {
+                return Err(StreamFileError::TooLarge {
+                    width: header.width,
+                    height: header.height,
+                    samples,
+                    limit,
+                });
+            }
             self.announced = announced;
             self.decoder = Some(StreamDecoder::new(header));
             self.georef = Some(georef);
@@ -548,6 +581,9 @@ pub struct StreamLimit {
     /// Stop at the first step whose stated max error is at most this, metres.
     /// Default: `None` (all).
     pub max_error_m: Option<f64>,
+    /// Refuse a head announcing more grid samples than this. Default: `None`,
+    /// the machine's budget ([`crate::limits::default_max_samples`]).
+    pub max_samples: Option<u64>,
 }
 
 impl StreamLimit {
@@ -555,6 +591,7 @@ impl StreamLimit {
     pub const ALL: StreamLimit = StreamLimit {
         max_bytes: None,
         max_error_m: None,
+        max_samples: None,
     };
 
     /// Sets [`StreamLimit::max_bytes`].
@@ -566,6 +603,12 @@ impl StreamLimit {
     /// Sets [`StreamLimit::max_error_m`].
     pub const fn with_max_error_m(mut self, e: Option<f64>) -> Self {
         self.max_error_m = e;
+        self
+    }
+
+    /// Sets [`StreamLimit::max_samples`].
+    pub const fn with_max_samples(mut self, n: Option<u64>) -> Self {
+        self.max_samples = n;
         self
     }
 }
@@ -583,19 +626,40 @@ pub struct DecodedStream {
     pub file_bytes: u64,
 }
 
-/// Reads `path` and decodes it up to `limit`.
+/// Reads `path` and decodes it up to `limit`, one frame at a time: bytes past
+/// the limits are never read, and no frame is larger than the format allows.
 ///
 /// # Errors
 /// [`StreamReadError`] naming the file: I/O, bad magic or version, checksum,
 /// truncation (also when `max_bytes` is too small for the head and step 0),
-/// or a step the core decoder rejects.
+/// a grid over the sample limit, or a step the core decoder rejects.
 pub fn read_stream(path: &Path, limit: &StreamLimit) -> Result<DecodedStream, StreamReadError> {
     let err = |kind: StreamReadErrorKind| StreamReadError {
         path: path.to_path_buf(),
         kind,
     };
-    let bytes = std::fs::read(path).map_err(|e| err(e.into()))?;
-    decode_stream_bytes(&bytes, limit).map_err(|e| err(e.into()))
+    let file = std::fs::File::open(path).map_err(|e| err(e.into()))?;
+    let size = file.metadata().map_err(|e| err(e.into()))?.len();
+    let mut d = decode_stream_from(std::io::BufReader::new(file), limit, false).map_err(err)?;
+    d.file_bytes = size;
+    Ok(d)
+}
+
+/// [`read_stream`] on any reader (standard input): `name` is what errors
+/// call it. [`DecodedStream::file_bytes`] counts the whole input, the rest
+/// after the limits read and dropped.
+///
+/// # Errors
+/// As [`read_stream`].
+pub fn read_stream_from(
+    reader: impl Read,
+    name: &Path,
+    limit: &StreamLimit,
+) -> Result<DecodedStream, StreamReadError> {
+    decode_stream_from(reader, limit, true).map_err(|kind| StreamReadError {
+        path: name.to_path_buf(),
+        kind,
+    })
 }
 
 /// [`read_stream`] on bytes in memory.
@@ -606,30 +670,90 @@ pub fn decode_stream_bytes(
     bytes: &[u8],
     limit: &StreamLimit,
 ) -> Result<DecodedStream, StreamFileError> {
-    let mut r = StreamReader::new();
+    decode_stream_from(bytes, limit, true).map_err(|e| match e {
+        StreamReadErrorKind::Stream(s) => s,
+        StreamReadErrorKind::Io(e) => StreamFileError::Malformed {
+            what: "bytes".into(),
+            expected: "bytes in memory".into(),
+            found: e.to_string(),
+        },
+    })
+}
+
+/// Reads `r` frame by frame (the fixed prefix, then the rest once its
+/// length is known and allowed) and decodes up to `limit`; `count_rest`:
+/// read what is left after the limits to count the input's bytes.
+fn decode_stream_from(
+    mut r: impl Read,
+    limit: &StreamLimit,
+    count_rest: bool,
+) -> Result<DecodedStream, StreamReadErrorKind> {
+    let max_samples = limit
+        .max_samples
+        .unwrap_or_else(crate::limits::default_max_samples);
+    let mut rd = StreamReader::with_max_samples(max_samples);
     let mut steps: Vec<StepFrame> = Vec::new();
     let cap = limit.max_bytes.unwrap_or(u64::MAX);
-    let mut at = 0usize;
+    let mut read = 0u64;
     let mut stopped = false;
-    // Feed frame-sized chunks so that nothing past the limits is decoded.
-    while at < bytes.len() {
+    loop {
         if let Some(e) = limit.max_error_m {
             if steps.last().is_some_and(|s| s.info.max_error_m <= e) {
                 stopped = true;
                 break;
             }
         }
-        let next = next_frame_end(bytes, at, r.decoder().is_some()).min(bytes.len());
-        if next as u64 > cap && r.decoder().is_some_and(|d| !d.steps().is_empty()) {
-            stopped = true;
+        let have_head = rd.decoder().is_some();
+        let mut frame = Vec::new();
+        let prefix = if have_head { 8 } else { 14 };
+        read_up_to(&mut r, &mut frame, prefix)?;
+        if frame.is_empty() {
             break;
         }
-        steps.extend(r.push(&bytes[at..next])?);
-        at = next;
+        let end = next_frame_end(&frame, 0, have_head) as u64;
+        if read.saturating_add(end) > cap && rd.decoder().is_some_and(|d| !d.steps().is_empty()) {
+            stopped = true;
+            read += frame.len() as u64;
+            break;
+        }
+        let most = if have_head {
+            MAX_STEP + 8
+        } else {
+            MAX_HEAD + 18
+        } as u64;
+        if frame.len() == prefix && end <= most {
+            read_up_to(&mut r, &mut frame, end as usize)?;
+        }
+        read += frame.len() as u64;
+        steps.extend(rd.push(&frame)?);
+        if (frame.len() as u64) < end {
+            break;
+        }
     }
     if !stopped {
-        r.finish()?;
+        rd.finish()?;
     }
+    if count_rest {
+        read += std::io::copy(&mut r, &mut std::io::sink())?;
+    }
+    finish_decoded(rd, steps, limit, read).map_err(Into::into)
+}
+
+/// Appends bytes from `r` to `buf` until it holds `len` bytes or the input
+/// ends.
+fn read_up_to(r: &mut impl Read, buf: &mut Vec<u8>, len: usize) -> std::io::Result<()> {
+    let want = len.saturating_sub(buf.len()) as u64;
+    r.take(want).read_to_end(buf).map(|_| ())
+}
+
+/// The checks after the last frame read: step 0 within `max_bytes`, a head
+/// and a step present.
+fn finish_decoded(
+    r: StreamReader,
+    steps: Vec<StepFrame>,
+    limit: &StreamLimit,
+    read: u64,
+) -> Result<DecodedStream, StreamFileError> {
     if let Some(n) = limit.max_bytes {
         if let Some(first) = steps.first() {
             if first.end_offset > n {
@@ -645,7 +769,7 @@ pub fn decode_stream_bytes(
         return Err(StreamFileError::Truncated {
             what: "head".into(),
             expected: 18,
-            found: bytes.len() as u64,
+            found: read,
         });
     };
     if steps.is_empty() {
@@ -659,7 +783,7 @@ pub fn decode_stream_bytes(
         decoder,
         georef,
         steps,
-        file_bytes: bytes.len() as u64,
+        file_bytes: read,
     })
 }
 

@@ -446,3 +446,33 @@ fn write_stream_fuzz_seeds() {
     put("seed-bad-crc.cstream", &c);
     put("seed-head-only.cstream", &b[..b.len() - steps]);
 }
+
+/// A head announcing more samples than the limit is refused before the
+/// decoder allocates; a reader decodes what the bytes decode, frame by frame.
+#[test]
+fn a_head_over_the_sample_limit_is_refused_and_readers_agree_with_bytes() {
+    let grid = small(33, 17);
+    let s = encode(&grid, &StreamOptions::default()).unwrap();
+    let bytes = stream_bytes(&s, grid.georef());
+    let tight = StreamLimit::ALL.with_max_samples(Some(33 * 17 - 1));
+    match decode_stream_bytes(&bytes, &tight) {
+        Err(StreamFileError::TooLarge {
+            width: 33,
+            height: 17,
+            samples,
+            limit,
+        }) => assert_eq!((samples, limit), (561, 560)),
+        other => panic!("expected TooLarge, found {other:?}"),
+    }
+    let exact = StreamLimit::ALL.with_max_samples(Some(33 * 17));
+    let whole = decode_stream_bytes(&bytes, &exact).unwrap();
+    let ends = step_end_offsets(&s, grid.georef());
+    let cut = StreamLimit::ALL.with_max_bytes(Some(ends[1]));
+    let name = std::path::Path::new("<test>");
+    let read = cota_io::stream_file::read_stream_from(&bytes[..], name, &cut).unwrap();
+    assert_eq!(read.steps.len(), 2);
+    assert_eq!(read.file_bytes, bytes.len() as u64);
+    let e = cota_io::stream_file::read_stream_from(&bytes[..], name, &tight).unwrap_err();
+    assert!(e.to_string().starts_with("<test>: too large"), "{e}");
+    assert_eq!(whole.steps.len(), ends.len());
+}
