@@ -52,12 +52,12 @@ fn region_options() -> RegionOptions {
     RegionOptions::DEFAULT.with_fill(Some(FillOptions::DEFAULT))
 }
 
+/// Each input file and its samples in the mosaic (`file_extents`).
+type FileExtents = Vec<(String, [usize; 4])>;
+
 /// Reads, fills the voids and resamples; with where each file lies in the
 /// mosaic (empty when a shard must read every file: one file, voids, holes).
-fn lattice_and_files(
-    paths: &[PathBuf],
-    s: &Settings,
-) -> PyResult<(Lattice, Vec<(String, [usize; 4])>)> {
+fn lattice_and_files(paths: &[PathBuf], s: &Settings) -> PyResult<(Lattice, FileExtents)> {
     let region = read_region(paths, &region_options()).map_err(errors::read)?;
     let lo = LatticeOptions::DEFAULT
         .with_max_zoom(s.max_zoom)
@@ -248,8 +248,7 @@ pub(crate) fn tiles_plan_step<'py>(
     d.set_item("coarse_tiles", coarse)?;
     d.set_item("written", report.written())?;
     d.set_item("skipped", report.skipped())?;
-    let files: Vec<(String, [usize; 4])> = frame.files;
-    d.set_item("files", files)?;
+    d.set_item("files", frame.files)?;
     Ok(d)
 }
 
