@@ -207,3 +207,47 @@ pub fn read_part_files(
         .collect();
     Ok((region.grid, names))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tiles::write_shard_frame;
+    use cota_core::tiles::{LatticeOptions, Prepared};
+
+    /// The two-tile mosaic: each file placed in it, the westmost of 4 shards
+    /// reads only the western file, and a frame of other settings is refused.
+    #[test]
+    fn part_reads_only_its_files_and_refuses_other_settings() {
+        let (Some(w), Some(e)) = (
+            cota_fixtures::shared("srtm/N00E010.hgt"),
+            cota_fixtures::shared("srtm/N00E011.hgt.zip"),
+        ) else {
+            return;
+        };
+        let inputs = vec![w.clone(), e.clone()];
+        let region = read_region(&inputs, &RegionOptions::DEFAULT).unwrap();
+        let files = file_extents(&region.files, region.grid.georef());
+        assert_eq!(files[0].1, [0, 0, 1200, 1200]);
+        assert_eq!(files[1].1, [1200, 0, 2400, 1200]);
+        assert!(file_extents(&region.files[..1], region.grid.georef()).is_empty());
+        let lo = LatticeOptions::DEFAULT.with_max_zoom(Some(10));
+        let lat = Lattice::resample(&region.grid, &lo).unwrap();
+        let opts = TilerOptions::DEFAULT;
+        let prep = Prepared::new(&lat, &opts).unwrap();
+        let frame = frame_of("k".into(), 4, &lat, prep.zooms(), files);
+        let out = tempfile::tempdir().unwrap();
+        write_shard_frame(out.path(), &frame).unwrap();
+        let read = |f: Option<Vec<PathBuf>>| read_part_files(&inputs, f, &RegionOptions::DEFAULT);
+        let part = load_part(out.path(), &frame, "k", &opts, 0, read).unwrap();
+        assert_eq!(part.files_read, vec![w.display().to_string()]);
+        assert!(part.lattice.grid().width() * 2 < lat.grid().width());
+        let other = load_part(out.path(), &frame, "other", &opts, 0, read);
+        let msg = other.unwrap_err().to_string();
+        assert!(
+            msg.contains("other settings") && msg.contains(".cota-shards-4.json"),
+            "{msg}"
+        );
+        let past = load_part(out.path(), &frame, "k", &opts, 4, read);
+        assert!(past.unwrap_err().to_string().contains("below 4"));
+    }
+}
