@@ -13,7 +13,8 @@
 //!   check, measure);
 //! * `mesh`: `cota.Mesh` (numpy vertices and triangles, `write`);
 //! * `tiles`: `cota.tiles` (a quantized-mesh pyramid, whole or one shard),
-//!   `cota.tiles_plan`, `cota.tiles_reduce` (used by `cota.dask`).
+//!   `cota.tiles_plan`, `cota.tiles_plan_step`, `cota.tiles_reduce` (used by
+//!   `cota.dask`).
 
 use pyo3::prelude::*;
 
@@ -34,8 +35,10 @@ fn _cota(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(dem::read, m)?)?;
     m.add_function(wrap_pyfunction!(tiles::tiles, m)?)?;
     m.add_function(wrap_pyfunction!(tiles::tiles_plan, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::tiles_plan_step, m)?)?;
     m.add_function(wrap_pyfunction!(tiles::tiles_reduce, m)?)?;
     m.add_function(wrap_pyfunction!(tiles::shard_record, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::shard_frame, m)?)?;
     m.add("CotaError", py.get_type::<errors::CotaError>())?;
     m.add("ReadError", py.get_type::<errors::ReadError>())?;
     m.add("MeshError", py.get_type::<errors::MeshError>())?;

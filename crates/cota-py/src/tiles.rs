@@ -1,6 +1,8 @@
-//! `cota.tiles`, `cota.tiles_plan` and `cota.tiles_reduce`: a quantized-mesh
-//! pyramid (`cota_io::tiles`), whole or one shard of it, as `cota tiles`
-//! writes it; the GIL is released while reading and tiling.
+//! `cota.tiles`, `cota.tiles_plan`, `cota.tiles_plan_step` and
+//! `cota.tiles_reduce`: a quantized-mesh pyramid (`cota_io::tiles`), whole or
+//! one shard of it, as `cota tiles` writes it (a shard after the plan step
+//! reads only the files of its part, `cota_io::tiles::part`); the GIL is
+//! released while reading and tiling.
 
 use std::path::PathBuf;
 
@@ -10,7 +12,9 @@ use cota_core::tiles::{
 };
 use cota_core::FillOptions;
 use cota_io::tiles::{
-    reduce_shards, shard_record_path, write_pyramid, write_shard, PyramidOptions, TileExtensions,
+    file_extents, frame_of, load_part, read_part_files, read_shard_frame, reduce_shards,
+    shard_frame_path, shard_record_path, write_coarse, write_pyramid, write_shard,
+    write_shard_frame, PartError, PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
 };
 use cota_io::{read_region, RegionOptions};
 use pyo3::prelude::*;
@@ -43,14 +47,62 @@ fn schedule(factor: Option<f64>, at_max: Option<f64>) -> ErrorSchedule {
     }
 }
 
-/// Reads, fills the voids (harmonic, as `cota tiles`) and resamples.
-fn lattice(paths: &[PathBuf], s: &Settings) -> PyResult<Lattice> {
-    let opts = RegionOptions::DEFAULT.with_fill(Some(FillOptions::DEFAULT));
-    let region = read_region(paths, &opts).map_err(errors::read)?;
+/// How the inputs are read: voids filled (harmonic, as `cota tiles`).
+fn region_options() -> RegionOptions {
+    RegionOptions::DEFAULT.with_fill(Some(FillOptions::DEFAULT))
+}
+
+/// Each input file and its samples in the mosaic (`file_extents`).
+type FileExtents = Vec<(String, [usize; 4])>;
+
+/// Reads, fills the voids and resamples; with where each file lies in the
+/// mosaic (empty when a shard must read every file: one file, voids, holes).
+fn lattice_and_files(paths: &[PathBuf], s: &Settings) -> PyResult<(Lattice, FileExtents)> {
+    let region = read_region(paths, &region_options()).map_err(errors::read)?;
     let lo = LatticeOptions::DEFAULT
         .with_max_zoom(s.max_zoom)
         .with_tile_cells(s.tile_cells);
-    Lattice::resample(&region.grid, &lo).map_err(errors::mesh)
+    let lat = Lattice::resample(&region.grid, &lo).map_err(errors::mesh)?;
+    let files = if region.voids > 0 || region.hole_samples > 0 {
+        Vec::new()
+    } else {
+        file_extents(&region.files, region.grid.georef())
+    };
+    Ok((lat, files))
+}
+
+/// Reads, fills the voids and resamples.
+fn lattice(paths: &[PathBuf], s: &Settings) -> PyResult<Lattice> {
+    lattice_and_files(paths, s).map(|(lat, _)| lat)
+}
+
+/// What decides the lattice and the plan: a shard refuses a plan step's
+/// frame made with other settings (or by the `cota` CLI).
+fn frame_key(paths: &[PathBuf], s: &Settings) -> String {
+    format!(
+        "cota-py {:?}",
+        (paths, s.min_zoom, s.max_zoom, s.tile_cells, s.error)
+    )
+}
+
+/// Shard `i` after the plan step: reads only the files of its part.
+fn write_part(
+    paths: &[PathBuf],
+    s: &Settings,
+    out: &std::path::Path,
+    opts: &PyramidOptions,
+    f: &ShardFrame,
+    i: u32,
+) -> PyResult<(u64, PyramidReport, Vec<String>)> {
+    let read = |files| read_part_files(paths, files, &region_options());
+    let part =
+        load_part(out, f, &frame_key(paths, s), &tiler(s), i, read).map_err(|e| match e {
+            PartError::Read(e) => errors::read(e),
+            PartError::Frame(e) => errors::write(e),
+        })?;
+    let prep = Prepared::new_part(&part.lattice, part.zooms.clone()).map_err(errors::mesh)?;
+    let report = write_shard(&prep, out, opts, &part.shard, &|_| {}).map_err(errors::write)?;
+    Ok((part.shard.tile_count(), report, part.files_read))
 }
 
 fn tiler(s: &Settings) -> TilerOptions {
@@ -106,7 +158,13 @@ pub(crate) fn tiles<'py>(
             )));
         }
     }
-    let (total, report) = py.detach(|| -> PyResult<_> {
+    let (total, report, files_read) = py.detach(|| -> PyResult<_> {
+        if let Some((i, n)) = shard {
+            if let Some(f) = read_shard_frame(&out, n).map_err(errors::write)? {
+                let (t, r, files) = write_part(&paths, &s, &out, &opts, &f, i)?;
+                return Ok((t, r, Some(files)));
+            }
+        }
         let lat = lattice(&paths, &s)?;
         let prep = Prepared::new(&lat, &tiler(&s)).map_err(errors::mesh)?;
         let report = match shard {
@@ -119,13 +177,78 @@ pub(crate) fn tiles<'py>(
             None => write_pyramid(&prep, &out, &opts, &|_| {}),
         }
         .map_err(errors::write)?;
-        Ok((prep.tile_count(), report))
+        Ok((prep.tile_count(), report, None))
     })?;
     let d = PyDict::new(py);
     d.set_item("tiles", total)?;
     d.set_item("written", report.written())?;
     d.set_item("skipped", report.skipped())?;
     d.set_item("bytes", report.bytes())?;
+    d.set_item("files_read", files_read)?;
+    Ok(d)
+}
+
+/// The plan step of `cota tiles --plan --shards n`: reads every input once,
+/// writes the tiles coarser than the band zoom and the frame
+/// `out/.cota-shards-n.json`; each `tiles(..., shard=(i, n))` then reads
+/// only the files its part of the lattice needs. Idempotent (tiles already
+/// there are skipped). Returns a dict: `band_zoom`, `coarse_tiles`,
+/// `written`, `skipped`, `files` (each input's samples in the mosaic; empty
+/// when every shard must read every file: one file, voids or holes).
+#[pyfunction]
+#[pyo3(signature = (paths, out, shards, *, min_zoom = 0, max_zoom = None, tile_cells = 64,
+    error_factor = None, max_error_m_at_max_zoom = None, normals = false, watermask = false,
+    metadata = false, gzip = false, force = false, check = false))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn tiles_plan_step<'py>(
+    py: Python<'py>,
+    paths: &Bound<'py, PyAny>,
+    out: PathBuf,
+    shards: u32,
+    min_zoom: u8,
+    max_zoom: Option<u8>,
+    tile_cells: u32,
+    error_factor: Option<f64>,
+    max_error_m_at_max_zoom: Option<f64>,
+    normals: bool,
+    watermask: bool,
+    metadata: bool,
+    gzip: bool,
+    force: bool,
+    check: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let paths = paths_of(paths)?;
+    let s = Settings {
+        min_zoom,
+        max_zoom,
+        tile_cells,
+        error: schedule(error_factor, max_error_m_at_max_zoom),
+    };
+    let opts = PyramidOptions::DEFAULT
+        .with_extensions(TileExtensions::with(normals, watermask, metadata))
+        .with_gzip(gzip)
+        .with_force(force)
+        .with_check(check);
+    if shards == 0 {
+        return Err(errors::value("expected at least 1 shard, found 0"));
+    }
+    let (frame, coarse, report) = py.detach(|| -> PyResult<_> {
+        let (lat, files) = lattice_and_files(&paths, &s)?;
+        let prep = Prepared::new(&lat, &tiler(&s)).map_err(errors::mesh)?;
+        let frame = frame_of(frame_key(&paths, &s), shards, &lat, prep.zooms(), files);
+        let band = frame.band_zoom;
+        let coarse = prep.tiles().filter(|t| t.z < band).count() as u64;
+        let report = write_coarse(&prep, &out, &opts, band, &|_| {})
+            .and_then(|r| write_shard_frame(&out, &frame).map(|()| r))
+            .map_err(errors::write)?;
+        Ok((frame, coarse, report))
+    })?;
+    let d = PyDict::new(py);
+    d.set_item("band_zoom", frame.band_zoom)?;
+    d.set_item("coarse_tiles", coarse)?;
+    d.set_item("written", report.written())?;
+    d.set_item("skipped", report.skipped())?;
+    d.set_item("files", frame.files)?;
     Ok(d)
 }
 
@@ -184,6 +307,14 @@ pub(crate) fn tiles_reduce(py: Python<'_>, out: PathBuf, shards: u32) -> PyResul
     py.detach(|| reduce_shards(&out, shards, false))
         .map(|r| r.tiles)
         .map_err(errors::write)
+}
+
+/// The path of the plan step's frame of `shards` shards under `out`: it
+/// exists once the plan step has written the coarse tiles (and until
+/// `tiles_reduce` removes it).
+#[pyfunction]
+pub(crate) fn shard_frame(out: PathBuf, shards: u32) -> PathBuf {
+    shard_frame_path(&out, shards)
 }
 
 /// The path of shard `index`'s record under `out`: it exists once the shard

@@ -69,15 +69,23 @@ def test_dask_local_cluster_equals_plain(plain, tmp_path):
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         out = tmp_path / "dask"
         r = cota.dask.build_pyramid(TILE, out, client=client, shards=3, **SETTINGS)
-        assert r == {"shards": 3, "skipped_shards": 0, "tiles": len(plain) - 2}
+        assert r["plan_step"] == "ran" and r["files_read"] == {i: [str(TILE)] for i in range(3)}
+        assert r["shards"] == 3 and r["skipped_shards"] == 0
+        assert r["coarse_tiles"] + r["tiles"] == len(plain) - 2
         assert files(out) == plain
         # Resume: two shards done (their records present), one not; only it runs.
         resumed = tmp_path / "resumed"
         for i in (0, 2):
             cota.tiles(TILE, resumed, shard=(i, 3), **SETTINGS)
         r = cota.dask.build_pyramid(TILE, resumed, client=client, shards=3, **SETTINGS)
-        assert r["skipped_shards"] == 2
+        assert r["skipped_shards"] == 2 and list(r["files_read"]) == [1]
         assert files(resumed) == plain
+        # Resume after the plan step: its frame is there, so it is not run again.
+        again = tmp_path / "again"
+        cota.tiles_plan_step(TILE, again, 3, **SETTINGS)
+        r = cota.dask.build_pyramid(TILE, again, client=client, shards=3, **SETTINGS)
+        assert r["plan_step"] == "skipped" and r["skipped_shards"] == 0
+        assert files(again) == plain
     shutil.rmtree(tmp_path, ignore_errors=True)
 
 
@@ -117,5 +125,63 @@ def test_dask_worker_killed_mid_shard_gives_identical_output(tmp_path):
             time.sleep(0.01)
         run.join(timeout=300)
     assert killed is not None, "no worker was caught running a shard (the run ended first)"
-    assert result["tiles"] == len(want) - 2
+    assert result["coarse_tiles"] + result["tiles"] == len(want) - 2
     assert files(out) == want
+
+
+SHARED = Path(os.environ.get("COTA_SHARED_DATA", ROOT.parent / "shared" / "data"))
+PAIR = ("srtm/N00E010.hgt", "srtm/N00E011.hgt.zip")
+PAIR_SETTINGS = {"max_zoom": 10}
+
+
+@pytest.fixture()
+def pair(tmp_path):
+    """The two-tile mosaic copied into ``tmp_path`` (west, east), and its plain pyramid's files."""
+    if not all((SHARED / p).is_file() for p in PAIR):
+        pytest.skip(f"the shared data ({SHARED}) is not there")
+    west, east = (tmp_path / Path(p).name for p in PAIR)
+    for src, dst in zip(PAIR, (west, east)):
+        shutil.copy(SHARED / src, dst)
+    plain = tmp_path / "plain"
+    cota.tiles([west, east], plain, **PAIR_SETTINGS)
+    return west, east, files(plain)
+
+
+def test_shard_after_the_plan_step_reads_only_its_part(pair, tmp_path):
+    """As ``cota tiles --shard`` after ``--plan``: the westmost of 4 shards runs with the
+    eastern file gone; the eastern one without it names it; the pyramid is byte-identical."""
+    west, east, plain = pair
+    out = tmp_path / "sharded"
+    step = cota.tiles_plan_step([west, east], out, 4, **PAIR_SETTINGS)
+    assert [f for f, _ in step["files"]] == [str(west), str(east)]
+    assert os.path.exists(cota.shard_frame(out, 4))
+    hidden = tmp_path / "elsewhere.zip"
+    east.rename(hidden)
+    r = cota.tiles([west, east], out, shard=(0, 4), **PAIR_SETTINGS)
+    assert r["files_read"] == [str(west)] and r["written"] > 0
+    with pytest.raises(cota.ReadError, match="N00E011"):
+        cota.tiles([west, east], out, shard=(3, 4), **PAIR_SETTINGS)
+    hidden.rename(east)
+    with pytest.raises(cota.WriteError, match="other settings"):
+        cota.tiles([west, east], out, shard=(1, 4), max_zoom=9)
+    for i in range(1, 4):
+        cota.tiles([west, east], out, shard=(i, 4), **PAIR_SETTINGS)
+    cota.tiles_reduce(out, 4)
+    assert files(out) == plain
+
+
+def test_dask_shards_read_only_their_part(pair, tmp_path):
+    """Under Dask the plan step runs as the first task and each shard reads only the
+    input files of its part: the westmost reads only the western file, the eastmost
+    only the eastern one; the result equals the plain pyramid byte for byte."""
+    distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed")
+    import cota.dask
+
+    west, east, plain = pair
+    out = tmp_path / "dask"
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        r = cota.dask.build_pyramid([west, east], out, client=client, shards=4, **PAIR_SETTINGS)
+    assert r["plan_step"] == "ran"
+    assert r["files_read"][0] == [str(west)] and r["files_read"][3] == [str(east)], r
+    assert files(out) == plain

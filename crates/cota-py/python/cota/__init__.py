@@ -29,9 +29,11 @@ from ._cota import (
     ReadError,
     WriteError,
     read,
+    shard_frame,
     shard_record,
     tiles,
     tiles_plan,
+    tiles_plan_step,
     tiles_reduce,
 )
 
@@ -45,8 +47,10 @@ __all__ = [
     "ReadError",
     "WriteError",
     "read",
+    "shard_frame",
     "shard_record",
     "tiles",
     "tiles_plan",
+    "tiles_plan_step",
     "tiles_reduce",
 ]

@@ -55,6 +55,17 @@ class TilesReport(TypedDict):
     written: int
     skipped: int
     bytes: int
+    files_read: list[str] | None
+    """The input files a shard after ``tiles_plan_step`` read; None otherwise."""
+
+class PlanStepReport(TypedDict):
+    """What ``tiles_plan_step`` wrote."""
+    band_zoom: int
+    coarse_tiles: int
+    written: int
+    skipped: int
+    files: list[tuple[str, tuple[int, int, int, int]]]
+    """Each input's samples in the mosaic ``(c0, r0, c1, r1)``; empty: shards read every file."""
 
 class ShardPlan(TypedDict):
     """One shard of ``tiles_plan``: its tiles as ``(zoom, x0, x1, y0, y1)``, TMS, inclusive."""
@@ -83,7 +94,34 @@ def tiles(
     """Write a quantized-mesh pyramid under ``out``, byte for byte as ``cota tiles``.
 
     ``shard=(i, n)``: only shard ``i`` of ``n`` and its record; ``tiles_reduce``
-    then writes ``layer.json``. Raises ReadError, MeshError, WriteError. Releases the GIL.
+    then writes ``layer.json``. After ``tiles_plan_step`` (its frame under ``out``)
+    the shard reads only the input files its part of the lattice needs, and
+    refuses a frame made with other settings. Raises ReadError, MeshError,
+    WriteError. Releases the GIL.
+    """
+
+def tiles_plan_step(
+    paths: Union[_Path, Sequence[_Path]],
+    out: _Path,
+    shards: int,
+    *,
+    min_zoom: int = 0,
+    max_zoom: int | None = None,
+    tile_cells: int = 64,
+    error_factor: float | None = None,
+    max_error_m_at_max_zoom: float | None = None,
+    normals: bool = False,
+    watermask: bool = False,
+    metadata: bool = False,
+    gzip: bool = False,
+    force: bool = False,
+    check: bool = False,
+) -> PlanStepReport:
+    """The plan step of ``cota tiles --plan --shards n``: read every input once, write
+    the tiles coarser than the band zoom and the frame ``out/.cota-shards-n.json``.
+
+    Idempotent. Then ``tiles(..., shard=(i, n))`` with the same settings reads only
+    its part's files. Raises ReadError, MeshError, WriteError. Releases the GIL.
     """
 
 def tiles_plan(
@@ -100,6 +138,9 @@ def tiles_plan(
 
 def tiles_reduce(out: _Path, shards: int) -> int:
     """Check the ``shards`` shards' records, write ``layer.json``, remove the records; the tile count."""
+
+def shard_frame(out: _Path, shards: int) -> str:
+    """The path of the plan step's frame (present once the coarse tiles are written)."""
 
 def shard_record(out: _Path, index: int, shards: int) -> str:
     """The path of shard ``index``'s record (present once the shard is complete)."""

@@ -1,20 +1,32 @@
 """Tile pyramids sharded across a Dask cluster: ``build_pyramid``.
 
-The shard plan (``cota.tiles_plan``, the same as ``cota tiles --plan``) becomes
-one Dask task per shard through ``client.map``; each task writes its shard's
-tiles with ``cota.tiles(..., shard=(i, n))`` (atomic writes, idempotent) and
-its record file; the reduce (``cota.tiles_reduce``) runs as a final task that
-depends on all shards and writes ``layer.json``. The output is byte-identical
-to a single-process ``cota.tiles`` / ``cota tiles`` run with the same settings.
+Three kinds of Dask task, as ``cota tiles --plan`` / ``--shard I/N`` /
+``--reduce``:
 
-* **Resumable:** a shard whose record file exists is not submitted again.
+1. the **plan step** (``cota.tiles_plan_step``): reads every input once, writes
+   the tiles coarser than the band zoom and the frame ``out/.cota-shards-N.json``
+   (where each input file lies in the mosaic);
+2. one task per **shard** (``cota.tiles(..., shard=(i, n))``), after the plan
+   step: it finds the frame, reads only the input files its part of the lattice
+   needs and holds only that part; it writes its tiles (atomic writes,
+   idempotent) and its record file;
+3. the **reduce** (``cota.tiles_reduce``), after all shards: writes
+   ``layer.json`` and removes the records and the frame.
+
+The output is byte-identical to a single-process ``cota.tiles`` / ``cota tiles``
+run with the same settings.
+
+* **Resumable:** the plan step is skipped when its frame exists (it is written
+  after the coarse tiles); a shard whose record file exists is not submitted
+  again.
 * **Retries:** a failed or lost task is retried (``retries``); a worker killed
-  mid-shard leaves only complete tiles (each written to a temporary file and
+  mid-task leaves only complete tiles (each written to a temporary file and
   renamed), which the retry skips.
 * **Progress:** the tasks are ordinary Dask tasks, visible in the dashboard
-  (named ``cota-shard-…`` and ``cota-reduce-…``).
+  (named ``cota-plan-…``, ``cota-shard-…`` and ``cota-reduce-…``).
 
-The directory ``out`` must be reachable by every worker (a shared filesystem).
+The directory ``out`` and the inputs must be reachable by every worker (a
+shared filesystem).
 """
 
 from __future__ import annotations
@@ -22,19 +34,29 @@ from __future__ import annotations
 import os
 from typing import Any, Optional, Sequence, Union
 
-from ._cota import shard_record, tiles, tiles_plan, tiles_reduce
+from ._cota import shard_frame, shard_record, tiles, tiles_plan_step, tiles_reduce
 
 _Path = Union[str, "os.PathLike[str]"]
 
 
-def _shard(inputs: list, out: str, index: int, shards: int, settings: dict) -> dict:
+def _plan_step(inputs: list, out: str, shards: int, settings: dict) -> dict:
+    return tiles_plan_step(inputs, out, shards, **settings)
+
+
+def _shard(inputs: list, out: str, index: int, shards: int, settings: dict, plan: Any) -> dict:
+    # ``plan`` (the plan step's report, or None when skipped) only orders this
+    # task after it.
+    del plan
     return tiles(inputs, out, shard=(index, shards), **settings)
 
 
-def _reduce(done: list, out: str, shards: int) -> int:
-    # ``done`` (the shards' reports) only orders this task after them.
-    del done
-    return tiles_reduce(out, shards)
+def _reduce(done: list, plan: Any, out: str, shards: int) -> tuple:
+    # ``done`` (the shards' reports) and ``plan`` (the plan step's) order this
+    # task after them; their reports are taken here, not gathered after the
+    # reduce (a lost result recomputed then would write a record or the
+    # frame again after the reduce removed them).
+    coarse = plan["coarse_tiles"] if plan is not None else None
+    return tiles_reduce(out, shards), coarse, [r["files_read"] for r in done]
 
 
 def build_pyramid(
@@ -55,7 +77,12 @@ def build_pyramid(
     ``normals``, ``watermask``, ``metadata``, ``gzip``, ``check``).
 
     Returns a dict: ``shards``, ``skipped_shards`` (already done before this
-    call), ``tiles`` (recorded by the shards). Raises what ``cota.tiles`` or
+    call), ``plan_step`` (``"ran"``, or ``"skipped"`` when its frame was there
+    or every shard was done), ``files_read`` (for each shard run here, the
+    input files it read), ``coarse_tiles`` (the tiles coarser than the band
+    zoom that the plan step covered here; None when it was skipped),
+    ``tiles`` (recorded by the shards: after the plan step, the band zoom and
+    finer). Raises what ``cota.tiles``, ``cota.tiles_plan_step`` or
     ``cota.tiles_reduce`` raise.
     """
     if client is None:
@@ -66,9 +93,12 @@ def build_pyramid(
         os.fspath(p) for p in inputs
     ]
     out = os.fspath(out)
-    plan_keys = ("min_zoom", "max_zoom", "tile_cells", "error_factor", "max_error_m_at_max_zoom")
-    plan = tiles_plan(paths, shards, **{k: v for k, v in settings.items() if k in plan_keys})
-    todo = [p["shard"] for p in plan if not os.path.exists(shard_record(out, p["shard"], shards))]
+    name = os.path.basename(out)
+    todo = [i for i in range(shards) if not os.path.exists(shard_record(out, i, shards))]
+    plan = None
+    if todo and not os.path.exists(shard_frame(out, shards)):
+        plan = client.submit(_plan_step, paths, out, shards, settings, retries=retries, pure=False,
+                             key=f"cota-plan-{shards}-{name}")
     futures = client.map(
         _shard,
         [paths] * len(todo),
@@ -76,11 +106,19 @@ def build_pyramid(
         todo,
         [shards] * len(todo),
         [settings] * len(todo),
-        key=[f"cota-shard-{i}-of-{shards}-{os.path.basename(out)}" for i in todo],
+        [plan] * len(todo),
+        key=[f"cota-shard-{i}-of-{shards}-{name}" for i in todo],
         retries=retries,
         pure=False,
     )
-    reduced = client.submit(_reduce, futures, out, shards, retries=retries, pure=False,
-                            key=f"cota-reduce-{shards}-{os.path.basename(out)}")
-    tiles_done = reduced.result()
-    return {"shards": shards, "skipped_shards": shards - len(todo), "tiles": tiles_done}
+    reduced = client.submit(_reduce, futures, plan, out, shards, retries=retries, pure=False,
+                            key=f"cota-reduce-{shards}-{name}")
+    tiles_done, coarse, read = reduced.result()
+    return {
+        "shards": shards,
+        "skipped_shards": shards - len(todo),
+        "plan_step": "skipped" if plan is None else "ran",
+        "files_read": dict(zip(todo, read)),
+        "coarse_tiles": coarse,
+        "tiles": tiles_done,
+    }

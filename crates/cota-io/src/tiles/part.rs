@@ -1,0 +1,253 @@
+//! Shards over parts of the lattice: the plan step's frame of the whole
+//! (where each input file's samples lie in the mosaic), and a shard's part,
+//! read from only the input files it needs. Shared by `cota tiles --plan` /
+//! `--shard I/N` and `cota.tiles_plan_step` / `cota.tiles(shard=…)`.
+
+use std::path::{Path, PathBuf};
+
+use cota_core::tiles::plan::plan_with;
+use cota_core::tiles::{
+    band_zoom, part_region, resampling_deviation, shard_plan, Deviation, Lattice, LatticeStats,
+    Shard, SourcePart, TilerOptions, ZoomPlan,
+};
+use cota_core::{GeoRef, HeightGrid};
+
+use super::shard::{shard_frame_path, ShardFrame};
+use super::PyramidError;
+use crate::{read_region, DemSummary, RegionError, RegionOptions};
+
+/// A shard's part could not be made: a frame that does not fit, or input
+/// files that could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum PartError {
+    /// The frame does not fit the settings or the files.
+    #[error(transparent)]
+    Frame(#[from] PyramidError),
+    /// The files could not be read.
+    #[error(transparent)]
+    Read(#[from] RegionError),
+}
+
+/// Where each file's samples lie in the mosaic `whole`, `[c0, r0, c1, r1]`
+/// inclusive; empty (a shard then reads every file) for fewer than two files
+/// or a file off the mosaic's grid origin. The caller also passes none when
+/// the mosaic has voids to fill, holes or a crop.
+pub fn file_extents(files: &[DemSummary], whole: &GeoRef) -> Vec<(String, [usize; 4])> {
+    if files.len() < 2 {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    for f in files {
+        let Some([c0, r0]) = offset_in(&f.georef, whole) else {
+            return Vec::new();
+        };
+        let e = [c0, r0, c0 + f.width - 1, r0 + f.height - 1];
+        out.push((f.path.display().to_string(), e));
+    }
+    out
+}
+
+/// The column and row of `part`'s sample (0, 0) in the grid of `whole`.
+fn offset_in(part: &GeoRef, whole: &GeoRef) -> Option<[usize; 2]> {
+    let (px, py) = part.sample_xy(0.0, 0.0);
+    let (wx, wy) = whole.sample_xy(0.0, 0.0);
+    let c = ((px - wx) / whole.pixel_x).round();
+    let r = ((py - wy) / whole.pixel_y).round();
+    (c >= 0.0 && r >= 0.0 && c.is_finite() && r.is_finite()).then_some([c as usize, r as usize])
+}
+
+/// The plan step's frame for `shards` shards of `lattice` (`key`: the
+/// settings; `files`: [`file_extents`]).
+pub fn frame_of(
+    key: String,
+    shards: u32,
+    lattice: &Lattice,
+    zooms: &[ZoomPlan],
+    files: Vec<(String, [usize; 4])>,
+) -> ShardFrame {
+    ShardFrame {
+        key,
+        shards,
+        band_zoom: band_zoom(zooms, lattice.align_zoom(), shards),
+        frame: lattice.frame().clone(),
+        stats: LatticeStats::of(lattice),
+        files,
+    }
+}
+
+/// One shard's part: its lattice, plan and tiles.
+#[derive(Debug)]
+pub struct Part {
+    /// The part of the lattice.
+    pub lattice: Lattice,
+    /// Every zoom's plan (the whole pyramid's).
+    pub zooms: Vec<ZoomPlan>,
+    /// The shard's tiles of the band zoom and finer.
+    pub shard: Shard,
+    /// The resampling's deviation over the source samples in the part.
+    pub deviation: Deviation,
+    /// The input files read.
+    pub files_read: Vec<String>,
+}
+
+/// Reads the files shard `index` of the frame `f` (found under `out`) needs
+/// and resamples its part. `key` must be the frame's. `read(files)` reads
+/// and fills the mosaic of `files` (`None`: every input, when the frame
+/// lists no files) and returns it with the names of the files read.
+///
+/// # Errors
+/// [`PyramidError::Shard`] for a frame of other settings or files off its
+/// grid, [`PyramidError::Tiles`], and what `read` returns.
+pub fn load_part<E: From<PyramidError>>(
+    out: &Path,
+    f: &ShardFrame,
+    key: &str,
+    opts: &TilerOptions,
+    index: u32,
+    read: impl FnOnce(Option<Vec<PathBuf>>) -> Result<(HeightGrid, Vec<String>), E>,
+) -> Result<Part, E> {
+    let refuse = |message: String| PyramidError::Shard {
+        path: shard_frame_path(out, f.shards),
+        message,
+    };
+    if f.key != key {
+        return Err(refuse("expected the plan step's frame of these settings, found one of other settings; run the plan step again with them".into()).into());
+    }
+    let fr = &f.frame;
+    let tiles = |e| E::from(PyramidError::Tiles(e));
+    let zooms = plan_with(&fr.scheme, fr.window, &f.stats, opts).map_err(tiles)?;
+    let shard = shard_plan(&zooms, f.shards).map_err(tiles)?;
+    let Some(shard) = shard.into_iter().nth(index as usize) else {
+        return Err(refuse(format!(
+            "expected a shard index below {}, found {index}",
+            f.shards
+        ))
+        .into());
+    };
+    let shard = shard.from_zoom(f.band_zoom);
+    let t = fr.scheme.cells_at(f.band_zoom);
+    let w = fr.window;
+    let region =
+        part_region(&shard, &fr.scheme, w, f.band_zoom).unwrap_or([w[0], w[1], w[0] + t, w[1] + t]);
+    let (grid, offset, files_read) = read_span(f, fr.source_span(region), read, &refuse)?;
+    let part = SourcePart {
+        grid: &grid,
+        offset,
+    };
+    let lattice = Lattice::resample_part(fr, part, region).map_err(tiles)?;
+    let deviation = resampling_deviation(&grid, &lattice);
+    Ok(Part {
+        lattice,
+        zooms,
+        shard,
+        deviation,
+        files_read,
+    })
+}
+
+/// The source samples `span` (`[c0, r0, c1, r1]` of the whole source): the
+/// files that meet it (every file when the frame lists none), their offset
+/// in the whole source, and their names.
+fn read_span<E: From<PyramidError>>(
+    f: &ShardFrame,
+    span: Option<[usize; 4]>,
+    read: impl FnOnce(Option<Vec<PathBuf>>) -> Result<(HeightGrid, Vec<String>), E>,
+    refuse: &dyn Fn(String) -> PyramidError,
+) -> Result<(HeightGrid, [usize; 2], Vec<String>), E> {
+    let Some(s) = span else {
+        // All 0 m: nothing is read.
+        let g = HeightGrid::new(2, 2, vec![0.0; 4], f.frame.source_georef.clone())
+            .map_err(|e| refuse(e.to_string()))?;
+        return Ok((g, [0, 0], Vec::new()));
+    };
+    if f.files.is_empty() {
+        let (grid, names) = read(None)?;
+        return Ok((grid, [0, 0], names));
+    }
+    let meets = |e: &[usize; 4]| e[0] <= s[2] && e[2] >= s[0] && e[1] <= s[3] && e[3] >= s[1];
+    let subset: Vec<PathBuf> = f
+        .files
+        .iter()
+        .filter(|(_, e)| meets(e))
+        .map(|(p, _)| PathBuf::from(p))
+        .collect();
+    if subset.is_empty() {
+        return Err(refuse(format!("expected input files covering samples {s:?} of the mosaic, found none in the plan step's frame; run the plan step again")).into());
+    }
+    let (grid, names) = read(Some(subset))?;
+    let whole = &f.frame.source_georef;
+    let (part, w) = (grid.georef(), whole);
+    if part.pixel_x != w.pixel_x || part.pixel_y != w.pixel_y || part.pixel_is != w.pixel_is {
+        return Err(refuse(format!(
+            "expected the shard's files on the plan step's grid (pixel {} x {}), found pixel {} x {}; run the plan step again",
+            w.pixel_x, w.pixel_y, part.pixel_x, part.pixel_y
+        )).into());
+    }
+    let offset = offset_in(part, whole)
+        .ok_or_else(|| refuse("expected the shard's files inside the mosaic, found them before its first sample; run the plan step again".into()))?;
+    Ok((grid, offset, names))
+}
+
+/// A reader for [`load_part`]: reads `files` (every one of `inputs` for
+/// `None`) with `opts` and returns the mosaic and the names of the files.
+///
+/// # Errors
+/// [`RegionError`] from [`read_region`].
+pub fn read_part_files(
+    inputs: &[PathBuf],
+    files: Option<Vec<PathBuf>>,
+    opts: &RegionOptions,
+) -> Result<(HeightGrid, Vec<String>), PartError> {
+    let paths = files.unwrap_or_else(|| inputs.to_vec());
+    let region = read_region(&paths, opts)?;
+    let names = region
+        .files
+        .iter()
+        .map(|f| f.path.display().to_string())
+        .collect();
+    Ok((region.grid, names))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tiles::write_shard_frame;
+    use cota_core::tiles::{LatticeOptions, Prepared};
+
+    /// The two-tile mosaic: each file placed in it, the westmost of 4 shards
+    /// reads only the western file, and a frame of other settings is refused.
+    #[test]
+    fn part_reads_only_its_files_and_refuses_other_settings() {
+        let (Some(w), Some(e)) = (
+            cota_fixtures::shared("srtm/N00E010.hgt"),
+            cota_fixtures::shared("srtm/N00E011.hgt.zip"),
+        ) else {
+            return;
+        };
+        let inputs = vec![w.clone(), e.clone()];
+        let region = read_region(&inputs, &RegionOptions::DEFAULT).unwrap();
+        let files = file_extents(&region.files, region.grid.georef());
+        assert_eq!(files[0].1, [0, 0, 1200, 1200]);
+        assert_eq!(files[1].1, [1200, 0, 2400, 1200]);
+        assert!(file_extents(&region.files[..1], region.grid.georef()).is_empty());
+        let lo = LatticeOptions::DEFAULT.with_max_zoom(Some(10));
+        let lat = Lattice::resample(&region.grid, &lo).unwrap();
+        let opts = TilerOptions::DEFAULT;
+        let prep = Prepared::new(&lat, &opts).unwrap();
+        let frame = frame_of("k".into(), 4, &lat, prep.zooms(), files);
+        let out = tempfile::tempdir().unwrap();
+        write_shard_frame(out.path(), &frame).unwrap();
+        let read = |f: Option<Vec<PathBuf>>| read_part_files(&inputs, f, &RegionOptions::DEFAULT);
+        let part = load_part(out.path(), &frame, "k", &opts, 0, read).unwrap();
+        assert_eq!(part.files_read, vec![w.display().to_string()]);
+        assert!(part.lattice.grid().width() * 2 < lat.grid().width());
+        let other = load_part(out.path(), &frame, "other", &opts, 0, read);
+        let msg = other.unwrap_err().to_string();
+        assert!(
+            msg.contains("other settings") && msg.contains(".cota-shards-4.json"),
+            "{msg}"
+        );
+        let past = load_part(out.path(), &frame, "k", &opts, 4, read);
+        assert!(past.unwrap_err().to_string().contains("below 4"));
+    }
+}
