@@ -72,7 +72,10 @@ fn sharded_equals_plain(inputs: &[&str], settings: &[&str]) {
             !out.join("layer.json").exists(),
             "the shards leave layer.json to the reduce"
         );
-        run_ok(&["tiles", "-o", o, "--reduce", "--shards", &ns]);
+        let r = run_ok(&["tiles", "-o", o, "--reduce", "--shards", &ns, "--json"]);
+        let r: serde_json::Value = serde_json::from_str(&r).unwrap();
+        // The reduce counts the whole pyramid, the plan step's tiles too.
+        assert_eq!(r["tiles"].as_u64(), Some(want.len() as u64 - 2), "{r}");
         assert!(files(&out) == want, "{n} shards differ from the plain run");
     }
 }

@@ -300,7 +300,8 @@ pub(crate) fn tiles_plan<'py>(
 
 /// Checks the records of the `shards` shards written under `out`, writes
 /// `layer.json` and removes the records (`cota tiles --reduce`). Returns
-/// the number of tiles the shards recorded. Raises `WriteError` naming a
+/// the pyramid's tile count: the shards' tiles plus, after a plan step,
+/// its coarse tiles. Raises `WriteError` naming a
 /// missing or disagreeing shard.
 #[pyfunction]
 pub(crate) fn tiles_reduce(py: Python<'_>, out: PathBuf, shards: u32) -> PyResult<u64> {

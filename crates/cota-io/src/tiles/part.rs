@@ -65,10 +65,17 @@ pub fn frame_of(
     zooms: &[ZoomPlan],
     files: Vec<(String, [usize; 4])>,
 ) -> ShardFrame {
+    let band = band_zoom(zooms, lattice.align_zoom(), shards);
+    let coarse_tiles = zooms
+        .iter()
+        .filter(|z| z.zoom < band)
+        .map(|z| z.range.count())
+        .sum();
     ShardFrame {
         key,
         shards,
-        band_zoom: band_zoom(zooms, lattice.align_zoom(), shards),
+        band_zoom: band,
+        coarse_tiles,
         frame: lattice.frame().clone(),
         stats: LatticeStats::of(lattice),
         files,

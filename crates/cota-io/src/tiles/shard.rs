@@ -55,6 +55,8 @@ pub struct ShardFrame {
     pub shards: u32,
     /// The band zoom: the tiles coarser than it were written by the plan step.
     pub band_zoom: u8,
+    /// How many tiles are coarser than the band zoom (the plan step's).
+    pub coarse_tiles: u64,
     /// The whole lattice's frame.
     pub frame: LatticeFrame,
     /// The whole lattice's statistics.
@@ -89,6 +91,7 @@ impl ShardFrame {
             "key": self.key,
             "shards": self.shards,
             "band_zoom": self.band_zoom,
+            "coarse_tiles": self.coarse_tiles,
             "max_zoom": f.scheme.max_zoom,
             "tile_cells": f.scheme.tile_cells,
             "footprint": f.footprint.map(bits),
@@ -132,6 +135,7 @@ impl ShardFrame {
             key: v["key"].as_str()?.to_owned(),
             shards: u32::try_from(v["shards"].as_u64()?).ok()?,
             band_zoom: small("band_zoom")?,
+            coarse_tiles: v["coarse_tiles"].as_u64()?,
             frame: LatticeFrame {
                 scheme: GeographicScheme {
                     max_zoom: small("max_zoom")?,
@@ -296,7 +300,8 @@ fn remove_temporaries(out: &Path) -> Result<(), PyramidError> {
 pub struct ReduceReport {
     /// Shards merged.
     pub shards: u32,
-    /// Tiles they recorded.
+    /// Tiles in the pyramid: those the shards recorded, plus the plan step's
+    /// coarse tiles when shards ran over parts.
     pub tiles: u64,
 }
 
@@ -384,6 +389,9 @@ pub fn reduce_shards(
     let (layer, tiles) = agreed(&paths, &records, &run, &manifest)?;
     remove_temporaries(out)?;
     write_file_atomically(&out.join("layer.json"), layer.as_bytes(), replace_read_only)?;
+    // After a plan step the shards hold only the band zoom and finer: its
+    // coarse tiles count too.
+    let coarse = read_shard_frame(out, shards)?.map_or(0, |f| f.coarse_tiles);
     let frame = shard_frame_path(out, shards);
     for p in paths.iter().chain(frame.is_file().then_some(&frame)) {
         std::fs::remove_file(p).map_err(|source| PyramidError::Io {
@@ -391,5 +399,8 @@ pub fn reduce_shards(
             source,
         })?;
     }
-    Ok(ReduceReport { shards, tiles })
+    Ok(ReduceReport {
+        shards,
+        tiles: tiles + coarse,
+    })
 }

@@ -137,7 +137,7 @@ def tiles_plan(
     """The deterministic shard plan of ``cota tiles --plan --shards n``."""
 
 def tiles_reduce(out: _Path, shards: int) -> int:
-    """Check the ``shards`` shards' records, write ``layer.json``, remove the records; the tile count."""
+    """Check the ``shards`` shards' records, write ``layer.json``, remove the records; the pyramid's tile count (with the plan step's coarse tiles)."""
 
 def shard_frame(out: _Path, shards: int) -> str:
     """The path of the plan step's frame (present once the coarse tiles are written)."""

@@ -81,8 +81,8 @@ def build_pyramid(
     or every shard was done), ``files_read`` (for each shard run here, the
     input files it read), ``coarse_tiles`` (the tiles coarser than the band
     zoom that the plan step covered here; None when it was skipped),
-    ``tiles`` (recorded by the shards: after the plan step, the band zoom and
-    finer). Raises what ``cota.tiles``, ``cota.tiles_plan_step`` or
+    ``tiles`` (in the pyramid: the shards' tiles plus the plan step's coarse
+    ones). Raises what ``cota.tiles``, ``cota.tiles_plan_step`` or
     ``cota.tiles_reduce`` raise.
     """
     if client is None:
