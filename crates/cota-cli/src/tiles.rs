@@ -134,7 +134,7 @@ fn plan_step(
     frame: &ShardFrame,
 ) -> anyhow::Result<std::process::ExitCode> {
     let band = frame.band_zoom;
-    let coarse = prepared.tiles().filter(|t| t.z < band).count() as u64;
+    let coarse = frame.coarse_tiles;
     let pb = progress::bar(coarse, "tiles");
     write_coarse(prepared, &a.output, &pyramid_options(a), band, &|n| {
         pb.set_position(n)

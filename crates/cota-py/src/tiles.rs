@@ -237,7 +237,7 @@ pub(crate) fn tiles_plan_step<'py>(
         let prep = Prepared::new(&lat, &tiler(&s)).map_err(errors::mesh)?;
         let frame = frame_of(frame_key(&paths, &s), shards, &lat, prep.zooms(), files);
         let band = frame.band_zoom;
-        let coarse = prep.tiles().filter(|t| t.z < band).count() as u64;
+        let coarse = frame.coarse_tiles;
         let report = write_coarse(&prep, &out, &opts, band, &|_| {})
             .and_then(|r| write_shard_frame(&out, &frame).map(|()| r))
             .map_err(errors::write)?;
