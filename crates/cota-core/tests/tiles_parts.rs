@@ -6,8 +6,8 @@
 
 use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
-    band_zoom, part_region, shard_plan, Lattice, LatticeOptions, LatticeStats, Prepared,
-    SourcePart, TilerOptions,
+    band_zoom, owned_region, part_region, shard_plan, BandCorners, CoarseHierarchy, Lattice,
+    LatticeFrame, LatticeOptions, LatticeStats, Prepared, Shard, SourcePart, TilerOptions,
 };
 use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
 
@@ -131,4 +131,104 @@ fn a_part_refuses_a_source_crop_that_misses_what_it_reads() {
     };
     let err = Lattice::resample_part(&frame, part, region).unwrap_err();
     assert!(err.to_string().contains("covering"), "{err}");
+}
+
+/// Shard `shard`'s part of the lattice of `src` (band zoom `band`).
+fn part_of(src: &HeightGrid, frame: &LatticeFrame, shard: &Shard, band: u8) -> Option<Lattice> {
+    let region = part_region(shard, &frame.scheme, frame.window, band)?;
+    let span = frame.source_span(region).unwrap();
+    let sub = crop(src, span);
+    let part = SourcePart {
+        grid: &sub,
+        offset: [span[0], span[1]],
+    };
+    Some(Lattice::resample_part(frame, part, region).unwrap())
+}
+
+/// The shards' partial maxima, merged, cut every tile coarser than the band
+/// zoom exactly as the whole hierarchy does: meshes, normals and water
+/// masks, for 1 to 11 shards (band zooms at and below the alignment zoom),
+/// from zoom 0 (the cap's levels) on.
+#[test]
+fn merged_partial_maxima_cut_the_coarse_tiles_of_the_whole_hierarchy() {
+    let mut src = source();
+    // Some samples at or below sea level, for the water masks.
+    let lowered: Vec<f32> = src.heights().iter().map(|h| h - 430.0).collect();
+    src = HeightGrid::new(src.width(), src.height(), lowered, src.georef().clone()).unwrap();
+    let lopts = LatticeOptions::DEFAULT.with_tile_cells(16);
+    let whole = Lattice::resample(&src, &lopts).unwrap();
+    let opts = TilerOptions::DEFAULT;
+    let prep = Prepared::new(&whole, &opts).unwrap();
+    let zooms = plan(&whole, &opts).unwrap();
+    let frame = whole.frame().clone();
+    let mut below_align = 0;
+    for n in [1, 2, 3, 5, 8, 11] {
+        let band = band_zoom(&zooms, whole.align_zoom(), n);
+        below_align += usize::from(band > whole.align_zoom());
+        let mut corners = BandCorners::new(frame.window, frame.scheme.cells_at(band));
+        let mut partials = Vec::new();
+        for shard in shard_plan(&zooms, n).unwrap() {
+            let shard = shard.from_zoom(band);
+            let Some(lat) = part_of(&src, &frame, &shard, band) else {
+                continue;
+            };
+            corners.fill_from(&lat);
+            let owned = owned_region(&shard, &frame.scheme, band).unwrap();
+            partials.push((lat, owned));
+        }
+        let mut got = Vec::new();
+        for (lat, owned) in &partials {
+            let part_prep = Prepared::new_part(lat, zooms.clone()).unwrap();
+            got.push(
+                part_prep
+                    .coarse_partial(*owned, band, &corners, true, true)
+                    .unwrap(),
+            );
+        }
+        let merged = CoarseHierarchy::new(&frame, zooms.clone(), band, corners, got).unwrap();
+        let mut cut = 0;
+        for t in merged.tiles() {
+            let (a, b) = (
+                prep.cut(t, true, true).unwrap(),
+                merged.cut(t, true, true).unwrap(),
+            );
+            assert_eq!(
+                format!("{:?}", a.mesh),
+                format!("{:?}", b.mesh),
+                "{t} n={n}"
+            );
+            assert_eq!(a.normals_enu, b.normals_enu, "{t} n={n}");
+            assert_eq!(a.water_mask, b.water_mask, "{t} n={n}");
+            assert_eq!(a.children, b.children, "{t} n={n}");
+            cut += 1;
+        }
+        assert_eq!(cut, prep.tiles().filter(|t| t.z < band).count(), "n={n}");
+    }
+    assert!(below_align > 0, "no band zoom below the alignment zoom");
+}
+
+/// A lost partial is refused, not silently cut as flat terrain.
+#[test]
+fn a_missing_partial_is_refused() {
+    let src = source();
+    let whole = Lattice::resample(&src, &LatticeOptions::DEFAULT).unwrap();
+    let zooms = plan(&whole, &TilerOptions::DEFAULT).unwrap();
+    let frame = whole.frame().clone();
+    let band = band_zoom(&zooms, whole.align_zoom(), 3);
+    let mut corners = BandCorners::new(frame.window, frame.scheme.cells_at(band));
+    corners.fill_from(&whole);
+    let shards = shard_plan(&zooms, 3).unwrap();
+    let mut partials = Vec::new();
+    for shard in shards.iter().skip(1) {
+        let shard = shard.from_zoom(band);
+        let lat = part_of(&src, &frame, &shard, band).unwrap();
+        let owned = owned_region(&shard, &frame.scheme, band).unwrap();
+        let p = Prepared::new_part(&lat, zooms.clone()).unwrap();
+        partials.push(
+            p.coarse_partial(owned, band, &corners, false, false)
+                .unwrap(),
+        );
+    }
+    let err = CoarseHierarchy::new(&frame, zooms, band, corners, partials).unwrap_err();
+    assert!(err.to_string().contains("missing"), "{err}");
 }

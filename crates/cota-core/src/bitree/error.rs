@@ -188,17 +188,52 @@ impl Span {
     }
 }
 
-/// Triangles with at least about this many samples (a square of the row
-/// count: 64 rows) are scanned in parallel, in blocks of 32 rows.
-const PARALLEL_SPAN_SAMPLES: u64 = 1 << 12;
+/// Largest |plane − h| over the samples of `t` (global lattice
+/// coordinates) inside `clip` (`[x0, y0, x1, y1]`, inclusive), the heights
+/// read from `heights` (rows of `w` samples whose sample (0, 0) is at global
+/// `origin`, covering `clip`), the plane through `hs`: each sample's value
+/// is bit for bit the one [`span_error`] computes over the whole triangle, so
+/// the maxima of disjoint (or overlapping) clips combine into it exactly.
+pub(crate) fn clipped_span_error(
+    heights: &[f32],
+    w: usize,
+    origin: [u64; 2],
+    t: &Tri,
+    hs: [f64; 3],
+    clip: [u64; 4],
+) -> f64 {
+    let span = Span::new(w, t, hs);
+    let (ya, yb) = span.rows();
+    let (ya, yb) = (ya.max(clip[1] as i64), yb.min(clip[3] as i64));
+    let row_max = |y: i64| -> f64 {
+        let (xl, xr) = span.spans.at(y);
+        let (a, b) = (xl.max(clip[0] as i64), xr.min(clip[2] as i64));
+        if a > b {
+            return 0.0;
+        }
+        let base = span.h0 + span.gx * (xl - span.x0) as f64 + span.gy * (y - span.y0) as f64;
+        let start = (y as u64 - origin[1]) as usize * w + (a as u64 - origin[0]) as usize;
+        let row = &heights[start..=start + (b - a) as usize];
+        row_max_dev_from(row, base, span.gx, (a - xl) as f64)
+    };
+    if ya > yb {
+        return 0.0;
+    }
+    if (yb - ya) > 64 {
+        (ya..=yb)
+            .into_par_iter()
+            .map(row_max)
+            .reduce(|| 0.0, max_no_nan)
+    } else {
+        (ya..=yb).map(row_max).fold(0.0, max_no_nan)
+    }
+}
 
-/// max_k |base + gx·k − row[k]|, with four independent maxima so the loop
-/// vectorises (the index runs as an exact `f64` counter, no int→float
-/// conversion per sample).
-#[inline]
-pub(super) fn row_max_dev(row: &[f32], base: f64, gx: f64) -> f64 {
+/// [`row_max_dev`] for a row whose first sample is `k0` samples after the
+/// span's start (`base` is the plane at the span's start).
+fn row_max_dev_from(row: &[f32], base: f64, gx: f64, k0: f64) -> f64 {
     let mut m = [0f64; 4];
-    let mut k = 0f64;
+    let mut k = k0;
     let chunks = row.chunks_exact(4);
     let rest = chunks.remainder();
     for c in chunks {
@@ -213,6 +248,18 @@ pub(super) fn row_max_dev(row: &[f32], base: f64, gx: f64) -> f64 {
         m[j] = if d > m[j] { d } else { m[j] };
     }
     max_no_nan(max_no_nan(m[0], m[1]), max_no_nan(m[2], m[3]))
+}
+
+/// Triangles with at least about this many samples (a square of the row
+/// count: 64 rows) are scanned in parallel, in blocks of 32 rows.
+const PARALLEL_SPAN_SAMPLES: u64 = 1 << 12;
+
+/// max_k |base + gx·k − row[k]|, with four independent maxima so the loop
+/// vectorises (the index runs as an exact `f64` counter, no int→float
+/// conversion per sample).
+#[inline]
+pub(super) fn row_max_dev(row: &[f32], base: f64, gx: f64) -> f64 {
+    row_max_dev_from(row, base, gx, 0.0)
 }
 
 /// The larger of two values known not to be NaN (the build refuses voids, so

@@ -87,7 +87,7 @@ use error_code::SplitRule;
 use fused::SWEEP_ROWS;
 use kernels::SMALL_MAX;
 
-pub(crate) use error::round_up_f32;
+pub(crate) use error::{clipped_span_error, round_up_f32};
 pub use extract::{ExtractOptions, Extraction, Target, TASK_DEPTH};
 pub use points::PointCounts;
 

@@ -61,55 +61,59 @@ impl Cap {
     pub(crate) fn build(lattice: &Lattice, tree: &Bitree<'_>) -> Cap {
         let s = lattice.scheme();
         let top = s.cells_at(lattice.align_zoom());
+        let window = lattice.window();
+        let own = |t: &Tri| own_error(lattice, t);
+        let below = |m: Pt| bitree_error(lattice, tree, m);
+        Cap::build_with(s.root_cells(), window, top, own, below)
+    }
+
+    /// The coarse levels above squares of side `top` over `window`, on a
+    /// world of `root_cells` rows: `own(T)` the own error of a coarse
+    /// triangle, `below(m)` the error of a split point of the level `top`
+    /// (the window's bitree).
+    pub(crate) fn build_with(
+        root_cells: u64,
+        window: [u64; 4],
+        top: u64,
+        own: impl Fn(&Tri) -> f32 + Sync,
+        below: impl Fn(Pt) -> f32 + Sync,
+    ) -> Cap {
         let mut cap = Cap::default();
         let mut size = 2 * top;
-        while size <= s.root_cells() {
-            cap.add_level(lattice, tree, size, top);
+        while size <= root_cells {
+            let child = |cap: &Cap, m: Pt| {
+                if size / 2 > top {
+                    cap.error(m)
+                } else {
+                    below(m)
+                }
+            };
+            cap.add_level(root_cells, window, size, &own, &child);
             size *= 2;
         }
         cap
     }
 
-    /// The error of the split point `m` of a triangle whose square has side
-    /// `size`: from the window's bitree up to `top`, from the cap above.
-    fn child_error(&self, lattice: &Lattice, tree: &Bitree<'_>, m: Pt, size: u64, top: u64) -> f32 {
-        if size > top {
-            return self.error(m);
-        }
-        let [x0, y0, x1, y1] = lattice.window();
-        let (x, y) = (u64::from(m[0]), u64::from(m[1]));
-        if x < x0 || x > x1 || y < y0 || y > y1 {
-            return 0.0;
-        }
-        let w = lattice.grid().width();
-        let i = (y - y0) as usize * w + (x - x0) as usize;
-        error_code::decode(tree.error_codes()[i])
-    }
-
     /// Adds the `B(size)` then the `A(size)` split points whose squares meet
     /// the window's interior.
-    fn add_level(&mut self, lattice: &Lattice, tree: &Bitree<'_>, size: u64, top: u64) {
-        let s = lattice.scheme();
-        let [x0, y0, x1, y1] = lattice.window();
-        let (nx, ny) = (2 * s.root_cells() / size, s.root_cells() / size);
-        // Every square within two squares of the window: a split point
-        // outside it inherits errors through the closure from split points
-        // nearer the window, up to `s/2 + s/4 + … < s` away at level `s`
-        // per level above (none at the bitree's levels, see
-        // `lattice::zero_band`), so beyond two squares every error is 0.
-        let first = |v: u64| (v / size).saturating_sub(2);
-        let squares: Vec<[u64; 2]> = (first(y0)..=(y1 / size + 2).min(ny - 1))
-            .flat_map(|j| (first(x0)..=(x1 / size + 2).min(nx - 1)).map(move |i| [i, j]))
-            .collect();
+    fn add_level(
+        &mut self,
+        root_cells: u64,
+        window: [u64; 4],
+        size: u64,
+        own: &(impl Fn(&Tri) -> f32 + Sync),
+        child: &(impl Fn(&Cap, Pt) -> f32 + Sync),
+    ) {
+        let squares = level_squares(root_cells, window, size);
         // Sides: the four triangles with a side as hypotenuse and the centre as apex.
         let sides: Vec<(Pt, f32)> = squares
             .par_iter()
             .flat_map_iter(|&[i, j]| {
                 square_tris(i, j, size).0.map(|t| {
                     let (c0, c1) = t.children();
-                    let e = own_error(lattice, &t)
-                        .max(self.child_error(lattice, tree, c0.mid(), size / 2, top))
-                        .max(self.child_error(lattice, tree, c1.mid(), size / 2, top));
+                    let e = own(&t)
+                        .max(child(self, c0.mid()))
+                        .max(child(self, c1.mid()));
                     (t.mid(), e)
                 })
             })
@@ -127,7 +131,7 @@ impl Cap {
                 for t in tris {
                     let (c0, c1) = t.children();
                     e = e
-                        .max(own_error(lattice, &t))
+                        .max(own(&t))
                         .max(self.error(c0.mid()))
                         .max(self.error(c1.mid()));
                 }
@@ -143,10 +147,38 @@ impl Cap {
     }
 }
 
+/// The error of the split point `m` of the window's bitree (its code's
+/// upper bound; 0 beyond the window).
+fn bitree_error(lattice: &Lattice, tree: &Bitree<'_>, m: Pt) -> f32 {
+    let [x0, y0, x1, y1] = lattice.window();
+    let (x, y) = (u64::from(m[0]), u64::from(m[1]));
+    if x < x0 || x > x1 || y < y0 || y > y1 {
+        return 0.0;
+    }
+    let w = lattice.grid().width();
+    let i = (y - y0) as usize * w + (x - x0) as usize;
+    error_code::decode(tree.error_codes()[i])
+}
+
+/// The squares of side `size` of a coarse level: every square within two
+/// squares of the window (a split point outside it inherits errors through
+/// the closure from split points nearer the window, up to
+/// `s/2 + s/4 + … < s` away at level `s` per level above; none at the
+/// bitree's levels, see `lattice::zero_band`), so beyond them every error
+/// is 0.
+pub(crate) fn level_squares(root_cells: u64, window: [u64; 4], size: u64) -> Vec<[u64; 2]> {
+    let [x0, y0, x1, y1] = window;
+    let (nx, ny) = (2 * root_cells / size, root_cells / size);
+    let first = |v: u64| (v / size).saturating_sub(2);
+    (first(y0)..=(y1 / size + 2).min(ny - 1))
+        .flat_map(|j| (first(x0)..=(x1 / size + 2).min(nx - 1)).map(move |i| [i, j]))
+        .collect()
+}
+
 /// The square `(i, j)` of side `size`: its four side triangles (hypotenuse a
 /// side, apex the centre) and its two halves, cut along `\` when `i + j` is
 /// even and `/` when odd (the hierarchy's diagonals).
-fn square_tris(i: u64, j: u64, size: u64) -> ([Tri; 4], [Tri; 2]) {
+pub(crate) fn square_tris(i: u64, j: u64, size: u64) -> ([Tri; 4], [Tri; 2]) {
     let (x0, y0) = ((i * size) as u32, (j * size) as u32);
     let s = size as u32;
     let (nw, ne, sw, se) = ([x0, y0], [x0 + s, y0], [x0, y0 + s], [x0 + s, y0 + s]);
@@ -194,7 +226,36 @@ pub(crate) fn square_halves([nw, ne, sw, se]: [Pt; 4], even: bool) -> [Tri; 2] {
 /// samples one by one, the 0 m beyond by the ends of each row's span),
 /// rounded up to `f32`.
 pub(crate) fn own_error(lattice: &Lattice, t: &Tri) -> f32 {
-    let [x0, y0, x1, y1] = lattice.window();
+    let z = t_heights(t, |x, y| lattice.height_at(x, y));
+    round_up_f32(own_rows(
+        lattice.window(),
+        t,
+        z,
+        true,
+        Some((lattice, lattice.window())),
+    ))
+}
+
+/// The heights of `t`'s corners `a`, `b`, `c`.
+pub(crate) fn t_heights(t: &Tri, height: impl Fn(u64, u64) -> f32) -> [f64; 3] {
+    [t.a, t.b, t.c].map(|q| f64::from(height(u64::from(q[0]), u64::from(q[1]))))
+}
+
+/// Largest |plane − h| of a coarse triangle `t` whose corners have heights
+/// `z`, over the window `window`: with `beyond`, the 0 m outside the window
+/// (by the ends of each row's span, the plane being linear along a row);
+/// with `inside = (lattice, clip)`, the window samples in `clip` read one by
+/// one from `lattice`. The maxima of the parts (the 0 m beyond, and clips
+/// covering the window) combine into the whole's exactly: each value is
+/// computed the same way in every part.
+pub(crate) fn own_rows(
+    window: [u64; 4],
+    t: &Tri,
+    z: [f64; 3],
+    beyond: bool,
+    inside: Option<(&Lattice, [u64; 4])>,
+) -> f64 {
+    let [x0, y0, x1, y1] = window;
     let p = [t.a, t.b, t.c];
     let lo = [p.iter().map(|q| q[0]).min(), p.iter().map(|q| q[1]).min()];
     let hi = [p.iter().map(|q| q[0]).max(), p.iter().map(|q| q[1]).max()];
@@ -205,7 +266,6 @@ pub(crate) fn own_error(lattice: &Lattice, t: &Tri) -> f32 {
     if u64::from(hx) <= x0 || u64::from(lx) >= x1 || u64::from(hy) <= y0 || u64::from(ly) >= y1 {
         return 0.0;
     }
-    let z = p.map(|q| f64::from(lattice.height_at(u64::from(q[0]), u64::from(q[1]))));
     let Some(plane) = Plane::new(p, z) else {
         return 0.0;
     };
@@ -219,31 +279,37 @@ pub(crate) fn own_error(lattice: &Lattice, t: &Tri) -> f32 {
         let bg = |x: i64| plane.at(x as f64, y as f64).abs();
         let (wx0, wx1) = (x0 as i64, x1 as i64);
         if y < y0 as i64 || y > y1 as i64 || r < wx0 || l > wx1 {
-            return bg(l).max(bg(r));
+            return if beyond { bg(l).max(bg(r)) } else { 0.0 };
         }
         let (a, b) = (l.max(wx0), r.min(wx1));
         let mut e = 0f64;
-        if l < a {
+        if beyond && l < a {
             e = e.max(bg(l)).max(bg(a - 1));
         }
-        if r > b {
+        if beyond && r > b {
             e = e.max(bg(b + 1)).max(bg(r));
         }
-        let g = lattice.grid();
-        let row = &g.heights()[(y - y0 as i64) as usize * g.width()..];
-        for x in a..=b {
-            let d = (plane.at(x as f64, y as f64) - row[(x - wx0) as usize] as f64).abs();
-            e = e.max(d);
+        if let Some((lattice, clip)) = inside {
+            let (ca, cb) = (a.max(clip[0] as i64), b.min(clip[2] as i64));
+            if y < clip[1] as i64 || y > clip[3] as i64 || ca > cb {
+                return e;
+            }
+            let g = lattice.grid();
+            let [ox, oy] = lattice.origin();
+            let row = &g.heights()[(y - oy as i64) as usize * g.width()..];
+            for x in ca..=cb {
+                let d = (plane.at(x as f64, y as f64) - row[(x - ox as i64) as usize] as f64).abs();
+                e = e.max(d);
+            }
         }
         e
     };
-    let e = if yb - ya > 256 {
+    if yb - ya > 256 {
         (ya..=yb)
             .into_par_iter()
             .map(row_error)
             .reduce(|| 0.0, f64::max)
     } else {
         (ya..=yb).map(row_error).fold(0.0, f64::max)
-    };
-    round_up_f32(e)
+    }
 }

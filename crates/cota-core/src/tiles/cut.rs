@@ -24,7 +24,7 @@ use super::cap::{square_halves, Cap};
 use super::error::TilesError;
 use super::lattice::Lattice;
 use super::plan::{children_in, plan, TileRange, TilerOptions, ZoomPlan};
-use super::scheme::TileId;
+use super::scheme::{GeographicScheme, TileId};
 use crate::bitree::error_code::SplitRule;
 use crate::bitree::Bitree;
 use crate::grid::metres_per_degree;
@@ -168,6 +168,14 @@ impl<'l> Prepared<'l> {
             && hi(y, w[3]) <= st[3]
     }
 
+    /// The window bitree's code of the split point `m` (stored by a part).
+    pub(crate) fn code_at(&self, m: Pt) -> u16 {
+        let [x0, y0, _, _] = self.lattice.stored();
+        let w = self.lattice.grid().width();
+        let i = (u64::from(m[1]) - y0) as usize * w + (u64::from(m[0]) - x0) as usize;
+        self.tree.error_codes()[i]
+    }
+
     /// The lattice.
     pub fn lattice(&self) -> &'l Lattice {
         self.lattice
@@ -253,29 +261,13 @@ impl<'l> Prepared<'l> {
     /// The leaves under the tile's square (north-west corner `o`, side
     /// `cells`) at threshold `thr`, depth-first.
     fn walk(&self, o: [u64; 2], cells: u64, thr: f64) -> Vec<Tri> {
-        let rule = SplitRule::new(thr);
-        let (x0, y0, s) = (o[0] as u32, o[1] as u32, cells as u32);
-        let (nw, ne, sw, se) = ([x0, y0], [x0 + s, y0], [x0, y0 + s], [x0 + s, y0 + s]);
-        let even = (u64::from(x0) / cells + u64::from(y0) / cells).is_multiple_of(2);
-        let roots = square_halves([nw, ne, sw, se], even);
-        let mut stack: Vec<Tri> = roots.iter().rev().copied().collect();
-        let mut out = Vec::new();
-        while let Some(t) = stack.pop() {
-            if !t.is_unit() && self.splits(&t, &rule) {
-                let (c0, c1) = t.children();
-                stack.push(c1);
-                stack.push(c0);
-            } else {
-                out.push(t);
-            }
-        }
-        out
+        walk_leaves(o, cells, thr, |t, rule| self.splits(t, rule))
     }
 
     /// Whether `t` splits under `rule`: the window's bitree up to the
     /// alignment zoom's squares, the cap above.
     #[inline]
-    fn splits(&self, t: &Tri, rule: &SplitRule) -> bool {
+    pub(crate) fn splits(&self, t: &Tri, rule: &SplitRule) -> bool {
         let m = t.mid();
         let size = t.a[0].abs_diff(t.b[0]).max(t.a[1].abs_diff(t.b[1]));
         let top = self.lattice.scheme().cells_at(self.lattice.align_zoom());
@@ -296,73 +288,151 @@ impl<'l> Prepared<'l> {
 
     /// The leaves as a mesh in tile coordinates, vertices in first-use order.
     fn mesh_of(&self, leaves: &[Tri], o: [u64; 2]) -> Mesh {
-        let mut ids: HashMap<Pt, u32> = HashMap::with_capacity(leaves.len());
-        let mut mesh = Mesh {
-            vertices: Vec::with_capacity(leaves.len() / 2 + 4),
-            triangles: Vec::with_capacity(leaves.len()),
-        };
-        for t in leaves {
-            let mut tri = [t.a, t.b, t.c];
-            if orient_up(tri[0], tri[1], tri[2]) < 0 {
-                tri.swap(1, 2);
-            }
-            let idx = tri.map(|p| {
-                *ids.entry(p).or_insert_with(|| {
-                    mesh.vertices.push(MeshVertex {
-                        col: (u64::from(p[0]) - o[0]) as u32,
-                        row: (u64::from(p[1]) - o[1]) as u32,
-                        z_m: self.lattice.height_at(u64::from(p[0]), u64::from(p[1])),
-                    });
-                    (mesh.vertices.len() - 1) as u32
-                })
-            });
-            mesh.triangles.push(idx);
-        }
-        mesh
+        mesh_of_leaves(leaves, o, |x, y| self.lattice.height_at(x, y))
     }
 
-    /// Per-vertex unit normals (east, north, up) from the lattice's slope
-    /// over `max(1, cells / 64)` cells on each side of the vertex.
+    /// Per-vertex unit normals (east, north, up): [`normal_at`].
     fn normals(&self, mesh: &Mesh, o: [u64; 2], cells: u64) -> Vec<[f32; 3]> {
         let s = self.lattice.scheme();
-        let k = (cells / 64).max(1);
-        let (wmax, hmax) = (2 * s.root_cells(), s.root_cells());
-        let d = s.cell_deg();
+        let h = |x: u64, y: u64| self.lattice.height_at(x, y);
         mesh.vertices
             .iter()
             .map(|v| {
-                let (x, y) = (o[0] + u64::from(v.col), o[1] + u64::from(v.row));
-                let h = |x: u64, y: u64| f64::from(self.lattice.height_at(x, y));
-                let (xa, xb) = (x.saturating_sub(k), (x + k).min(wmax));
-                let (ya, yb) = (y.saturating_sub(k), (y + k).min(hmax));
-                let [mx, my] = metres_per_degree(s.lat_of(y as f64));
-                let dx = (h(xb, y) - h(xa, y)) / (((xb - xa) as f64) * d * mx).max(1e-9);
-                // Rows run south: the slope to the north is minus the slope down the rows.
-                let dn = -(h(x, yb) - h(x, ya)) / (((yb - ya) as f64) * d * my).max(1e-9);
-                let n = [-dx, -dn, 1.0];
-                let len = (n[0] * n[0] + n[1] * n[1] + 1.0).sqrt();
-                n.map(|c| (c / len) as f32)
+                normal_at(
+                    s,
+                    h,
+                    o[0] + u64::from(v.col),
+                    o[1] + u64::from(v.row),
+                    cells,
+                )
             })
             .collect()
     }
 
     /// The water mask: 256×256 nearest lattice samples, water at or below 0 m.
     fn water(&self, o: [u64; 2], cells: u64) -> WaterMask {
-        let mut grid = Vec::with_capacity(256 * 256);
-        for j in 0..256u64 {
-            let y = o[1] + (j * cells + 127) / 255;
-            for i in 0..256u64 {
-                let x = o[0] + (i * cells + 127) / 255;
-                grid.push(if self.lattice.height_at(x, y) <= 0.0 {
-                    255u8
-                } else {
-                    0
+        water_of(o, cells, |_, x, y| self.lattice.height_at(x, y) <= 0.0)
+    }
+}
+
+/// The leaves under the square with north-west corner `o` and side `cells`
+/// at threshold `thr`, depth-first, splitting where `splits` says.
+pub(crate) fn walk_leaves(
+    o: [u64; 2],
+    cells: u64,
+    thr: f64,
+    splits: impl Fn(&Tri, &SplitRule) -> bool,
+) -> Vec<Tri> {
+    let rule = SplitRule::new(thr);
+    let (x0, y0, s) = (o[0] as u32, o[1] as u32, cells as u32);
+    let (nw, ne, sw, se) = ([x0, y0], [x0 + s, y0], [x0, y0 + s], [x0 + s, y0 + s]);
+    let even = (u64::from(x0) / cells + u64::from(y0) / cells).is_multiple_of(2);
+    let roots = square_halves([nw, ne, sw, se], even);
+    let mut stack: Vec<Tri> = roots.iter().rev().copied().collect();
+    let mut out = Vec::new();
+    while let Some(t) = stack.pop() {
+        if !t.is_unit() && splits(&t, &rule) {
+            let (c0, c1) = t.children();
+            stack.push(c1);
+            stack.push(c0);
+        } else {
+            out.push(t);
+        }
+    }
+    out
+}
+
+/// The leaves as a mesh in the coordinates of the tile whose north-west
+/// corner is `o`, vertices in first-use order, heights from `height`.
+pub(crate) fn mesh_of_leaves(
+    leaves: &[Tri],
+    o: [u64; 2],
+    height: impl Fn(u64, u64) -> f32,
+) -> Mesh {
+    let mut ids: HashMap<Pt, u32> = HashMap::with_capacity(leaves.len());
+    let mut mesh = Mesh {
+        vertices: Vec::with_capacity(leaves.len() / 2 + 4),
+        triangles: Vec::with_capacity(leaves.len()),
+    };
+    for t in leaves {
+        let mut tri = [t.a, t.b, t.c];
+        if orient_up(tri[0], tri[1], tri[2]) < 0 {
+            tri.swap(1, 2);
+        }
+        let idx = tri.map(|p| {
+            *ids.entry(p).or_insert_with(|| {
+                mesh.vertices.push(MeshVertex {
+                    col: (u64::from(p[0]) - o[0]) as u32,
+                    row: (u64::from(p[1]) - o[1]) as u32,
+                    z_m: height(u64::from(p[0]), u64::from(p[1])),
                 });
-            }
+                (mesh.vertices.len() - 1) as u32
+            })
+        });
+        mesh.triangles.push(idx);
+    }
+    mesh
+}
+
+/// How far (lattice cells) a vertex normal looks on each side: `T_z / 64`
+/// for a tile of `T_z` cells, at least 1 and at most this, so that a shard
+/// holding its part plus this margin computes the normals of its vertices
+/// for every zoom (see [`super::partial`]).
+pub const NORMAL_REACH_CELLS: u64 = 256;
+
+/// The unit normal (east, north, up) at global lattice position `(x, y)` for
+/// a tile of `cells` cells: the lattice's slope from `height` over
+/// `k = clamp(cells / 64, 1, NORMAL_REACH_CELLS)` cells on each side of the
+/// vertex (clamped to the world), so two tiles that share a vertex give it
+/// the same normal.
+pub(crate) fn normal_at(
+    s: &GeographicScheme,
+    height: impl Fn(u64, u64) -> f32,
+    x: u64,
+    y: u64,
+    cells: u64,
+) -> [f32; 3] {
+    let k = (cells / 64).clamp(1, NORMAL_REACH_CELLS);
+    let (wmax, hmax) = (2 * s.root_cells(), s.root_cells());
+    let d = s.cell_deg();
+    let h = |x: u64, y: u64| f64::from(height(x, y));
+    let (xa, xb) = (x.saturating_sub(k), (x + k).min(wmax));
+    let (ya, yb) = (y.saturating_sub(k), (y + k).min(hmax));
+    let [mx, my] = metres_per_degree(s.lat_of(y as f64));
+    let dx = (h(xb, y) - h(xa, y)) / (((xb - xa) as f64) * d * mx).max(1e-9);
+    // Rows run south: the slope to the north is minus the slope down the rows.
+    let dn = -(h(x, yb) - h(x, ya)) / (((yb - ya) as f64) * d * my).max(1e-9);
+    let n = [-dx, -dn, 1.0];
+    let len = (n[0] * n[0] + n[1] * n[1] + 1.0).sqrt();
+    n.map(|c| (c / len) as f32)
+}
+
+/// The global lattice position of water-mask sample `(i, j)` (0..256) of
+/// the tile with north-west corner `o` and side `cells`.
+#[inline]
+pub(crate) fn water_sample(o: [u64; 2], cells: u64, i: u64, j: u64) -> [u64; 2] {
+    [
+        o[0] + (i * cells + 127) / 255,
+        o[1] + (j * cells + 127) / 255,
+    ]
+}
+
+/// The water mask of the tile with north-west corner `o` and side `cells`:
+/// 256×256 nearest lattice samples, `wet(index, x, y)` for each.
+pub(crate) fn water_of(
+    o: [u64; 2],
+    cells: u64,
+    wet: impl Fn(usize, u64, u64) -> bool,
+) -> WaterMask {
+    let mut grid = Vec::with_capacity(256 * 256);
+    for j in 0..256u64 {
+        for i in 0..256u64 {
+            let [x, y] = water_sample(o, cells, i, j);
+            grid.push(if wet(grid.len(), x, y) { 255u8 } else { 0 });
         }
-        match grid.first() {
-            Some(&v) if grid.iter().all(|&g| g == v) => WaterMask::Uniform(v),
-            _ => WaterMask::Grid(grid),
-        }
+    }
+    match grid.first() {
+        Some(&v) if grid.iter().all(|&g| g == v) => WaterMask::Uniform(v),
+        _ => WaterMask::Grid(grid),
     }
 }

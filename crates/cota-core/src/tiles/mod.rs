@@ -30,18 +30,22 @@ pub mod cap;
 pub mod cut;
 mod error;
 pub mod lattice;
+pub mod merge;
+pub mod partial;
 pub mod plan;
 pub mod scheme;
 pub mod shard;
 
-pub use cut::{Prepared, TileMesh, WaterMask};
+pub use cut::{Prepared, TileMesh, WaterMask, NORMAL_REACH_CELLS};
 pub use error::TilesError;
 pub use lattice::{
     resampling_deviation, Deviation, Lattice, LatticeFrame, LatticeOptions, SourcePart,
 };
+pub use merge::CoarseHierarchy;
+pub use partial::{BandCorners, CoarsePartial, FinePoint, WATER_UNKNOWN};
 pub use plan::{LatticeStats, TileRange, TilerOptions, ZoomPlan};
 pub use scheme::{ErrorSchedule, GeographicScheme, TileId};
-pub use shard::{band_zoom, part_region, shard_plan, Shard};
+pub use shard::{band_zoom, owned_region, part_region, shard_plan, Shard};
 
 /// The largest `u`, `v` or height value of quantized-mesh-1.0.
 pub const QUANTIZED_MAX: u32 = 32767;

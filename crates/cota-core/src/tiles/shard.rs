@@ -25,6 +25,7 @@
 //! outwards to band-zoom tiles with the global diagonals. The tiles coarser
 //! than the band zoom straddle bands; they need the whole lattice.
 
+use super::cut::NORMAL_REACH_CELLS;
 use super::error::TilesError;
 use super::plan::{TileRange, ZoomPlan};
 use super::scheme::{GeographicScheme, TileId};
@@ -126,8 +127,11 @@ pub fn part_region(
         }));
     }
     let b = bbox?;
-    let lo = |v: u64, min: u64| (v.saturating_sub(t / 2) / t * t).max(min);
-    let hi = |v: u64, max: u64| ((v + t / 2).div_ceil(t) * t).min(max);
+    // Half a band tile (the split points' reach), and the normals' reach
+    // (the coarse tiles' vertex normals, computed by the shards).
+    let g = (t / 2).max(NORMAL_REACH_CELLS);
+    let lo = |v: u64, min: u64| (v.saturating_sub(g) / t * t).max(min);
+    let hi = |v: u64, max: u64| ((v + g).div_ceil(t) * t).min(max);
     let (mut x0, mut y0) = (lo(b[0], window[0]), lo(b[1], window[1]));
     let (x1, y1) = (hi(b[2], window[2]), hi(b[3], window[3]));
     // The global diagonals: `(x0 + y0) / t` even (the window's origin is).
@@ -139,6 +143,22 @@ pub fn part_region(
         }
     }
     Some([x0, y0, x1, y1])
+}
+
+/// The samples whose coarse maxima `shard` computes ([`super::partial`]):
+/// the squares of its tiles at zoom `band`, `[x0, y0, x1, y1]` inclusive
+/// (global lattice), `None` when it has none there. The shards' regions
+/// cover the window (the band zoom's tiles are the window's).
+pub fn owned_region(shard: &Shard, scheme: &GeographicScheme, band: u8) -> Option<[u64; 4]> {
+    let (_, r) = shard.ranges.iter().find(|(z, _)| *z == band)?;
+    let c = scheme.cells_at(band);
+    let ny = u64::from(GeographicScheme::tiles_at(band)[1]);
+    Some([
+        u64::from(r.x0) * c,
+        (ny - 1 - u64::from(r.y1)) * c,
+        (u64::from(r.x1) + 1) * c,
+        (ny - u64::from(r.y0)) * c,
+    ])
 }
 
 /// The band of each position along the cut axis at the finest zoom:
