@@ -5,13 +5,14 @@
 use std::time::Instant;
 
 use anyhow::Context;
+use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
-    resampling_deviation, shard_plan, Deviation, ErrorSchedule, Lattice, LatticeOptions, Prepared,
-    Shard, TilerOptions, ZoomPlan,
+    resampling_deviation, shard_plan, BandCorners, Deviation, ErrorSchedule, Lattice,
+    LatticeOptions, Prepared, Shard, TilerOptions, ZoomPlan,
 };
 use cota_io::tiles::{
-    read_shard_frame, reduce_shards, write_coarse, write_pyramid, write_shard, write_shard_frame,
-    PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
+    read_shard_frame, reduce_shards, write_plan, write_pyramid, write_shard, PyramidOptions,
+    PyramidReport, ShardFrame, TileExtensions,
 };
 use serde_json::json;
 
@@ -50,15 +51,14 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         Vec::new()
     };
     drop(inp.grid);
+    if a.plan {
+        return plan_step(a, &lattice, &opts, files);
+    }
     let t_prep = Instant::now();
     let spinner = progress::spinner("preparing");
     let prepared = Prepared::new(&lattice, &opts).with_context(|| format!("tiling {name}"))?;
     drop(spinner);
     let prep_s = t_prep.elapsed().as_secs_f64();
-    if a.plan {
-        let frame = tiles_part::frame_of(a, &lattice, prepared.zooms(), files);
-        return plan_step(a, &prepared, &frame);
-    }
     let report = write(a, &prepared, None)?;
     let times = [prep_s, t0.elapsed().as_secs_f64()];
     finish(a, &name, &prepared, &deviation, &report, times, json!(null));
@@ -116,7 +116,7 @@ fn run_part(
     let prepared = Prepared::new_part(&part.lattice, part.zooms.clone())
         .with_context(|| format!("tiling {name}"))?;
     let prep_s = t_prep.elapsed().as_secs_f64();
-    let report = write(a, &prepared, Some(part.shard.clone()))?;
+    let report = write(a, &prepared, Some((part.shard.clone(), f)))?;
     let times = [prep_s, t0.elapsed().as_secs_f64()];
     let info = json!({
         "band_zoom": f.band_zoom,
@@ -127,22 +127,22 @@ fn run_part(
     Ok(std::process::ExitCode::SUCCESS)
 }
 
-/// `--plan`: the tiles coarser than the band zoom, the frame, the plan.
+/// `--plan`: the frame and the band corners (the reduce cuts the tiles
+/// coarser than the band zoom from the shards' partial maxima), the plan.
 fn plan_step(
     a: &TilesArgs,
-    prepared: &Prepared<'_>,
-    frame: &ShardFrame,
+    lattice: &Lattice,
+    opts: &TilerOptions,
+    files: Vec<(String, [usize; 4])>,
 ) -> anyhow::Result<std::process::ExitCode> {
+    let zooms = plan(lattice, opts)?;
+    let frame = tiles_part::frame_of(a, lattice, &zooms, files);
     let band = frame.band_zoom;
-    let coarse = frame.coarse_tiles;
-    let pb = progress::bar(coarse, "tiles");
-    write_coarse(prepared, &a.output, &pyramid_options(a), band, &|n| {
-        pb.set_position(n)
-    })
-    .and_then(|_| write_shard_frame(&a.output, frame))
-    .with_context(|| format!("writing {}", a.output.display()))?;
-    pb.finish_and_clear();
-    print_plan(prepared.zooms(), a.shards, band, coarse, a.json)
+    let mut corners = BandCorners::new(lattice.window(), lattice.scheme().cells_at(band));
+    corners.fill_from(lattice);
+    write_plan(&a.output, &frame, &corners)
+        .with_context(|| format!("writing {}", a.output.display()))?;
+    print_plan(&zooms, a.shards, band, frame.coarse_tiles, a.json)
 }
 
 fn pyramid_options(a: &TilesArgs) -> PyramidOptions {
@@ -158,11 +158,12 @@ fn pyramid_options(a: &TilesArgs) -> PyramidOptions {
 fn write(
     a: &TilesArgs,
     prepared: &Prepared<'_>,
-    part: Option<Shard>,
+    part: Option<(Shard, &ShardFrame)>,
 ) -> anyhow::Result<PyramidReport> {
     let pyramid = pyramid_options(a);
-    let shard = match (part, a.shard) {
-        (Some(s), _) => Some(s),
+    let frame = part.as_ref().map(|p| p.1);
+    let shard = match (part.as_ref(), a.shard) {
+        (Some((s, _)), _) => Some(s.clone()),
         (None, Some((i, n))) => Some(shard_plan(prepared.zooms(), n)?.swap_remove(i as usize)),
         (None, None) => None,
     };
@@ -171,7 +172,9 @@ fn write(
         .map_or(prepared.tile_count(), Shard::tile_count);
     let pb = progress::bar(total, "tiles");
     let report = match &shard {
-        Some(s) => write_shard(prepared, &a.output, &pyramid, s, &|n| pb.set_position(n)),
+        Some(s) => write_shard(prepared, &a.output, &pyramid, s, frame, &|n| {
+            pb.set_position(n)
+        }),
         None => write_pyramid(prepared, &a.output, &pyramid, &|n| pb.set_position(n)),
     }
     .with_context(|| format!("writing {}", a.output.display()))?;
@@ -181,15 +184,25 @@ fn write(
 
 /// `--reduce`: the shards' records into layer.json.
 fn reduce(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
-    let r = reduce_shards(&a.output, a.shards, a.force)
+    let coarse = read_shard_frame(&a.output, a.shards)
+        .ok()
+        .flatten()
+        .map_or(0, |f| f.coarse_tiles);
+    let pb = progress::bar(coarse, "coarse tiles");
+    let r = reduce_shards(&a.output, a.shards, a.force, &|n| pb.set_position(n))
         .with_context(|| format!("reducing {}", a.output.display()))?;
+    pb.finish_and_clear();
     if a.json {
-        println!("{}", json!({"reduced": r.shards, "tiles": r.tiles}));
+        println!(
+            "{}",
+            json!({"reduced": r.shards, "tiles": r.tiles, "coarse_written": r.coarse_written})
+        );
     } else {
         println!(
-            "reduced     {} shards, {} tiles; wrote {}",
+            "reduced     {} shards, {} tiles ({} coarser than the band zoom cut here); wrote {}",
             r.shards,
             r.tiles,
+            r.coarse_written,
             a.output.join("layer.json").display()
         );
     }
@@ -197,7 +210,7 @@ fn reduce(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
 }
 
 /// `--plan`: each shard's tiles, zoom by zoom (the band zoom and finer; the
-/// plan step wrote the `coarse` tiles above it).
+/// reduce cuts the `coarse` tiles above it).
 fn print_plan(
     zooms: &[ZoomPlan],
     shards: u32,
@@ -227,7 +240,7 @@ fn print_plan(
         );
         return Ok(std::process::ExitCode::SUCCESS);
     }
-    println!("plan step  {coarse:>6}  zooms below {band} (written)");
+    println!("reduce     {coarse:>6}  zooms below {band} (from the shards' partial maxima)");
     println!("shard       tiles  zoom: columns x rows (TMS)");
     for s in &plan {
         let parts: Vec<String> = s

@@ -36,7 +36,7 @@ fn run_ok(args: &[&str]) -> String {
     stdout(&r)
 }
 
-/// Plain run, then 1, 2, 3 shards + reduce, each compared file by file.
+/// Plain run, then 1, 2, 3 and 5 shards + reduce, each compared file by file.
 fn sharded_equals_plain(inputs: &[&str], settings: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
     let plain = dir.path().join("plain");
@@ -47,7 +47,7 @@ fn sharded_equals_plain(inputs: &[&str], settings: &[&str]) {
     run_ok(&[&args[..], &["-o", p]].concat());
     let want = files(&plain);
     assert!(want.len() > 5, "{want:?}");
-    for n in 1..=3u32 {
+    for n in [1, 2, 3, 5u32] {
         let out = dir.path().join(format!("sharded{n}"));
         let o = out.to_str().unwrap();
         let ns = n.to_string();
@@ -59,11 +59,19 @@ fn sharded_equals_plain(inputs: &[&str], settings: &[&str]) {
             .iter()
             .map(|s| s["tiles"].as_u64().unwrap())
             .sum();
-        // The plan step wrote the tiles above the band zoom; the shards
-        // list the others once: as many as the pyramid has (but layer.json
-        // and the run manifest).
+        // The reduce cuts the tiles above the band zoom; the shards list the
+        // others once: as many as the pyramid has (but layer.json and the
+        // run manifest).
         let coarse = plan["coarse_tiles"].as_u64().unwrap();
+        assert!(coarse > 0, "{plan}");
         assert_eq!((planned + coarse) as usize, want.len() - 2, "{plan}");
+        let terrain = |d: &Path| {
+            let f = files(d);
+            f.keys()
+                .filter(|k| k.extension().is_some_and(|e| e == "terrain"))
+                .count()
+        };
+        assert_eq!(terrain(&out), 0, "the plan step writes no tile");
         for i in (0..n).rev() {
             let s = format!("{i}/{n}");
             run_ok(&[&args[..], &["-o", o, "--shard", &s]].concat());
@@ -72,10 +80,17 @@ fn sharded_equals_plain(inputs: &[&str], settings: &[&str]) {
             !out.join("layer.json").exists(),
             "the shards leave layer.json to the reduce"
         );
+        assert_eq!(
+            terrain(&out) as u64,
+            planned,
+            "the shards write only their tiles"
+        );
         let r = run_ok(&["tiles", "-o", o, "--reduce", "--shards", &ns, "--json"]);
         let r: serde_json::Value = serde_json::from_str(&r).unwrap();
-        // The reduce counts the whole pyramid, the plan step's tiles too.
+        // The reduce counts the whole pyramid, and cut the coarse tiles from
+        // the shards' partial maxima.
         assert_eq!(r["tiles"].as_u64(), Some(want.len() as u64 - 2), "{r}");
+        assert_eq!(r["coarse_written"].as_u64(), Some(coarse), "{r}");
         assert!(files(&out) == want, "{n} shards differ from the plain run");
     }
 }
@@ -97,7 +112,10 @@ fn shards_and_reduce_equal_plain_run_on_the_two_tile_mosaic() {
         a.to_str().unwrap().to_owned(),
         b.to_str().unwrap().to_owned(),
     );
-    sharded_equals_plain(&[&a, &b], &["--max-zoom", "7", "--gzip"]);
+    sharded_equals_plain(
+        &[&a, &b],
+        &["--max-zoom", "7", "--gzip", "--normals", "--watermask"],
+    );
 }
 
 #[test]
@@ -220,4 +238,67 @@ fn shard_refuses_a_frame_of_other_settings_or_a_damaged_one() {
         assert_eq!(r.status.code(), Some(1), "{bad}: {}", stderr(&r));
         assert!(stderr(&r).contains(".cota-shards-2.json"), "{}", stderr(&r));
     }
+}
+
+/// The reduce refuses a missing, truncated or foreign partial file, and a
+/// shard damaged band corners, naming the file; the directory stays as it
+/// was, and the reduce succeeds once the file is back.
+#[test]
+fn reduce_refuses_a_missing_or_damaged_partial_naming_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t");
+    let o = out.to_str().unwrap();
+    let base = ["tiles", "--max-zoom", "7", "--normals", "-o", o];
+    run_ok(&[&base[..], &["--plan", "--shards", "2"]].concat());
+    for i in 0..2 {
+        run_ok(&[&base[..], &["--shard", &format!("{i}/2")]].concat());
+    }
+    let partial = out.join(".cota-partial-1-of-2.bin");
+    let good = std::fs::read(&partial).unwrap();
+    let mut foreign = good.clone();
+    foreign[8..].reverse();
+    for bad in [
+        good[..good.len() / 2].to_vec(),
+        b"COTAPRT1".to_vec(),
+        b"not a partial".to_vec(),
+        foreign,
+        Vec::new(),
+    ] {
+        std::fs::write(&partial, &bad).unwrap();
+        let r = cota(&["tiles", "-o", o, "--reduce", "--shards", "2"]);
+        assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+        assert!(
+            stderr(&r).contains(".cota-partial-1-of-2.bin"),
+            "{}",
+            stderr(&r)
+        );
+        assert!(!out.join("layer.json").exists());
+    }
+    std::fs::remove_file(&partial).unwrap();
+    let r = cota(&["tiles", "-o", o, "--reduce", "--shards", "2"]);
+    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+    assert!(
+        stderr(&r).contains(".cota-partial-1-of-2.bin"),
+        "{}",
+        stderr(&r)
+    );
+    // Damaged corners: a shard (run again) names them.
+    let corners = out.join(".cota-shards-2.corners");
+    let kept = std::fs::read(&corners).unwrap();
+    std::fs::write(&corners, &kept[..kept.len() - 3]).unwrap();
+    let r = cota(&[&base[..], &["--shard", "1/2"]].concat());
+    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+    assert!(
+        stderr(&r).contains(".cota-shards-2.corners"),
+        "{}",
+        stderr(&r)
+    );
+    std::fs::write(&corners, &kept).unwrap();
+    run_ok(&[&base[..], &["--shard", "1/2"]].concat());
+    run_ok(&["tiles", "-o", o, "--reduce", "--shards", "2"]);
+    let left: Vec<_> = files(&out)
+        .into_keys()
+        .filter(|k| k.to_string_lossy().starts_with(".cota-") && !k.ends_with(".cota-tiles.json"))
+        .collect();
+    assert!(left.is_empty(), "the reduce leaves {left:?}");
 }

@@ -8,13 +8,13 @@ use std::path::PathBuf;
 
 use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
-    shard_plan, ErrorSchedule, Lattice, LatticeOptions, Prepared, TilerOptions,
+    shard_plan, BandCorners, ErrorSchedule, Lattice, LatticeOptions, Prepared, TilerOptions,
 };
 use cota_core::FillOptions;
 use cota_io::tiles::{
     file_extents, frame_of, load_part, read_part_files, read_shard_frame, reduce_shards,
-    shard_frame_path, shard_record_path, write_coarse, write_pyramid, write_shard,
-    write_shard_frame, PartError, PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
+    shard_frame_path, shard_record_path, write_plan, write_pyramid, write_shard, PartError,
+    PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
 };
 use cota_io::{read_region, RegionOptions};
 use pyo3::prelude::*;
@@ -101,7 +101,8 @@ fn write_part(
             PartError::Frame(e) => errors::write(e),
         })?;
     let prep = Prepared::new_part(&part.lattice, part.zooms.clone()).map_err(errors::mesh)?;
-    let report = write_shard(&prep, out, opts, &part.shard, &|_| {}).map_err(errors::write)?;
+    let report =
+        write_shard(&prep, out, opts, &part.shard, Some(f), &|_| {}).map_err(errors::write)?;
     Ok((part.shard.tile_count(), report, part.files_read))
 }
 
@@ -172,7 +173,7 @@ pub(crate) fn tiles<'py>(
                 let part = shard_plan(prep.zooms(), n)
                     .map_err(errors::value)?
                     .swap_remove(i as usize);
-                write_shard(&prep, &out, &opts, &part, &|_| {})
+                write_shard(&prep, &out, &opts, &part, None, &|_| {})
             }
             None => write_pyramid(&prep, &out, &opts, &|_| {}),
         }
@@ -224,30 +225,27 @@ pub(crate) fn tiles_plan_step<'py>(
         tile_cells,
         error: schedule(error_factor, max_error_m_at_max_zoom),
     };
-    let opts = PyramidOptions::DEFAULT
-        .with_extensions(TileExtensions::with(normals, watermask, metadata))
-        .with_gzip(gzip)
-        .with_force(force)
-        .with_check(check);
+    // The tiles' settings are the shards' (each records them with its
+    // partial maxima, and the reduce cuts the coarse tiles with them).
+    let _ = (normals, watermask, metadata, gzip, force, check);
     if shards == 0 {
         return Err(errors::value("expected at least 1 shard, found 0"));
     }
-    let (frame, coarse, report) = py.detach(|| -> PyResult<_> {
+    let (frame, coarse) = py.detach(|| -> PyResult<_> {
         let (lat, files) = lattice_and_files(&paths, &s)?;
-        let prep = Prepared::new(&lat, &tiler(&s)).map_err(errors::mesh)?;
-        let frame = frame_of(frame_key(&paths, &s), shards, &lat, prep.zooms(), files);
-        let band = frame.band_zoom;
+        let zooms = plan(&lat, &tiler(&s)).map_err(errors::mesh)?;
+        let frame = frame_of(frame_key(&paths, &s), shards, &lat, &zooms, files);
+        let mut corners = BandCorners::new(lat.window(), lat.scheme().cells_at(frame.band_zoom));
+        corners.fill_from(&lat);
+        write_plan(&out, &frame, &corners).map_err(errors::write)?;
         let coarse = frame.coarse_tiles;
-        let report = write_coarse(&prep, &out, &opts, band, &|_| {})
-            .and_then(|r| write_shard_frame(&out, &frame).map(|()| r))
-            .map_err(errors::write)?;
-        Ok((frame, coarse, report))
+        Ok((frame, coarse))
     })?;
     let d = PyDict::new(py);
     d.set_item("band_zoom", frame.band_zoom)?;
     d.set_item("coarse_tiles", coarse)?;
-    d.set_item("written", report.written())?;
-    d.set_item("skipped", report.skipped())?;
+    d.set_item("written", 0)?;
+    d.set_item("skipped", 0)?;
     d.set_item("files", frame.files)?;
     Ok(d)
 }
@@ -298,20 +296,20 @@ pub(crate) fn tiles_plan<'py>(
     Ok(list)
 }
 
-/// Checks the records of the `shards` shards written under `out`, writes
-/// `layer.json` and removes the records (`cota tiles --reduce`). Returns
-/// the pyramid's tile count: the shards' tiles plus, after a plan step,
-/// its coarse tiles. Raises `WriteError` naming a
+/// Checks the records of the `shards` shards written under `out`, after a
+/// plan step cuts the tiles coarser than the band zoom from the shards'
+/// partial maxima, writes `layer.json` and removes the records
+/// (`cota tiles --reduce`). Returns the pyramid's tile count. Raises `WriteError` naming a
 /// missing or disagreeing shard.
 #[pyfunction]
 pub(crate) fn tiles_reduce(py: Python<'_>, out: PathBuf, shards: u32) -> PyResult<u64> {
-    py.detach(|| reduce_shards(&out, shards, false))
+    py.detach(|| reduce_shards(&out, shards, false, &|_| {}))
         .map(|r| r.tiles)
         .map_err(errors::write)
 }
 
 /// The path of the plan step's frame of `shards` shards under `out`: it
-/// exists once the plan step has written the coarse tiles (and until
+/// exists once the plan step is done (and until
 /// `tiles_reduce` removes it).
 #[pyfunction]
 pub(crate) fn shard_frame(out: PathBuf, shards: u32) -> PathBuf {

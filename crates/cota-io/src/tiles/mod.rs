@@ -27,6 +27,7 @@
 //! # }
 //! ```
 
+pub mod coarse;
 pub mod decode;
 pub mod ellipsoid;
 pub mod layer;
@@ -36,16 +37,20 @@ pub mod quantized_mesh;
 pub mod seams;
 pub mod shard;
 
+pub use coarse::{
+    corners_path, partial_path, read_band_corners, read_partial, write_band_corners, write_partial,
+    write_reduced_coarse, write_shard_partial, PartialHeader,
+};
 pub use decode::{decode, DecodeError, DecodedTile, Header};
 pub use layer::layer_json;
 pub use part::{file_extents, frame_of, load_part, read_part_files, Part, PartError};
 pub use pyramid::{
-    make_tile, tile_path, write_pyramid, MadeTile, PyramidError, PyramidOptions, PyramidReport,
-    ZoomReport,
+    finish_tile, make_tile, tile_path, write_pyramid, MadeTile, PyramidError, PyramidOptions,
+    PyramidReport, ZoomReport,
 };
 pub use quantized_mesh::{encode, encode_tile, EncodeError, Extensions, TileExtensions, TileFrame};
 pub use seams::{compare_border, edge_lists_match, BorderCheck, Neighbour};
 pub use shard::{
-    read_shard_frame, reduce_shards, shard_frame_path, shard_record_path, write_coarse,
-    write_shard, write_shard_frame, ReduceReport, ShardFrame,
+    read_shard_frame, reduce_shards, shard_frame_path, shard_record_path, write_plan, write_shard,
+    write_shard_frame, ReduceReport, ShardFrame,
 };

@@ -25,8 +25,8 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use cota_core::mesh::check::{check_placed_mesh, CheckError};
-use cota_core::tiles::{Prepared, TileId, TilesError};
+use cota_core::mesh::check::{check_placed_mesh, CheckError, Region};
+use cota_core::tiles::{Prepared, TileId, TileMesh, TilesError};
 use rayon::prelude::*;
 
 use super::decode::{decode, DecodeError};
@@ -175,39 +175,61 @@ pub fn make_tile(
 ) -> Result<MadeTile, PyramidError> {
     let ext = opts.extensions;
     let tile = prep.cut(t, ext.normals, ext.watermask)?;
+    finish_tile(tile, opts, Some(&prep.region(t)))
+}
+
+/// Encodes a cut tile and (with [`PyramidOptions::check`]) verifies it:
+/// decoded independently, its edge lists, and with `region` the one
+/// checker at every lattice sample of its square.
+///
+/// # Errors
+/// As [`make_tile`].
+pub fn finish_tile(
+    tile: TileMesh,
+    opts: &PyramidOptions,
+    region: Option<&Region<'_>>,
+) -> Result<MadeTile, PyramidError> {
+    let (t, ext) = (tile.tile, opts.extensions);
     let raw =
         encode_tile(&tile, &ext).map_err(|source| PyramidError::Encode { tile: t, source })?;
     let bytes = if opts.gzip { gzip(&raw) } else { raw };
+    let unchecked = MadeTile {
+        tile: t,
+        triangles: tile.mesh.triangles.len(),
+        vertices: tile.mesh.vertices.len(),
+        max_error_m: tile.max_error_m,
+        measured_error_m: f64::NAN,
+        bytes,
+    };
     if !opts.check {
-        return Ok(MadeTile {
-            tile: t,
-            bytes,
-            triangles: tile.mesh.triangles.len(),
-            vertices: tile.mesh.vertices.len(),
-            max_error_m: tile.max_error_m,
-            measured_error_m: f64::NAN,
-        });
+        return Ok(unchecked);
     }
-    let decoded = decode(&bytes).map_err(|source| PyramidError::Decode { tile: t, source })?;
-    let report = check_placed_mesh(
-        &prep.region(t),
-        &decoded.to_placed(tile.cells),
-        Some(tile.max_error_m),
-    )
-    .map_err(|source| PyramidError::Check { tile: t, source })?;
+    let decoded =
+        decode(&unchecked.bytes).map_err(|source| PyramidError::Decode { tile: t, source })?;
     if !edge_lists_match(&decoded) {
         return Err(PyramidError::Decode {
             tile: t,
             source: DecodeError::Invalid("the edge lists do not hold the edges' vertices".into()),
         });
     }
+    let Some(region) = region else {
+        return Ok(MadeTile {
+            triangles: decoded.triangles.len(),
+            vertices: decoded.u.len(),
+            ..unchecked
+        });
+    };
+    let report = check_placed_mesh(
+        region,
+        &decoded.to_placed(tile.cells),
+        Some(tile.max_error_m),
+    )
+    .map_err(|source| PyramidError::Check { tile: t, source })?;
     Ok(MadeTile {
-        tile: t,
-        bytes,
         triangles: decoded.triangles.len(),
         vertices: decoded.u.len(),
-        max_error_m: tile.max_error_m,
         measured_error_m: report.metrics.max_error_m,
+        ..unchecked
     })
 }
 

@@ -6,16 +6,17 @@
 //! writes, so the directory after the reduce is byte-identical to
 //! [`super::write_pyramid`]'s:
 //!
-//! * **Parts** (after the plan step): the plan step reads the whole input
-//!   once, writes the tiles coarser than the band zoom
-//!   ([`cota_core::tiles::band_zoom`]: they straddle bands and need the
-//!   whole lattice) with [`write_coarse`], and records in
+//! * **Parts** (after the plan step): the plan step records in
 //!   `OUT/.cota-shards-N.json` ([`ShardFrame`]) what every shard needs of the
 //!   whole: the lattice's frame, its statistics (height range, largest
-//!   step: they set every zoom's threshold) and where each input file lies.
-//!   A shard then reads only the files its part of the lattice reads
+//!   step: they set every zoom's threshold) and where each input file lies,
+//!   and beside it the heights at the band zoom's tile corners. A shard then
+//!   reads only the files its part of the lattice reads
 //!   ([`cota_core::tiles::part_region`]), resamples and builds the bitree of
-//!   that part only, and cuts its tiles of the band zoom and finer.
+//!   that part only, cuts its tiles of the band zoom
+//!   ([`cota_core::tiles::band_zoom`]) and finer, and writes its partial
+//!   maxima of the coarser tiles ([`super::coarse`]); the reduce merges them
+//!   and cuts those tiles, exactly the whole hierarchy's.
 //! * **Whole** (no plan step): every shard prepares the whole hierarchy from
 //!   the whole input and cuts only its own tiles (all zooms).
 //!
@@ -30,10 +31,15 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use cota_core::tiles::{GeographicScheme, LatticeFrame, LatticeStats, Prepared, Shard, TileId};
+use cota_core::tiles::{
+    BandCorners, GeographicScheme, LatticeFrame, LatticeStats, Prepared, Shard,
+};
 use cota_core::{Crs, GeoRef, PixelIs};
 use serde_json::{json, Value};
 
+use super::coarse::{
+    remove_coarse_files, write_band_corners, write_reduced_coarse, write_shard_partial,
+};
 use super::layer::run_manifest;
 use super::pyramid::{
     fold, layer_text, write_file_atomically, write_tiles, PyramidError, PyramidOptions,
@@ -53,9 +59,9 @@ pub struct ShardFrame {
     pub key: String,
     /// The number of shards.
     pub shards: u32,
-    /// The band zoom: the tiles coarser than it were written by the plan step.
+    /// The band zoom: the tiles coarser than it are cut by the reduce.
     pub band_zoom: u8,
-    /// How many tiles are coarser than the band zoom (the plan step's).
+    /// How many tiles are coarser than the band zoom.
     pub coarse_tiles: u64,
     /// The whole lattice's frame.
     pub frame: LatticeFrame,
@@ -218,29 +224,25 @@ pub fn read_shard_frame(out: &Path, shards: u32) -> Result<Option<ShardFrame>, P
         })
 }
 
-/// Writes every tile of `prep` coarser than zoom `band` (the plan step of
-/// sharded runs over parts; skipping those already there unless `force`).
+/// The plan step's output for shards over parts: the band corners (every
+/// one known, [`super::coarse`]), then the frame, whose presence tells the
+/// shards that the plan step is done.
 ///
 /// # Errors
-/// As [`super::write_pyramid`].
-pub fn write_coarse(
-    prep: &Prepared<'_>,
+/// [`PyramidError::Shard`] for a corner not known, [`PyramidError::Io`].
+pub fn write_plan(
     out: &Path,
-    opts: &PyramidOptions,
-    band: u8,
-    progress: &(dyn Fn(u64) + Sync),
-) -> Result<PyramidReport, PyramidError> {
-    let t0 = Instant::now();
-    let tiles: Vec<TileId> = prep.tiles().filter(|t| t.z < band).collect();
-    let outcomes = write_tiles(prep, out, opts, &tiles, progress)?;
-    Ok(PyramidReport {
-        zooms: fold(prep, &outcomes),
-        seconds: t0.elapsed().as_secs_f64(),
-    })
+    frame: &ShardFrame,
+    corners: &BandCorners,
+) -> Result<(), PyramidError> {
+    write_band_corners(out, frame.shards, corners)?;
+    write_shard_frame(out, frame)
 }
 
 /// Writes the tiles of `shard` under `out` (skipping those already there
-/// unless `force`), then its record; `progress(done)` after each tile.
+/// unless `force`), then, for a shard over a part (`frame`: the plan step's),
+/// its partial maxima of the coarser tiles ([`super::coarse`]), then its
+/// record; `progress(done)` after each tile.
 ///
 /// # Errors
 /// As [`super::write_pyramid`].
@@ -249,11 +251,15 @@ pub fn write_shard(
     out: &Path,
     opts: &PyramidOptions,
     shard: &Shard,
+    frame: Option<&ShardFrame>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<PyramidReport, PyramidError> {
     let t0 = Instant::now();
     let tiles: Vec<_> = shard.tiles().collect();
     let outcomes = write_tiles(prep, out, opts, &tiles, progress)?;
+    if let Some(f) = frame {
+        write_shard_partial(prep, out, f, shard.index, opts)?;
+    }
     let record = json!({
         "shard": shard.index,
         "shards": shard.shards,
@@ -300,9 +306,12 @@ fn remove_temporaries(out: &Path) -> Result<(), PyramidError> {
 pub struct ReduceReport {
     /// Shards merged.
     pub shards: u32,
-    /// Tiles in the pyramid: those the shards recorded, plus the plan step's
-    /// coarse tiles when shards ran over parts.
+    /// Tiles in the pyramid: those the shards recorded, plus the tiles
+    /// coarser than the band zoom when shards ran over parts.
     pub tiles: u64,
+    /// Of those coarser tiles, how many this reduce wrote (the others were
+    /// there from an interrupted reduce).
+    pub coarse_written: u64,
 }
 
 fn read_record(path: &Path) -> Result<Value, PyramidError> {
@@ -360,6 +369,7 @@ pub fn reduce_shards(
     out: &Path,
     shards: u32,
     replace_read_only: bool,
+    progress: &(dyn Fn(u64) + Sync),
 ) -> Result<ReduceReport, PyramidError> {
     let paths: Vec<PathBuf> = (0..shards)
         .map(|i| shard_record_path(out, i, shards))
@@ -388,19 +398,28 @@ pub fn reduce_shards(
         .collect::<Result<Vec<_>, _>>()?;
     let (layer, tiles) = agreed(&paths, &records, &run, &manifest)?;
     remove_temporaries(out)?;
+    // After a plan step the shards hold only the band zoom and finer: the
+    // coarser tiles are cut here from their partial maxima, and count too.
+    let frame = read_shard_frame(out, shards)?;
+    let [written, kept] = match &frame {
+        Some(f) => write_reduced_coarse(out, f, false, progress)?,
+        None => [0, 0],
+    };
     write_file_atomically(&out.join("layer.json"), layer.as_bytes(), replace_read_only)?;
-    // After a plan step the shards hold only the band zoom and finer: its
-    // coarse tiles count too.
-    let coarse = read_shard_frame(out, shards)?.map_or(0, |f| f.coarse_tiles);
-    let frame = shard_frame_path(out, shards);
-    for p in paths.iter().chain(frame.is_file().then_some(&frame)) {
+    let frame_path = shard_frame_path(out, shards);
+    for p in paths
+        .iter()
+        .chain(frame_path.is_file().then_some(&frame_path))
+    {
         std::fs::remove_file(p).map_err(|source| PyramidError::Io {
             path: p.clone(),
             source,
         })?;
     }
+    remove_coarse_files(out, shards)?;
     Ok(ReduceReport {
         shards,
-        tiles: tiles + coarse,
+        tiles: tiles + written + kept,
+        coarse_written: written,
     })
 }
