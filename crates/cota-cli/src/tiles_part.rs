@@ -68,5 +68,5 @@ pub fn load_part(
             .collect();
         Ok((inp.grid, names))
     };
-    cota_io::tiles::load_part(&a.output, f, &frame_key(a), opts, index, read)
+    cota_io::tiles::load_part(&a.output, f, &frame_key(a), opts, index, a.normals, read)
 }

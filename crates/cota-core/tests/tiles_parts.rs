@@ -61,7 +61,7 @@ fn parts_cut_the_tiles_of_the_whole_hierarchy() {
         let band = band_zoom(&zooms, whole.align_zoom(), n);
         for shard in shard_plan(&zooms, n).unwrap() {
             let shard = shard.from_zoom(band);
-            let Some(region) = part_region(&shard, &frame.scheme, frame.window, band) else {
+            let Some(region) = part_region(&shard, &frame.scheme, frame.window, band, false) else {
                 continue;
             };
             let span = frame.source_span(region).unwrap();
@@ -134,8 +134,14 @@ fn a_part_refuses_a_source_crop_that_misses_what_it_reads() {
 }
 
 /// Shard `shard`'s part of the lattice of `src` (band zoom `band`).
-fn part_of(src: &HeightGrid, frame: &LatticeFrame, shard: &Shard, band: u8) -> Option<Lattice> {
-    let region = part_region(shard, &frame.scheme, frame.window, band)?;
+fn part_of(
+    src: &HeightGrid,
+    frame: &LatticeFrame,
+    shard: &Shard,
+    band: u8,
+    normals: bool,
+) -> Option<Lattice> {
+    let region = part_region(shard, &frame.scheme, frame.window, band, normals)?;
     let span = frame.source_span(region).unwrap();
     let sub = crop(src, span);
     let part = SourcePart {
@@ -169,7 +175,7 @@ fn merged_partial_maxima_cut_the_coarse_tiles_of_the_whole_hierarchy() {
         let mut partials = Vec::new();
         for shard in shard_plan(&zooms, n).unwrap() {
             let shard = shard.from_zoom(band);
-            let Some(lat) = part_of(&src, &frame, &shard, band) else {
+            let Some(lat) = part_of(&src, &frame, &shard, band, true) else {
                 continue;
             };
             corners.fill_from(&lat);
@@ -221,7 +227,7 @@ fn a_missing_partial_is_refused() {
     let mut partials = Vec::new();
     for shard in shards.iter().skip(1) {
         let shard = shard.from_zoom(band);
-        let lat = part_of(&src, &frame, &shard, band).unwrap();
+        let lat = part_of(&src, &frame, &shard, band, false).unwrap();
         let owned = owned_region(&shard, &frame.scheme, band).unwrap();
         let p = Prepared::new_part(&lat, zooms.clone()).unwrap();
         partials.push(

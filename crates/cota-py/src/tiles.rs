@@ -95,11 +95,19 @@ fn write_part(
     i: u32,
 ) -> PyResult<(u64, PyramidReport, Vec<String>)> {
     let read = |files| read_part_files(paths, files, &region_options());
-    let part =
-        load_part(out, f, &frame_key(paths, s), &tiler(s), i, read).map_err(|e| match e {
-            PartError::Read(e) => errors::read(e),
-            PartError::Frame(e) => errors::write(e),
-        })?;
+    let part = load_part(
+        out,
+        f,
+        &frame_key(paths, s),
+        &tiler(s),
+        i,
+        opts.extensions.normals,
+        read,
+    )
+    .map_err(|e| match e {
+        PartError::Read(e) => errors::read(e),
+        PartError::Frame(e) => errors::write(e),
+    })?;
     let prep = Prepared::new_part(&part.lattice, part.zooms.clone()).map_err(errors::mesh)?;
     let report =
         write_shard(&prep, out, opts, &part.shard, Some(f), &|_| {}).map_err(errors::write)?;

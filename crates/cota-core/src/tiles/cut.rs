@@ -13,8 +13,9 @@
 //! window lies on 0 m and never splits.
 //!
 //! Also per vertex, on request: a normal from the lattice's slope at the
-//! tile's own scale (a central difference over `T_z / 64` cells, so two
-//! tiles that share a vertex give it the same normal), and a 256×256 water
+//! tile's own scale (a central difference over `T_z / 64` cells, at most
+//! [`NORMAL_REACH_CELLS`], so two tiles that share a vertex give it the same
+//! normal and a shard's part holds what its normals read), and a 256×256 water
 //! mask (samples at or below 0 m: sea level in SRTM, and the 0 m beyond the
 //! source; a heuristic, not a coastline).
 

@@ -22,7 +22,9 @@
 //!    roots); a split point on a tile's border decides alike in both tiles
 //!    that share it, and its ancestors in each tile split too (errors grow up
 //!    the tree), so there is no T-junction across a border;
-//! 4. the tile is encoded, decoded independently and checked with
+//! 4. sharded: the tiles coarser than the band zoom from the shards' partial
+//!    maxima ([`partial`]), merged by a reducer ([`merge`]) exactly;
+//! 5. the tile is encoded, decoded independently and checked with
 //!    [`crate::mesh::check::check_placed_mesh`] at every lattice sample of its
 //!    square (`cota-io`).
 

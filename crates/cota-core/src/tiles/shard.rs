@@ -99,12 +99,15 @@ pub fn band_zoom(zooms: &[ZoomPlan], align_zoom: u8, shards: u32) -> u8 {
 
 /// The region (`[x0, y0, x1, y1]` global lattice, inclusive) of the window
 /// `window` that `shard`'s tiles of zoom `band` and finer need (see the
-/// module docs), `None` when it has none there.
+/// module docs), and with `normals` what the normals of its vertices of
+/// coarser tiles read ([`NORMAL_REACH_CELLS`]); `None` when it has none
+/// there.
 pub fn part_region(
     shard: &Shard,
     scheme: &GeographicScheme,
     window: [u64; 4],
     band: u8,
+    normals: bool,
 ) -> Option<[u64; 4]> {
     let t = scheme.cells_at(band);
     let mut bbox: Option<[u64; 4]> = None;
@@ -127,9 +130,14 @@ pub fn part_region(
         }));
     }
     let b = bbox?;
-    // Half a band tile (the split points' reach), and the normals' reach
-    // (the coarse tiles' vertex normals, computed by the shards).
-    let g = (t / 2).max(NORMAL_REACH_CELLS);
+    // Half a band tile (the split points' reach), and with `normals` the
+    // normals' reach (the coarse tiles' vertex normals, computed by the
+    // shards).
+    let g = if normals {
+        (t / 2).max(NORMAL_REACH_CELLS)
+    } else {
+        t / 2
+    };
     let lo = |v: u64, min: u64| (v.saturating_sub(g) / t * t).max(min);
     let hi = |v: u64, max: u64| ((v + g).div_ceil(t) * t).min(max);
     let (mut x0, mut y0) = (lo(b[0], window[0]), lo(b[1], window[1]));

@@ -98,7 +98,8 @@ pub struct Part {
 }
 
 /// Reads the files shard `index` of the frame `f` (found under `out`) needs
-/// and resamples its part. `key` must be the frame's. `read(files)` reads
+/// and resamples its part (with `normals`, grown by what the normals of its
+/// coarse vertices read). `key` must be the frame's. `read(files)` reads
 /// and fills the mosaic of `files` (`None`: every input, when the frame
 /// lists no files) and returns it with the names of the files read.
 ///
@@ -111,6 +112,7 @@ pub fn load_part<E: From<PyramidError>>(
     key: &str,
     opts: &TilerOptions,
     index: u32,
+    normals: bool,
     read: impl FnOnce(Option<Vec<PathBuf>>) -> Result<(HeightGrid, Vec<String>), E>,
 ) -> Result<Part, E> {
     let refuse = |message: String| PyramidError::Shard {
@@ -134,8 +136,12 @@ pub fn load_part<E: From<PyramidError>>(
     let shard = shard.from_zoom(f.band_zoom);
     let t = fr.scheme.cells_at(f.band_zoom);
     let w = fr.window;
-    let region =
-        part_region(&shard, &fr.scheme, w, f.band_zoom).unwrap_or([w[0], w[1], w[0] + t, w[1] + t]);
+    let region = part_region(&shard, &fr.scheme, w, f.band_zoom, normals).unwrap_or([
+        w[0],
+        w[1],
+        w[0] + t,
+        w[1] + t,
+    ]);
     let (grid, offset, files_read) = read_span(f, fr.source_span(region), read, &refuse)?;
     let part = SourcePart {
         grid: &grid,

@@ -59,10 +59,12 @@ class TilesReport(TypedDict):
     """The input files a shard after ``tiles_plan_step`` read; None otherwise."""
 
 class PlanStepReport(TypedDict):
-    """What ``tiles_plan_step`` wrote."""
+    """What ``tiles_plan_step`` wrote (the frame and the band corners; no tile)."""
     band_zoom: int
     coarse_tiles: int
+    """The tiles coarser than the band zoom, which ``tiles_reduce`` cuts."""
     written: int
+    """0: the plan step writes no tile."""
     skipped: int
     files: list[tuple[str, tuple[int, int, int, int]]]
     """Each input's samples in the mosaic ``(c0, r0, c1, r1)``; empty: shards read every file."""
@@ -118,10 +120,13 @@ def tiles_plan_step(
     check: bool = False,
 ) -> PlanStepReport:
     """The plan step of ``cota tiles --plan --shards n``: read every input once, write
-    the tiles coarser than the band zoom and the frame ``out/.cota-shards-n.json``.
+    the frame ``out/.cota-shards-n.json`` and the band zoom's tile-corner heights.
 
     Idempotent. Then ``tiles(..., shard=(i, n))`` with the same settings reads only
-    its part's files. Raises ReadError, MeshError, WriteError. Releases the GIL.
+    its part's files, writes its tiles of the band zoom and finer and its partial
+    maxima of the coarser ones, which ``tiles_reduce`` merges and cuts. The tile
+    settings (``normals`` … ``check``) are the shards'. Raises ReadError,
+    MeshError, WriteError. Releases the GIL.
     """
 
 def tiles_plan(
@@ -137,10 +142,10 @@ def tiles_plan(
     """The deterministic shard plan of ``cota tiles --plan --shards n``."""
 
 def tiles_reduce(out: _Path, shards: int) -> int:
-    """Check the ``shards`` shards' records, write ``layer.json``, remove the records; the pyramid's tile count (with the plan step's coarse tiles)."""
+    """Check the ``shards`` shards' records; after a plan step, cut the tiles coarser than the band zoom from the shards' partial maxima; write ``layer.json``, remove the records; the pyramid's tile count."""
 
 def shard_frame(out: _Path, shards: int) -> str:
-    """The path of the plan step's frame (present once the coarse tiles are written)."""
+    """The path of the plan step's frame (present once the plan step is done)."""
 
 def shard_record(out: _Path, index: int, shards: int) -> str:
     """The path of shard ``index``'s record (present once the shard is complete)."""

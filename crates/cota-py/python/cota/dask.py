@@ -4,20 +4,22 @@ Three kinds of Dask task, as ``cota tiles --plan`` / ``--shard I/N`` /
 ``--reduce``:
 
 1. the **plan step** (``cota.tiles_plan_step``): reads every input once, writes
-   the tiles coarser than the band zoom and the frame ``out/.cota-shards-N.json``
-   (where each input file lies in the mosaic);
+   the frame ``out/.cota-shards-N.json`` (where each input file lies in the
+   mosaic, the lattice's statistics) and the band zoom's tile-corner heights;
 2. one task per **shard** (``cota.tiles(..., shard=(i, n))``), after the plan
    step: it finds the frame, reads only the input files its part of the lattice
-   needs and holds only that part; it writes its tiles (atomic writes,
-   idempotent) and its record file;
-3. the **reduce** (``cota.tiles_reduce``), after all shards: writes
-   ``layer.json`` and removes the records and the frame.
+   needs and holds only that part; it writes its tiles of the band zoom and
+   finer (atomic writes, idempotent), its partial maxima of the coarser tiles,
+   and its record file;
+3. the **reduce** (``cota.tiles_reduce``), after all shards: merges the partial
+   maxima, cuts the tiles coarser than the band zoom (exactly the single-machine
+   tiles), writes ``layer.json`` and removes the records, partials and frame.
 
 The output is byte-identical to a single-process ``cota.tiles`` / ``cota tiles``
 run with the same settings.
 
 * **Resumable:** the plan step is skipped when its frame exists (it is written
-  after the coarse tiles); a shard whose record file exists is not submitted
+  last); a shard whose record file exists is not submitted
   again.
 * **Retries:** a failed or lost task is retried (``retries``); a worker killed
   mid-task leaves only complete tiles (each written to a temporary file and
@@ -77,12 +79,12 @@ def build_pyramid(
     ``normals``, ``watermask``, ``metadata``, ``gzip``, ``check``).
 
     Returns a dict: ``shards``, ``skipped_shards`` (already done before this
-    call), ``plan_step`` (``"ran"``, or ``"skipped"`` when its frame was there
-    or every shard was done), ``files_read`` (for each shard run here, the
+    call), ``plan_step`` (``"ran"``, or ``"skipped"`` when its frame was there,
+    or some shards were done without it: the others then run without it
+    too), ``files_read`` (for each shard run here, the
     input files it read), ``coarse_tiles`` (the tiles coarser than the band
-    zoom that the plan step covered here; None when it was skipped),
-    ``tiles`` (in the pyramid: the shards' tiles plus the plan step's coarse
-    ones). Raises what ``cota.tiles``, ``cota.tiles_plan_step`` or
+    zoom, cut by the reduce; None when the plan step was skipped),
+    ``tiles`` (in the pyramid: the shards' tiles plus the coarser ones). Raises what ``cota.tiles``, ``cota.tiles_plan_step`` or
     ``cota.tiles_reduce`` raise.
     """
     if client is None:
@@ -96,7 +98,9 @@ def build_pyramid(
     name = os.path.basename(out)
     todo = [i for i in range(shards) if not os.path.exists(shard_record(out, i, shards))]
     plan = None
-    if todo and not os.path.exists(shard_frame(out, shards)):
+    # The plan step runs on a fresh run; a resumed run whose finished shards
+    # ran without it (no frame) goes on without it.
+    if len(todo) == shards and not os.path.exists(shard_frame(out, shards)):
         plan = client.submit(_plan_step, paths, out, shards, settings, retries=retries, pure=False,
                              key=f"cota-plan-{shards}-{name}")
     futures = client.map(
