@@ -251,16 +251,16 @@ mod tests {
         let out = tempfile::tempdir().unwrap();
         write_shard_frame(out.path(), &frame).unwrap();
         let read = |f: Option<Vec<PathBuf>>| read_part_files(&inputs, f, &RegionOptions::DEFAULT);
-        let part = load_part(out.path(), &frame, "k", &opts, 0, read).unwrap();
+        let part = load_part(out.path(), &frame, "k", &opts, 0, false, read).unwrap();
         assert_eq!(part.files_read, vec![w.display().to_string()]);
         assert!(part.lattice.grid().width() * 2 < lat.grid().width());
-        let other = load_part(out.path(), &frame, "other", &opts, 0, read);
+        let other = load_part(out.path(), &frame, "other", &opts, 0, false, read);
         let msg = other.unwrap_err().to_string();
         assert!(
             msg.contains("other settings") && msg.contains(".cota-shards-4.json"),
             "{msg}"
         );
-        let past = load_part(out.path(), &frame, "k", &opts, 4, read);
+        let past = load_part(out.path(), &frame, "k", &opts, 4, false, read);
         assert!(past.unwrap_err().to_string().contains("below 4"));
     }
 }
