@@ -39,7 +39,7 @@ pub use error::TilesError;
 pub use lattice::{
     resampling_deviation, Deviation, Lattice, LatticeFrame, LatticeOptions, SourcePart,
 };
-pub use plan::{LatticeStats, TileRange, TilerOptions, ZoomPlan};
+pub use plan::{LatticeStats, PartStats, TileRange, TilerOptions, ZoomPlan};
 pub use scheme::{ErrorSchedule, GeographicScheme, TileId};
 pub use shard::{band_zoom, part_region, shard_plan, Shard};
 

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use cota_core::tiles::plan::plan_with;
 use cota_core::tiles::{
-    band_zoom, part_region, resampling_deviation, shard_plan, Deviation, Lattice, LatticeStats,
-    Shard, SourcePart, TilerOptions, ZoomPlan,
+    band_zoom, part_region, resampling_deviation, shard_plan, Deviation, Lattice, LatticeFrame,
+    LatticeStats, Shard, SourcePart, TilerOptions, ZoomPlan,
 };
 use cota_core::{GeoRef, HeightGrid};
 
@@ -65,7 +65,21 @@ pub fn frame_of(
     zooms: &[ZoomPlan],
     files: Vec<(String, [usize; 4])>,
 ) -> ShardFrame {
-    let band = band_zoom(zooms, lattice.align_zoom(), shards);
+    let stats = LatticeStats::of(lattice);
+    frame_with(key, shards, lattice.frame().clone(), stats, zooms, files)
+}
+
+/// The plan step's frame for `shards` shards of a lattice of frame `frame`
+/// and statistics `stats` (`zooms`: its plan).
+pub(super) fn frame_with(
+    key: String,
+    shards: u32,
+    frame: LatticeFrame,
+    stats: LatticeStats,
+    zooms: &[ZoomPlan],
+    files: Vec<(String, [usize; 4])>,
+) -> ShardFrame {
+    let band = band_zoom(zooms, frame.align_zoom, shards);
     let coarse_tiles = zooms
         .iter()
         .filter(|z| z.zoom < band)
@@ -76,8 +90,8 @@ pub fn frame_of(
         shards,
         band_zoom: band,
         coarse_tiles,
-        frame: lattice.frame().clone(),
-        stats: LatticeStats::of(lattice),
+        frame,
+        stats,
         files,
     }
 }
@@ -155,7 +169,7 @@ pub fn load_part<E: From<PyramidError>>(
 /// The source samples `span` (`[c0, r0, c1, r1]` of the whole source): the
 /// files that meet it (every file when the frame lists none), their offset
 /// in the whole source, and their names.
-fn read_span<E: From<PyramidError>>(
+pub(super) fn read_span<E: From<PyramidError>>(
     f: &ShardFrame,
     span: Option<[usize; 4]>,
     read: impl FnOnce(Option<Vec<PathBuf>>) -> Result<(HeightGrid, Vec<String>), E>,
