@@ -322,20 +322,33 @@ fn read_inputs(
     }
 }
 
+/// How the files are joined (`--seam`).
+pub fn mosaic_options(a: &InputArgs) -> MosaicOptions {
+    let policy = match a.seam {
+        Seam::Mean => SeamPolicy::Mean,
+        Seam::First => SeamPolicy::First,
+    };
+    MosaicOptions::DEFAULT.with_seam_policy(policy)
+}
+
+/// Each input file as [`load`] reports it, read one at a time and its
+/// samples dropped (the peak is one file); no mosaic, no `--bbox`.
+pub fn summaries(a: &InputArgs) -> anyhow::Result<Vec<FileInfo>> {
+    check_options(a)?;
+    let opts = read_options(a)?;
+    Ok(cota_io::tiles::summarize_files(&a.files, &opts)?)
+}
+
 /// Reads every input (or the bundled sample) and mosaics them, then keeps
 /// the `--bbox` window (for inputs other than PMTiles archives).
 pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
     let t0 = Instant::now();
     let opts = read_options(a)?;
     check_options(a)?;
-    let policy = match a.seam {
-        Seam::Mean => SeamPolicy::Mean,
-        Seam::First => SeamPolicy::First,
-    };
     // Voids stay NaN here: each command applies its own policy (`fill`).
     let region_opts = RegionOptions::DEFAULT
         .with_read(opts)
-        .with_mosaic(MosaicOptions::DEFAULT.with_seam_policy(policy))
+        .with_mosaic(mosaic_options(a))
         .with_fill(None);
     let region = read_inputs(&a.files, &opts, &region_opts)?;
     warn_unpositioned(&region.files);

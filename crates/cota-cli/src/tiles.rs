@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use cota_core::tiles::{
-    resampling_deviation, shard_plan, Deviation, ErrorSchedule, Lattice, LatticeOptions, Prepared,
+    plan::plan_with, resampling_deviation, shard_plan, Deviation, ErrorSchedule, Lattice, Prepared,
     Shard, TilerOptions, ZoomPlan,
 };
 use cota_io::tiles::{
@@ -17,6 +17,15 @@ use serde_json::json;
 
 use crate::args::TilesArgs;
 use crate::{input, progress, tiles_part};
+
+/// Whether `--plan` writes the tiles coarser than the band zoom. Cutting
+/// them needs the whole lattice, so the plan step then reads the whole
+/// input; without them it streams its frame (`tiles_part::stream_frame`:
+/// each file alone, then each shard's part in turn), the same frame at
+/// about one shard's memory.
+// TODO(integrator): false once the shards compute the coarse partial
+// maxima and the reduce cuts the coarse tiles.
+const PLAN_STEP_WRITES_COARSE: bool = true;
 
 /// Runs `cota tiles`.
 pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
@@ -31,14 +40,17 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
             return run_part(a, &f, &opts, i);
         }
     }
+    if a.plan && !PLAN_STEP_WRITES_COARSE {
+        if let Some(frame) = tiles_part::stream_frame(a, &opts)? {
+            return plan_step_streamed(a, &opts, &frame);
+        }
+    }
     let t0 = Instant::now();
     let mut inp = input::load(&a.input)?;
     let voids = inp.grid.void_count();
     input::fill(&mut inp.grid, a.voids)?;
     let name = input::name(&inp.files);
-    let lattice_opts = LatticeOptions::DEFAULT
-        .with_max_zoom(a.max_zoom)
-        .with_tile_cells(a.tile_cells);
+    let lattice_opts = tiles_part::lattice_options(a);
     let spinner = progress::spinner("resampling");
     let lattice =
         Lattice::resample(&inp.grid, &lattice_opts).with_context(|| format!("tiling {name}"))?;
@@ -142,7 +154,22 @@ fn plan_step(
     .and_then(|_| write_shard_frame(&a.output, frame))
     .with_context(|| format!("writing {}", a.output.display()))?;
     pb.finish_and_clear();
-    print_plan(prepared.zooms(), a.shards, band, coarse, a.json)
+    print_plan(prepared.zooms(), a.shards, (band, coarse, true), a.json)
+}
+
+/// `--plan` without the whole input: the frame only (see
+/// [`PLAN_STEP_WRITES_COARSE`]), and the plan.
+fn plan_step_streamed(
+    a: &TilesArgs,
+    opts: &TilerOptions,
+    frame: &ShardFrame,
+) -> anyhow::Result<std::process::ExitCode> {
+    write_shard_frame(&a.output, frame)
+        .with_context(|| format!("writing {}", a.output.display()))?;
+    let f = &frame.frame;
+    let zooms = plan_with(&f.scheme, f.window, &frame.stats, opts)?;
+    let (band, coarse) = (frame.band_zoom, frame.coarse_tiles);
+    print_plan(&zooms, a.shards, (band, coarse, false), a.json)
 }
 
 fn pyramid_options(a: &TilesArgs) -> PyramidOptions {
@@ -197,12 +224,11 @@ fn reduce(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
 }
 
 /// `--plan`: each shard's tiles, zoom by zoom (the band zoom and finer; the
-/// plan step wrote the `coarse` tiles above it).
+/// `coarse` tiles above it, which the plan step wrote when `written`).
 fn print_plan(
     zooms: &[ZoomPlan],
     shards: u32,
-    band: u8,
-    coarse: u64,
+    (band, coarse, written): (u8, u64, bool),
     as_json: bool,
 ) -> anyhow::Result<std::process::ExitCode> {
     let plan: Vec<Shard> = shard_plan(zooms, shards)?
@@ -227,7 +253,8 @@ fn print_plan(
         );
         return Ok(std::process::ExitCode::SUCCESS);
     }
-    println!("plan step  {coarse:>6}  zooms below {band} (written)");
+    let done = if written { "written" } else { "not written" };
+    println!("plan step  {coarse:>6}  zooms below {band} ({done})");
     println!("shard       tiles  zoom: columns x rows (TMS)");
     for s in &plan {
         let parts: Vec<String> = s
