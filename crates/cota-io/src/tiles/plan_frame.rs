@@ -221,6 +221,32 @@ mod tests {
         }
     }
 
+    /// Not streamed (a shard would read every file): an L of three files
+    /// (samples no file covers), and a file with a void.
+    #[test]
+    fn holes_and_voids_are_not_streamed() {
+        let (Some(w), Some(e)) = (
+            cota_fixtures::shared("srtm/N00E010.hgt"),
+            cota_fixtures::shared("srtm/N00E011.hgt.zip"),
+        ) else {
+            return;
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let block = relabelled_block(&[w, e], dir.path());
+        let (lo, mo) = (LatticeOptions::DEFAULT, MosaicOptions::DEFAULT);
+        let frame = |paths: &[PathBuf]| {
+            let sums = summarize_files(paths, &ReadOptions::DEFAULT).unwrap();
+            mosaic_frame(&sums, &lo, &mo).unwrap()
+        };
+        assert!(frame(&block[..2]).is_some());
+        let l = [block[0].clone(), block[1].clone(), block[4].clone()];
+        assert!(frame(&l).is_none());
+        let mut bytes = std::fs::read(&block[1]).unwrap();
+        bytes[2000..2002].copy_from_slice(&i16::MIN.to_be_bytes());
+        std::fs::write(&block[1], bytes).unwrap();
+        assert!(frame(&block[..2]).is_none());
+    }
+
     /// Copies of `tiles` (alternating) as raw SRTM tiles N10E020…N09E023.
     fn relabelled_block(tiles: &[PathBuf], dir: &Path) -> Vec<PathBuf> {
         let bytes: Vec<Vec<u8>> = tiles
