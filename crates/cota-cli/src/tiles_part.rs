@@ -57,16 +57,18 @@ pub fn lattice_options(a: &TilesArgs) -> LatticeOptions {
 }
 
 /// A reader of the input files a part needs (`None`: every input), as
-/// `cota tiles` reads its input (the input flags, the void policy).
+/// `cota tiles` reads its input (the input flags, the void policy); the
+/// files one after the other when `in_turn` (see [`input::load_with`]).
 fn part_reader(
     a: &TilesArgs,
+    in_turn: bool,
 ) -> impl Fn(Option<Vec<PathBuf>>) -> anyhow::Result<(HeightGrid, Vec<String>)> + '_ {
-    |files: Option<Vec<PathBuf>>| {
+    move |files: Option<Vec<PathBuf>>| {
         let mut args = a.input.clone();
         if let Some(files) = files {
             args.files = files;
         }
-        let mut inp = input::load(&args)?;
+        let mut inp = input::load_with(&args, in_turn)?;
         input::fill(&mut inp.grid, a.voids)?;
         let names = inp
             .files
@@ -85,7 +87,14 @@ pub fn load_part(
     opts: &TilerOptions,
     index: u32,
 ) -> anyhow::Result<Part> {
-    cota_io::tiles::load_part(&a.output, f, &frame_key(a), opts, index, part_reader(a))
+    cota_io::tiles::load_part(
+        &a.output,
+        f,
+        &frame_key(a),
+        opts,
+        index,
+        part_reader(a, false),
+    )
 }
 
 /// The plan step's frame without the whole input (each file read alone for
@@ -105,7 +114,9 @@ pub fn stream_frame(a: &TilesArgs, opts: &TilerOptions) -> anyhow::Result<Option
     let Some(m) = cota_io::tiles::mosaic_frame(&files, &lattice, &mosaic)? else {
         return Ok(None);
     };
-    let (key, read) = (frame_key(a), part_reader(a));
+    // The parts are read in turn, each file on this thread, so each part
+    // reuses the memory the last one freed.
+    let (key, read) = (frame_key(a), part_reader(a, true));
     cota_io::tiles::stream_frame(&a.output, key, a.shards, &m, opts, read).map(Some)
 }
 
