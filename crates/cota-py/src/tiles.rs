@@ -12,10 +12,10 @@ use cota_core::tiles::{
 };
 use cota_core::FillOptions;
 use cota_io::tiles::{
-    file_extents, frame_of, load_part, mosaic_frame, read_part_files, read_shard_frame,
-    reduce_shards, shard_frame_path, shard_record_path, stream_frame, summarize_files,
-    write_coarse, write_pyramid, write_shard, write_shard_frame, PartError, PyramidOptions,
-    PyramidReport, ShardFrame, TileExtensions,
+    file_extents, frame_of, load_part, mosaic_frame, read_part_files, read_part_files_in_turn,
+    read_shard_frame, reduce_shards, shard_frame_path, shard_record_path, stream_frame,
+    summarize_files, write_coarse, write_pyramid, write_shard, write_shard_frame, PartError,
+    PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
 };
 use cota_io::{read_region, RegionOptions};
 use pyo3::prelude::*;
@@ -84,7 +84,7 @@ fn streamed_frame(
     let Some(m) = mosaic_frame(&files, &lattice_options(s), &ro.mosaic)? else {
         return Ok(None);
     };
-    let read = |files| read_part_files(paths, files, &ro);
+    let read = |files| read_part_files_in_turn(paths, files, &ro);
     stream_frame(out, frame_key(paths, s), shards, &m, &tiler(s), read).map(Some)
 }
 

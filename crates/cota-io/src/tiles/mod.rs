@@ -39,7 +39,9 @@ pub mod shard;
 
 pub use decode::{decode, DecodeError, DecodedTile, Header};
 pub use layer::layer_json;
-pub use part::{file_extents, frame_of, load_part, read_part_files, Part, PartError};
+pub use part::{
+    file_extents, frame_of, load_part, read_part_files, read_part_files_in_turn, Part, PartError,
+};
 pub use plan_frame::{mosaic_frame, stream_frame, summarize_files, MosaicFrame};
 pub use pyramid::{
     make_tile, tile_path, write_pyramid, MadeTile, PyramidError, PyramidOptions, PyramidReport,

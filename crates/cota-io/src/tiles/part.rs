@@ -14,7 +14,7 @@ use cota_core::{GeoRef, HeightGrid};
 
 use super::shard::{shard_frame_path, ShardFrame};
 use super::PyramidError;
-use crate::{read_region, DemSummary, RegionError, RegionOptions};
+use crate::{read_region, read_region_in_turn, DemSummary, Region, RegionError, RegionOptions};
 
 /// A shard's part could not be made: a frame that does not fit, or input
 /// files that could not be read.
@@ -220,13 +220,32 @@ pub fn read_part_files(
     opts: &RegionOptions,
 ) -> Result<(HeightGrid, Vec<String>), PartError> {
     let paths = files.unwrap_or_else(|| inputs.to_vec());
-    let region = read_region(&paths, opts)?;
+    Ok(named(read_region(&paths, opts)?))
+}
+
+/// [`read_part_files`] reading the files one after the other on this
+/// thread ([`read_region_in_turn`]): for a process that reads parts in
+/// turn, so that each reuses the memory the last one freed.
+///
+/// # Errors
+/// [`RegionError`] from [`read_region_in_turn`].
+pub fn read_part_files_in_turn(
+    inputs: &[PathBuf],
+    files: Option<Vec<PathBuf>>,
+    opts: &RegionOptions,
+) -> Result<(HeightGrid, Vec<String>), PartError> {
+    let paths = files.unwrap_or_else(|| inputs.to_vec());
+    Ok(named(read_region_in_turn(&paths, opts)?))
+}
+
+/// The region's grid and the names of its files.
+fn named(region: Region) -> (HeightGrid, Vec<String>) {
     let names = region
         .files
         .iter()
         .map(|f| f.path.display().to_string())
         .collect();
-    Ok((region.grid, names))
+    (region.grid, names)
 }
 
 #[cfg(test)]

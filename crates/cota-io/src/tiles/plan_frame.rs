@@ -151,7 +151,7 @@ pub fn stream_frame<E: From<PyramidError>>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tiles::{frame_of, read_part_files, write_shard_frame};
+    use crate::tiles::{frame_of, read_part_files_in_turn, write_shard_frame};
     use crate::{read_region, RegionOptions};
     use cota_core::tiles::plan::plan;
 
@@ -167,7 +167,7 @@ mod tests {
         let m = mosaic_frame(&sums, lo, &MosaicOptions::DEFAULT)
             .unwrap()
             .unwrap();
-        let read = |f: Option<Vec<PathBuf>>| read_part_files(inputs, f, &RegionOptions::DEFAULT);
+        let read = |f| read_part_files_in_turn(inputs, f, &RegionOptions::DEFAULT);
         let out = Path::new("out");
         let streamed = stream_frame(out, "k".into(), shards, &m, &opts, read).unwrap();
         (text(&whole), text(&streamed))
