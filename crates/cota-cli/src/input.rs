@@ -10,8 +10,8 @@ use cota_core::grid::mosaic::{MosaicOptions, SeamPolicy, SeamReport};
 use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
 use cota_core::HeightGrid;
 use cota_io::{
-    read_dem_bytes, read_dem_from, read_region_with_progress, ArrayName, PngEncoding, ReadOptions,
-    Region, RegionOptions, TileRequest,
+    read_dem_bytes, read_dem_from, read_region_in_turn, read_region_with_progress, ArrayName,
+    PngEncoding, ReadOptions, Region, RegionOptions, TileRequest,
 };
 
 use crate::args::{Encoding, InputArgs, Seam, Voids};
@@ -293,6 +293,7 @@ fn read_inputs(
     files: &[PathBuf],
     opts: &ReadOptions,
     region_opts: &RegionOptions,
+    in_turn: bool,
 ) -> anyhow::Result<Region> {
     let one = |dem| -> anyhow::Result<Region> { Ok(cota_io::read::join(vec![dem], region_opts)?) };
     match files {
@@ -311,6 +312,7 @@ fn read_inputs(
             "-: standard input must be the only FILE (it holds one DEM), found {} files",
             files.len()
         ),
+        _ if in_turn => Ok(read_region_in_turn(files, region_opts)?),
         _ => {
             let pb = progress::bar(files.len() as u64, "reading");
             let r = read_region_with_progress(files, region_opts, &|done, _| {
@@ -322,22 +324,41 @@ fn read_inputs(
     }
 }
 
-/// Reads every input (or the bundled sample) and mosaics them, then keeps
-/// the `--bbox` window (for inputs other than PMTiles archives).
-pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
-    let t0 = Instant::now();
-    let opts = read_options(a)?;
-    check_options(a)?;
+/// How the files are joined (`--seam`).
+pub fn mosaic_options(a: &InputArgs) -> MosaicOptions {
     let policy = match a.seam {
         Seam::Mean => SeamPolicy::Mean,
         Seam::First => SeamPolicy::First,
     };
+    MosaicOptions::DEFAULT.with_seam_policy(policy)
+}
+
+/// Each input file as [`load`] reports it, read one at a time and its
+/// samples dropped (the peak is one file); no mosaic, no `--bbox`.
+pub fn summaries(a: &InputArgs) -> anyhow::Result<Vec<FileInfo>> {
+    check_options(a)?;
+    let opts = read_options(a)?;
+    Ok(cota_io::tiles::summarize_files(&a.files, &opts)?)
+}
+
+/// Reads every input (or the bundled sample) and mosaics them, then keeps
+/// the `--bbox` window (for inputs other than PMTiles archives).
+pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
+    load_with(a, false)
+}
+
+/// [`load`], the files read in parallel or (`in_turn`) one after the other
+/// on this thread (see [`read_region_in_turn`]).
+pub fn load_with(a: &InputArgs, in_turn: bool) -> anyhow::Result<Input> {
+    let t0 = Instant::now();
+    let opts = read_options(a)?;
+    check_options(a)?;
     // Voids stay NaN here: each command applies its own policy (`fill`).
     let region_opts = RegionOptions::DEFAULT
         .with_read(opts)
-        .with_mosaic(MosaicOptions::DEFAULT.with_seam_policy(policy))
+        .with_mosaic(mosaic_options(a))
         .with_fill(None);
-    let region = read_inputs(&a.files, &opts, &region_opts)?;
+    let region = read_inputs(&a.files, &opts, &region_opts, in_turn)?;
     warn_unpositioned(&region.files);
     check_seams(a, region.seams.as_ref(), &region.files)?;
     check_cell_size(&region.grid, &region.files)?;

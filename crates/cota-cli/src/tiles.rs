@@ -5,10 +5,10 @@
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::tiles::plan::plan;
+use cota_core::tiles::plan::{plan, plan_with};
 use cota_core::tiles::{
-    resampling_deviation, shard_plan, BandCorners, Deviation, ErrorSchedule, Lattice,
-    LatticeOptions, Prepared, Shard, TilerOptions, ZoomPlan,
+    resampling_deviation, shard_plan, BandCorners, Deviation, ErrorSchedule, Lattice, Prepared,
+    Shard, TilerOptions, ZoomPlan,
 };
 use cota_io::tiles::{
     read_shard_frame, reduce_shards, write_plan, write_pyramid, write_shard, PyramidOptions,
@@ -32,14 +32,19 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
             return run_part(a, &f, &opts, i);
         }
     }
+    if a.plan {
+        // Without the whole input where the files allow it (each file
+        // alone, then each shard's part in turn).
+        if let Some((frame, corners)) = tiles_part::stream_frame(a, &opts)? {
+            return write_plan_step(a, &opts, &frame, &corners);
+        }
+    }
     let t0 = Instant::now();
     let mut inp = input::load(&a.input)?;
     let voids = inp.grid.void_count();
     input::fill(&mut inp.grid, a.voids)?;
     let name = input::name(&inp.files);
-    let lattice_opts = LatticeOptions::DEFAULT
-        .with_max_zoom(a.max_zoom)
-        .with_tile_cells(a.tile_cells);
+    let lattice_opts = tiles_part::lattice_options(a);
     let spinner = progress::spinner("resampling");
     let lattice =
         Lattice::resample(&inp.grid, &lattice_opts).with_context(|| format!("tiling {name}"))?;
@@ -127,8 +132,9 @@ fn run_part(
     Ok(std::process::ExitCode::SUCCESS)
 }
 
-/// `--plan`: the frame and the band corners (the reduce cuts the tiles
-/// coarser than the band zoom from the shards' partial maxima), the plan.
+/// `--plan` from the whole lattice: the frame and the band corners (the
+/// reduce cuts the tiles coarser than the band zoom from the shards' partial
+/// maxima), the plan.
 fn plan_step(
     a: &TilesArgs,
     lattice: &Lattice,
@@ -137,12 +143,30 @@ fn plan_step(
 ) -> anyhow::Result<std::process::ExitCode> {
     let zooms = plan(lattice, opts)?;
     let frame = tiles_part::frame_of(a, lattice, &zooms, files);
-    let band = frame.band_zoom;
-    let mut corners = BandCorners::new(lattice.window(), lattice.scheme().cells_at(band));
+    let mut corners =
+        BandCorners::new(lattice.window(), lattice.scheme().cells_at(frame.band_zoom));
     corners.fill_from(lattice);
-    write_plan(&a.output, &frame, &corners)
+    write_plan_step(a, opts, &frame, &corners)
+}
+
+/// Writes the plan step's frame and band corners, and prints the plan.
+fn write_plan_step(
+    a: &TilesArgs,
+    opts: &TilerOptions,
+    frame: &ShardFrame,
+    corners: &BandCorners,
+) -> anyhow::Result<std::process::ExitCode> {
+    write_plan(&a.output, frame, corners)
         .with_context(|| format!("writing {}", a.output.display()))?;
-    print_plan(&zooms, a.shards, band, frame.coarse_tiles, a.json)
+    let f = &frame.frame;
+    let zooms = plan_with(&f.scheme, f.window, &frame.stats, opts)?;
+    print_plan(
+        &zooms,
+        a.shards,
+        frame.band_zoom,
+        frame.coarse_tiles,
+        a.json,
+    )
 }
 
 fn pyramid_options(a: &TilesArgs) -> PyramidOptions {

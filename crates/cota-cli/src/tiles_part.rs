@@ -2,7 +2,10 @@
 //! arguments' side of `cota_io::tiles::part` (the settings' key, which files
 //! a shard may read alone, and reading them as `cota tiles` reads its input).
 
-use cota_core::tiles::{Lattice, TilerOptions, ZoomPlan};
+use std::path::PathBuf;
+
+use cota_core::tiles::{BandCorners, Lattice, LatticeOptions, TilerOptions, ZoomPlan};
+use cota_core::HeightGrid;
 use cota_io::tiles::{Part, ShardFrame};
 
 use crate::args::TilesArgs;
@@ -46,6 +49,36 @@ pub fn frame_of(
     cota_io::tiles::frame_of(frame_key(a), a.shards, lattice, zooms, files)
 }
 
+/// The lattice's options of the arguments.
+pub fn lattice_options(a: &TilesArgs) -> LatticeOptions {
+    LatticeOptions::DEFAULT
+        .with_max_zoom(a.max_zoom)
+        .with_tile_cells(a.tile_cells)
+}
+
+/// A reader of the input files a part needs (`None`: every input), as
+/// `cota tiles` reads its input (the input flags, the void policy); the
+/// files one after the other when `in_turn` (see [`input::load_with`]).
+fn part_reader(
+    a: &TilesArgs,
+    in_turn: bool,
+) -> impl Fn(Option<Vec<PathBuf>>) -> anyhow::Result<(HeightGrid, Vec<String>)> + '_ {
+    move |files: Option<Vec<PathBuf>>| {
+        let mut args = a.input.clone();
+        if let Some(files) = files {
+            args.files = files;
+        }
+        let mut inp = input::load_with(&args, in_turn)?;
+        input::fill(&mut inp.grid, a.voids)?;
+        let names = inp
+            .files
+            .iter()
+            .map(|f| f.path.display().to_string())
+            .collect();
+        Ok((inp.grid, names))
+    }
+}
+
 /// Reads the files shard `index` needs (with the input flags) and
 /// resamples its part.
 pub fn load_part(
@@ -54,19 +87,105 @@ pub fn load_part(
     opts: &TilerOptions,
     index: u32,
 ) -> anyhow::Result<Part> {
-    let read = |files: Option<Vec<std::path::PathBuf>>| -> anyhow::Result<_> {
-        let mut args = a.input.clone();
-        if let Some(files) = files {
-            args.files = files;
-        }
-        let mut inp = input::load(&args)?;
-        input::fill(&mut inp.grid, a.voids)?;
-        let names = inp
-            .files
-            .iter()
-            .map(|f| f.path.display().to_string())
-            .collect();
-        Ok((inp.grid, names))
+    cota_io::tiles::load_part(
+        &a.output,
+        f,
+        &frame_key(a),
+        opts,
+        index,
+        a.normals,
+        part_reader(a, false),
+    )
+}
+
+/// The plan step's frame without the whole input (each file read alone for
+/// the mosaic's frame, then each shard's part in turn for the statistics):
+/// the same frame as [`frame_of`] of the whole lattice. `None` where a shard
+/// would read every file (see [`file_extents`]; also standard input or the
+/// bundled sample): the plan step must then read the whole input.
+pub fn stream_frame(
+    a: &TilesArgs,
+    opts: &TilerOptions,
+) -> anyhow::Result<Option<(ShardFrame, BandCorners)>> {
+    let inp = &a.input;
+    let crop = inp.bbox.is_some() || inp.zoom.is_some();
+    if crop || inp.files.len() < 2 || inp.files.iter().any(|f| input::is_dash(f)) {
+        return Ok(None);
+    }
+    let files = input::summaries(inp)?;
+    let lattice = lattice_options(a);
+    let mosaic = input::mosaic_options(inp);
+    let Some(m) = cota_io::tiles::mosaic_frame(&files, &lattice, &mosaic)? else {
+        return Ok(None);
     };
-    cota_io::tiles::load_part(&a.output, f, &frame_key(a), opts, index, a.normals, read)
+    // The parts are read in turn, each file on this thread, so each part
+    // reuses the memory the last one freed.
+    let (key, read) = (frame_key(a), part_reader(a, true));
+    cota_io::tiles::stream_frame(&a.output, key, a.shards, &m, opts, read).map(Some)
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::panic)]
+    use super::*;
+    use crate::args::{Cli, Command};
+    use clap::Parser;
+    use cota_core::tiles::Prepared;
+
+    fn tiles_args(args: &[&str]) -> TilesArgs {
+        match Cli::try_parse_from([&["cota", "tiles"], args].concat())
+            .unwrap()
+            .command
+        {
+            Command::Tiles(t) => t,
+            _ => panic!("not tiles"),
+        }
+    }
+
+    /// `cota tiles W E --plan --shards 3`: the streamed frame is the one the
+    /// whole input gives; one file, or a `--bbox` crop, is not streamed.
+    #[test]
+    fn streamed_frame_is_the_whole_inputs() {
+        let (Some(w), Some(e)) = (
+            cota_fixtures::shared("srtm/N00E010.hgt"),
+            cota_fixtures::shared("srtm/N00E011.hgt.zip"),
+        ) else {
+            return;
+        };
+        let (w, e) = (w.to_str().unwrap(), e.to_str().unwrap());
+        let a = tiles_args(&[
+            w,
+            e,
+            "-o",
+            "out",
+            "--plan",
+            "--shards",
+            "3",
+            "--max-zoom",
+            "10",
+        ]);
+        let opts = TilerOptions::DEFAULT;
+        let (streamed, corners) = stream_frame(&a, &opts).unwrap().unwrap();
+        assert_eq!(corners.missing(), 0);
+        let inp = input::load(&a.input).unwrap();
+        let lat = Lattice::resample(&inp.grid, &lattice_options(&a)).unwrap();
+        let prep = Prepared::new(&lat, &opts).unwrap();
+        let whole = frame_of(&a, &lat, prep.zooms(), file_extents(&a, &inp, 0));
+        assert_eq!(format!("{streamed:?}"), format!("{whole:?}"));
+        assert_eq!(streamed.stats.hi_m.to_bits(), whole.stats.hi_m.to_bits());
+        let one = tiles_args(&[w, "-o", "out", "--plan", "--shards", "3"]);
+        assert!(stream_frame(&one, &opts).unwrap().is_none());
+        let crop = [
+            w,
+            e,
+            "-o",
+            "out",
+            "--plan",
+            "--shards",
+            "3",
+            "--bbox",
+            "10.2,0.2,11.5,0.8",
+        ];
+        assert!(stream_frame(&tiles_args(&crop), &opts).unwrap().is_none());
+    }
 }

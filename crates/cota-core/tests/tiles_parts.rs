@@ -7,7 +7,8 @@
 use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
     band_zoom, owned_region, part_region, shard_plan, BandCorners, CoarseHierarchy, Lattice,
-    LatticeFrame, LatticeOptions, LatticeStats, Prepared, Shard, SourcePart, TilerOptions,
+    LatticeFrame, LatticeOptions, LatticeStats, PartStats, Prepared, Shard, SourcePart,
+    TilerOptions,
 };
 use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
 
@@ -59,6 +60,8 @@ fn parts_cut_the_tiles_of_the_whole_hierarchy() {
     let mut parts_seen = 0;
     for n in 1..=4 {
         let band = band_zoom(&zooms, whole.align_zoom(), n);
+        let mut merged = PartStats::default();
+        let mut regions = Vec::new();
         for shard in shard_plan(&zooms, n).unwrap() {
             let shard = shard.from_zoom(band);
             let Some(region) = part_region(&shard, &frame.scheme, frame.window, band, false) else {
@@ -72,6 +75,8 @@ fn parts_cut_the_tiles_of_the_whole_hierarchy() {
             };
             let lat = Lattice::resample_part(&frame, part, region).unwrap();
             parts_seen += usize::from(lat.is_part());
+            merged = merged.merge(PartStats::of(&lat));
+            regions.push(region);
             // Bit for bit the whole lattice's heights.
             for r in region[1]..=region[3] {
                 for c in region[0]..=region[2] {
@@ -108,11 +113,42 @@ fn parts_cut_the_tiles_of_the_whole_hierarchy() {
                 }
             }
         }
+        // The parts' statistics merge into the whole's, bit for bit: the
+        // regions cover every pair of neighbouring samples of the window.
+        assert_pairs_covered(&regions, frame.window, n);
+        let (got, want) = (merged.stats(), stats);
+        assert_eq!(got.lo_m.to_bits(), want.lo_m.to_bits(), "n={n}");
+        assert_eq!(got.hi_m.to_bits(), want.hi_m.to_bits(), "n={n}");
+        assert_eq!(got.max_step_m.to_bits(), want.max_step_m.to_bits(), "n={n}");
     }
     assert!(
         parts_seen >= 4,
         "only {parts_seen} parts smaller than the window"
     );
+}
+
+/// Every pair of neighbouring window samples (along a row or a column) lies
+/// in one of `regions`.
+fn assert_pairs_covered(regions: &[[u64; 4]], w: [u64; 4], n: u32) {
+    let holds = |c: u64, r: u64, dc: u64, dr: u64| {
+        regions
+            .iter()
+            .any(|g| g[0] <= c && c + dc <= g[2] && g[1] <= r && r + dr <= g[3])
+    };
+    for r in w[1]..=w[3] {
+        for c in w[0]..=w[2] {
+            assert!(
+                c == w[2] || holds(c, r, 1, 0),
+                "({c}, {r})-({}, {r}) n={n}",
+                c + 1
+            );
+            assert!(
+                r == w[3] || holds(c, r, 0, 1),
+                "({c}, {r})-({c}, {}) n={n}",
+                r + 1
+            );
+        }
+    }
 }
 
 #[test]

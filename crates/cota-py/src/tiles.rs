@@ -4,7 +4,7 @@
 //! reads only the files of its part, `cota_io::tiles::part`); the GIL is
 //! released while reading and tiling.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
@@ -12,9 +12,10 @@ use cota_core::tiles::{
 };
 use cota_core::FillOptions;
 use cota_io::tiles::{
-    file_extents, frame_of, load_part, read_part_files, read_shard_frame, reduce_shards,
-    shard_frame_path, shard_record_path, write_plan, write_pyramid, write_shard, PartError,
-    PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
+    file_extents, frame_of, load_part, mosaic_frame, read_part_files, read_part_files_in_turn,
+    read_shard_frame, reduce_shards, shard_frame_path, shard_record_path, stream_frame,
+    summarize_files, write_plan, write_pyramid, write_shard, PartError, PyramidOptions,
+    PyramidReport, ShardFrame, TileExtensions,
 };
 use cota_io::{read_region, RegionOptions};
 use pyo3::prelude::*;
@@ -55,14 +56,44 @@ fn region_options() -> RegionOptions {
 /// Each input file and its samples in the mosaic (`file_extents`).
 type FileExtents = Vec<(String, [usize; 4])>;
 
+/// The lattice's options of the settings.
+fn lattice_options(s: &Settings) -> LatticeOptions {
+    LatticeOptions::DEFAULT
+        .with_max_zoom(s.max_zoom)
+        .with_tile_cells(s.tile_cells)
+}
+
+/// The plan step's frame without the whole input (each file read alone,
+/// then each shard's part in turn): the frame [`frame_of`] makes of the
+/// whole lattice; `None` when a shard must read every file.
+fn streamed_frame(
+    paths: &[PathBuf],
+    s: &Settings,
+    out: &Path,
+    shards: u32,
+) -> Result<Option<(ShardFrame, BandCorners)>, PartError> {
+    let ro = region_options();
+    let files = summarize_files(paths, &ro.read)?;
+    let Some(m) = mosaic_frame(&files, &lattice_options(s), &ro.mosaic)? else {
+        return Ok(None);
+    };
+    let read = |files| read_part_files_in_turn(paths, files, &ro);
+    stream_frame(out, frame_key(paths, s), shards, &m, &tiler(s), read).map(Some)
+}
+
+/// A part's error as Python's.
+fn part_error(e: PartError) -> PyErr {
+    match e {
+        PartError::Read(e) => errors::read(e),
+        PartError::Frame(e) => errors::write(e),
+    }
+}
+
 /// Reads, fills the voids and resamples; with where each file lies in the
 /// mosaic (empty when a shard must read every file: one file, voids, holes).
 fn lattice_and_files(paths: &[PathBuf], s: &Settings) -> PyResult<(Lattice, FileExtents)> {
     let region = read_region(paths, &region_options()).map_err(errors::read)?;
-    let lo = LatticeOptions::DEFAULT
-        .with_max_zoom(s.max_zoom)
-        .with_tile_cells(s.tile_cells);
-    let lat = Lattice::resample(&region.grid, &lo).map_err(errors::mesh)?;
+    let lat = Lattice::resample(&region.grid, &lattice_options(s)).map_err(errors::mesh)?;
     let files = if region.voids > 0 || region.hole_samples > 0 {
         Vec::new()
     } else {
@@ -95,19 +126,9 @@ fn write_part(
     i: u32,
 ) -> PyResult<(u64, PyramidReport, Vec<String>)> {
     let read = |files| read_part_files(paths, files, &region_options());
-    let part = load_part(
-        out,
-        f,
-        &frame_key(paths, s),
-        &tiler(s),
-        i,
-        opts.extensions.normals,
-        read,
-    )
-    .map_err(|e| match e {
-        PartError::Read(e) => errors::read(e),
-        PartError::Frame(e) => errors::write(e),
-    })?;
+    let normals = opts.extensions.normals;
+    let part =
+        load_part(out, f, &frame_key(paths, s), &tiler(s), i, normals, read).map_err(part_error)?;
     let prep = Prepared::new_part(&part.lattice, part.zooms.clone()).map_err(errors::mesh)?;
     let report =
         write_shard(&prep, out, opts, &part.shard, Some(f), &|_| {}).map_err(errors::write)?;
@@ -240,6 +261,14 @@ pub(crate) fn tiles_plan_step<'py>(
         return Err(errors::value("expected at least 1 shard, found 0"));
     }
     let (frame, coarse) = py.detach(|| -> PyResult<_> {
+        // Without the whole input where the files allow it.
+        if let Some((frame, corners)) =
+            streamed_frame(&paths, &s, &out, shards).map_err(part_error)?
+        {
+            write_plan(&out, &frame, &corners).map_err(errors::write)?;
+            let coarse = frame.coarse_tiles;
+            return Ok((frame, coarse));
+        }
         let (lat, files) = lattice_and_files(&paths, &s)?;
         let zooms = plan(&lat, &tiler(&s)).map_err(errors::mesh)?;
         let frame = frame_of(frame_key(&paths, &s), shards, &lat, &zooms, files);

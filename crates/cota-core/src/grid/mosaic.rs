@@ -326,7 +326,8 @@ pub fn mosaic(tiles: Vec<HeightGrid>, opts: &MosaicOptions) -> Result<Mosaic, Mo
             hole_samples: 0,
         });
     }
-    let layout = plan(&tiles, opts)?;
+    let shapes: Vec<TileShape> = tiles.iter().map(TileShape::of).collect();
+    let layout = layout(&shapes, opts)?;
     // Zeroed pages cost nothing until written: each tile's area is committed
     // as it is copied, and the tile is then dropped, keeping only the parts
     // that overlap other tiles (for the seams). Peak: the output plus about
@@ -358,38 +359,74 @@ pub fn mosaic(tiles: Vec<HeightGrid>, opts: &MosaicOptions) -> Result<Mosaic, Mo
     })
 }
 
-/// The output extent and where each tile goes.
-struct Layout {
-    width: usize,
-    height: usize,
-    georef: GeoRef,
-    placements: Vec<TilePlacement>,
-    hole_samples: u64,
+/// What [`layout`] needs of a tile: its georeference and size, not its
+/// samples.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TileShape {
+    /// The tile's georeference.
+    pub georef: GeoRef,
+    /// Width in samples.
+    pub width: usize,
+    /// Height in samples.
+    pub height: usize,
 }
 
-/// Checks the tiles against tile 0 and computes the output extent, without allocating it.
-fn plan(tiles: &[HeightGrid], opts: &MosaicOptions) -> Result<Layout, MosaicError> {
+impl TileShape {
+    /// The shape of `grid`.
+    pub fn of(grid: &HeightGrid) -> TileShape {
+        TileShape {
+            georef: grid.georef().clone(),
+            width: grid.width(),
+            height: grid.height(),
+        }
+    }
+}
+
+/// The mosaic's extent and where each tile goes: what [`mosaic`] makes of
+/// two or more tiles, decided from their shapes alone.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MosaicLayout {
+    /// Width of the mosaic in samples.
+    pub width: usize,
+    /// Height of the mosaic in samples.
+    pub height: usize,
+    /// The mosaic's georeference (see the module docs).
+    pub georef: GeoRef,
+    /// Where each tile goes, in input order.
+    pub placements: Vec<TilePlacement>,
+    /// Samples covered by no tile.
+    pub hole_samples: u64,
+}
+
+/// Checks the tiles' shapes against tile 0's and computes the mosaic's
+/// extent, georeference and placements, without allocating it: the layout
+/// [`mosaic`] uses for two or more tiles (one tile is placed at its own
+/// origin, with its georeference marked known).
+///
+/// # Errors
+/// As [`mosaic`], except the seam limit.
+pub fn layout(tiles: &[TileShape], opts: &MosaicOptions) -> Result<MosaicLayout, MosaicError> {
     let Some(first) = tiles.first() else {
         return Err(MosaicError::NoTiles);
     };
-    let g0 = first.georef();
+    let g0 = &first.georef;
     // Integer offset (columns, rows) of each tile's first sample from tile 0's.
     let mut offsets = Vec::with_capacity(tiles.len());
     for (index, tile) in tiles.iter().enumerate() {
-        offsets.push(lattice_offset(index, tile.georef(), g0)?);
+        offsets.push(lattice_offset(index, &tile.georef, g0)?);
     }
     let min_col = offsets.iter().map(|o| o.0).min().unwrap_or(0);
     let min_row = offsets.iter().map(|o| o.1).min().unwrap_or(0);
     let end_col = tiles
         .iter()
         .zip(&offsets)
-        .map(|(t, o)| o.0 + t.width() as i64)
+        .map(|(t, o)| o.0 + t.width as i64)
         .max()
         .unwrap_or(0);
     let end_row = tiles
         .iter()
         .zip(&offsets)
-        .map(|(t, o)| o.1 + t.height() as i64)
+        .map(|(t, o)| o.1 + t.height as i64)
         .max()
         .unwrap_or(0);
     let (width, height) = ((end_col - min_col) as u64, (end_row - min_row) as u64);
@@ -403,8 +440,8 @@ fn plan(tiles: &[HeightGrid], opts: &MosaicOptions) -> Result<Layout, MosaicErro
             index,
             col: (o.0 - min_col) as usize,
             row: (o.1 - min_row) as usize,
-            width: t.width(),
-            height: t.height(),
+            width: t.width,
+            height: t.height,
         })
         .collect();
     let total = (width * height) as u64;
@@ -420,7 +457,7 @@ fn plan(tiles: &[HeightGrid], opts: &MosaicOptions) -> Result<Layout, MosaicErro
         });
     }
     let georef = output_georef(tiles, &offsets, min_col, min_row);
-    Ok(Layout {
+    Ok(MosaicLayout {
         width,
         height,
         georef,
@@ -565,18 +602,18 @@ fn covered_samples(placements: &[TilePlacement]) -> u64 {
 /// north-west corner. Each coordinate of the origin is taken from a tile that
 /// reaches that edge, so that it is exact when the conventions agree.
 fn output_georef(
-    tiles: &[HeightGrid],
+    tiles: &[TileShape],
     offsets: &[(i64, i64)],
     min_col: i64,
     min_row: i64,
 ) -> GeoRef {
-    let g0 = tiles[0].georef();
+    let g0 = &tiles[0].georef;
     let mut out = g0.clone();
     out.known = true;
     let west = offsets.iter().position(|o| o.0 == min_col).unwrap_or(0);
     let north = offsets.iter().position(|o| o.1 == min_row).unwrap_or(0);
-    out.origin_x = origin_in(tiles[west].georef(), g0.pixel_is, true);
-    out.origin_y = origin_in(tiles[north].georef(), g0.pixel_is, false);
+    out.origin_x = origin_in(&tiles[west].georef, g0.pixel_is, true);
+    out.origin_y = origin_in(&tiles[north].georef, g0.pixel_is, false);
     out
 }
 

@@ -116,7 +116,20 @@ impl LatticeFrame {
     /// [`TilesError::NotGeographic`], [`TilesError::OutsideWorld`],
     /// [`TilesError::BadOptions`].
     pub fn of(source: &HeightGrid, opts: &LatticeOptions) -> Result<LatticeFrame, TilesError> {
-        let g = source.georef();
+        LatticeFrame::for_source(source.georef(), [source.width(), source.height()], opts)
+    }
+
+    /// The frame of a source of georeference `g` (geographic) and `size`
+    /// `[width, height]` samples under `opts`: [`LatticeFrame::of`] without
+    /// the samples, which the frame does not depend on.
+    ///
+    /// # Errors
+    /// As [`LatticeFrame::of`].
+    pub fn for_source(
+        g: &GeoRef,
+        size: [usize; 2],
+        opts: &LatticeOptions,
+    ) -> Result<LatticeFrame, TilesError> {
         if !g.crs.is_geographic() || !g.known {
             return Err(TilesError::NotGeographic {
                 crs: if g.known {
@@ -126,15 +139,14 @@ impl LatticeFrame {
                 },
             });
         }
-        if source.width() < 2 || source.height() < 2 {
+        let [w, h] = size;
+        if w < 2 || h < 2 {
             return Err(TilesError::BadOptions(format!(
-                "expected a source of at least 2x2 samples, found {}x{}",
-                source.width(),
-                source.height()
+                "expected a source of at least 2x2 samples, found {w}x{h}"
             )));
         }
         let scheme = scheme_for(g, opts)?;
-        let footprint = footprint(source, &scheme)?;
+        let footprint = footprint(g, size, &scheme)?;
         let (align_zoom, window) = choose_window(&scheme, footprint);
         Ok(LatticeFrame {
             scheme,
@@ -142,7 +154,7 @@ impl LatticeFrame {
             window,
             align_zoom,
             source_georef: g.clone(),
-            source_size: [source.width(), source.height()],
+            source_size: size,
         })
     }
 
@@ -354,9 +366,12 @@ fn scheme_for(g: &GeoRef, opts: &LatticeOptions) -> Result<GeographicScheme, Til
 
 /// The source's sample-centre rectangle in global lattice coordinates:
 /// `[west col, north row, east col, south row]`.
-fn footprint(source: &HeightGrid, s: &GeographicScheme) -> Result<[f64; 4], TilesError> {
-    let g = source.georef();
-    let (w, h) = (source.width() as f64 - 1.0, source.height() as f64 - 1.0);
+fn footprint(
+    g: &GeoRef,
+    [width, height]: [usize; 2],
+    s: &GeographicScheme,
+) -> Result<[f64; 4], TilesError> {
+    let (w, h) = (width as f64 - 1.0, height as f64 - 1.0);
     let (xa, ya) = g.sample_xy(0.0, 0.0);
     let (xb, yb) = g.sample_xy(w, h);
     let (west, east) = (xa.min(xb), xa.max(xb));

@@ -45,7 +45,7 @@ pub use lattice::{
 };
 pub use merge::CoarseHierarchy;
 pub use partial::{BandCorners, CoarsePartial, FinePoint, WATER_UNKNOWN};
-pub use plan::{LatticeStats, TileRange, TilerOptions, ZoomPlan};
+pub use plan::{LatticeStats, PartStats, TileRange, TilerOptions, ZoomPlan};
 pub use scheme::{ErrorSchedule, GeographicScheme, TileId};
 pub use shard::{band_zoom, owned_region, part_region, shard_plan, Shard};
 

@@ -133,6 +133,13 @@ pub fn range_at(s: &GeographicScheme, window: [u64; 4], z: u8) -> TileRange {
 /// largest along a column, metres per lattice cell (0 m beyond the window
 /// and on its border, so no step crosses it).
 pub fn max_step_m(lattice: &Lattice) -> f64 {
+    let [gx, gy] = max_steps_m(lattice);
+    gx + gy
+}
+
+/// The largest height step along a row and the largest along a column of
+/// `lattice`'s stored heights, metres per lattice cell.
+fn max_steps_m(lattice: &Lattice) -> [f64; 2] {
     let g = lattice.grid();
     let (w, h) = (g.width(), g.height());
     let hs = g.heights();
@@ -156,12 +163,11 @@ pub fn max_step_m(lattice: &Lattice) -> f64 {
             (gx, gy)
         })
         .reduce(|| (0.0, 0.0), |a, b| (a.0.max(b.0), a.1.max(b.1)));
-    gx + gy
+    [gx, gy]
 }
 
-/// What the plan needs of the whole lattice: its height range and `G` (a
-/// minimum, a maximum and a maximum, so a sharded run can reduce them from
-/// its parts, whose regions overlap by a sample).
+/// What the plan needs of the whole lattice: its height range and `G` (see
+/// [`PartStats`] for reducing them from parts).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LatticeStats {
     /// The lowest height, metres (0 for an empty lattice).
@@ -175,11 +181,57 @@ pub struct LatticeStats {
 impl LatticeStats {
     /// The statistics of `lattice`'s stored heights.
     pub fn of(lattice: &Lattice) -> LatticeStats {
-        let (lo_m, hi_m) = lattice.grid().valid_range().unwrap_or((0.0, 0.0));
+        PartStats::of(lattice).stats()
+    }
+}
+
+/// [`LatticeStats`] of a part of the lattice, in a form that merges: the
+/// height range and the largest step along rows and along columns apart
+/// (`G` is their sum, so the sum of one part's two maxima would not merge).
+/// Parts whose regions cover the window, and every pair of neighbouring
+/// samples within one of them (regions that overlap by a sample do), merge
+/// into the whole lattice's statistics bit for bit: each is a minimum or a
+/// maximum of the same values.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PartStats {
+    /// The lowest and highest height, metres; `None` when no sample was seen.
+    pub range_m: Option<(f32, f32)>,
+    /// The largest height step along a row and along a column, metres per
+    /// cell.
+    pub step_m: [f64; 2],
+}
+
+impl PartStats {
+    /// The statistics of `lattice`'s stored heights (a part's or the window's).
+    pub fn of(lattice: &Lattice) -> PartStats {
+        PartStats {
+            range_m: lattice.grid().valid_range(),
+            step_m: max_steps_m(lattice),
+        }
+    }
+
+    /// The statistics of both parts together.
+    pub fn merge(self, other: PartStats) -> PartStats {
+        let range_m = match (self.range_m, other.range_m) {
+            (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1))),
+            (a, b) => a.or(b),
+        };
+        PartStats {
+            range_m,
+            step_m: [
+                self.step_m[0].max(other.step_m[0]),
+                self.step_m[1].max(other.step_m[1]),
+            ],
+        }
+    }
+
+    /// The statistics the plan uses.
+    pub fn stats(&self) -> LatticeStats {
+        let (lo_m, hi_m) = self.range_m.unwrap_or((0.0, 0.0));
         LatticeStats {
             lo_m,
             hi_m,
-            max_step_m: max_step_m(lattice),
+            max_step_m: self.step_m[0] + self.step_m[1],
         }
     }
 }

@@ -244,6 +244,28 @@ pub fn read_region<P: AsRef<Path> + Sync>(
     read_region_with_progress(paths, opts, &|_, _| {})
 }
 
+/// [`read_region`] reading the files one after the other on the calling
+/// thread: slower, but every tile is allocated by one thread, so a process
+/// that reads several regions in turn (the plan step of sharded tiling)
+/// reuses the memory of the last one instead of leaving it in the reading
+/// threads' allocator arenas.
+///
+/// # Errors
+/// As [`read_region`].
+pub fn read_region_in_turn<P: AsRef<Path>>(
+    paths: &[P],
+    opts: &RegionOptions,
+) -> Result<Region, RegionError> {
+    if paths.is_empty() {
+        return Err(RegionError::NoFiles);
+    }
+    let dems = paths
+        .iter()
+        .map(|p| read_dem(p.as_ref(), &opts.read))
+        .collect::<Result<Vec<Dem>, ReadError>>()?;
+    join(dems, opts)
+}
+
 /// [`read_region`], calling `progress(files_read, files)` as each file is
 /// read (from the reading threads, in any order).
 ///

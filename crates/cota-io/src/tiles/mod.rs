@@ -32,6 +32,7 @@ pub mod decode;
 pub mod ellipsoid;
 pub mod layer;
 pub mod part;
+pub mod plan_frame;
 pub mod pyramid;
 pub mod quantized_mesh;
 pub mod seams;
@@ -43,7 +44,10 @@ pub use coarse::{
 };
 pub use decode::{decode, DecodeError, DecodedTile, Header};
 pub use layer::layer_json;
-pub use part::{file_extents, frame_of, load_part, read_part_files, Part, PartError};
+pub use part::{
+    file_extents, frame_of, load_part, read_part_files, read_part_files_in_turn, Part, PartError,
+};
+pub use plan_frame::{mosaic_frame, stream_frame, summarize_files, MosaicFrame};
 pub use pyramid::{
     finish_tile, make_tile, tile_path, write_pyramid, MadeTile, PyramidError, PyramidOptions,
     PyramidReport, ZoomReport,

@@ -7,14 +7,14 @@ use std::path::{Path, PathBuf};
 
 use cota_core::tiles::plan::plan_with;
 use cota_core::tiles::{
-    band_zoom, part_region, resampling_deviation, shard_plan, Deviation, Lattice, LatticeStats,
-    Shard, SourcePart, TilerOptions, ZoomPlan,
+    band_zoom, part_region, resampling_deviation, shard_plan, Deviation, Lattice, LatticeFrame,
+    LatticeStats, Shard, SourcePart, TilerOptions, ZoomPlan,
 };
 use cota_core::{GeoRef, HeightGrid};
 
 use super::shard::{shard_frame_path, ShardFrame};
 use super::PyramidError;
-use crate::{read_region, DemSummary, RegionError, RegionOptions};
+use crate::{read_region, read_region_in_turn, DemSummary, Region, RegionError, RegionOptions};
 
 /// A shard's part could not be made: a frame that does not fit, or input
 /// files that could not be read.
@@ -65,7 +65,21 @@ pub fn frame_of(
     zooms: &[ZoomPlan],
     files: Vec<(String, [usize; 4])>,
 ) -> ShardFrame {
-    let band = band_zoom(zooms, lattice.align_zoom(), shards);
+    let stats = LatticeStats::of(lattice);
+    frame_with(key, shards, lattice.frame().clone(), stats, zooms, files)
+}
+
+/// The plan step's frame for `shards` shards of a lattice of frame `frame`
+/// and statistics `stats` (`zooms`: its plan).
+pub(super) fn frame_with(
+    key: String,
+    shards: u32,
+    frame: LatticeFrame,
+    stats: LatticeStats,
+    zooms: &[ZoomPlan],
+    files: Vec<(String, [usize; 4])>,
+) -> ShardFrame {
+    let band = band_zoom(zooms, frame.align_zoom, shards);
     let coarse_tiles = zooms
         .iter()
         .filter(|z| z.zoom < band)
@@ -76,8 +90,8 @@ pub fn frame_of(
         shards,
         band_zoom: band,
         coarse_tiles,
-        frame: lattice.frame().clone(),
-        stats: LatticeStats::of(lattice),
+        frame,
+        stats,
         files,
     }
 }
@@ -161,7 +175,7 @@ pub fn load_part<E: From<PyramidError>>(
 /// The source samples `span` (`[c0, r0, c1, r1]` of the whole source): the
 /// files that meet it (every file when the frame lists none), their offset
 /// in the whole source, and their names.
-fn read_span<E: From<PyramidError>>(
+pub(super) fn read_span<E: From<PyramidError>>(
     f: &ShardFrame,
     span: Option<[usize; 4]>,
     read: impl FnOnce(Option<Vec<PathBuf>>) -> Result<(HeightGrid, Vec<String>), E>,
@@ -212,13 +226,32 @@ pub fn read_part_files(
     opts: &RegionOptions,
 ) -> Result<(HeightGrid, Vec<String>), PartError> {
     let paths = files.unwrap_or_else(|| inputs.to_vec());
-    let region = read_region(&paths, opts)?;
+    Ok(named(read_region(&paths, opts)?))
+}
+
+/// [`read_part_files`] reading the files one after the other on this
+/// thread ([`read_region_in_turn`]): for a process that reads parts in
+/// turn, so that each reuses the memory the last one freed.
+///
+/// # Errors
+/// [`RegionError`] from [`read_region_in_turn`].
+pub fn read_part_files_in_turn(
+    inputs: &[PathBuf],
+    files: Option<Vec<PathBuf>>,
+    opts: &RegionOptions,
+) -> Result<(HeightGrid, Vec<String>), PartError> {
+    let paths = files.unwrap_or_else(|| inputs.to_vec());
+    Ok(named(read_region_in_turn(&paths, opts)?))
+}
+
+/// The region's grid and the names of its files.
+fn named(region: Region) -> (HeightGrid, Vec<String>) {
     let names = region
         .files
         .iter()
         .map(|f| f.path.display().to_string())
         .collect();
-    Ok((region.grid, names))
+    (region.grid, names)
 }
 
 #[cfg(test)]
