@@ -45,20 +45,15 @@ def _plan_step(inputs: list, out: str, shards: int, settings: dict) -> dict:
     return tiles_plan_step(inputs, out, shards, **settings)
 
 
-def _shard(inputs: list, out: str, index: int, shards: int, settings: dict, plan: Any) -> dict:
-    # ``plan`` (the plan step's report, or None when skipped) only orders this
-    # task after it.
-    del plan
+def _shard(inputs: list, out: str, index: int, shards: int, settings: dict) -> dict:
     return tiles(inputs, out, shard=(index, shards), **settings)
 
 
-def _reduce(done: list, plan: Any, out: str, shards: int) -> tuple:
-    # ``done`` (the shards' reports) and ``plan`` (the plan step's) order this
-    # task after them; their reports are taken here, not gathered after the
-    # reduce (a lost result recomputed then would write a record or the
-    # frame again after the reduce removed them).
-    coarse = plan["coarse_tiles"] if plan is not None else None
-    return tiles_reduce(out, shards), coarse, [r["files_read"] for r in done]
+def _reduce(done: list, out: str, shards: int) -> tuple:
+    # ``done`` (the shards' reports) orders this task after them; their
+    # reports are taken here, not gathered after the reduce (a lost result
+    # recomputed then would write a record again after the reduce removed it).
+    return tiles_reduce(out, shards), [r["files_read"] for r in done]
 
 
 def build_pyramid(
@@ -101,8 +96,12 @@ def build_pyramid(
     # The plan step runs on a fresh run; a resumed run whose finished shards
     # ran without it (no frame) goes on without it.
     if len(todo) == shards and not os.path.exists(shard_frame(out, shards)):
-        plan = client.submit(_plan_step, paths, out, shards, settings, retries=retries, pure=False,
-                             key=f"cota-plan-{shards}-{name}")
+        future = client.submit(_plan_step, paths, out, shards, settings, retries=retries,
+                               pure=False, key=f"cota-plan-{shards}-{name}")
+        # A barrier, not a data dependency: shard tasks that took its result
+        # would all queue on the worker holding it.
+        plan = future.result()
+        future.release()
     futures = client.map(
         _shard,
         [paths] * len(todo),
@@ -110,14 +109,14 @@ def build_pyramid(
         todo,
         [shards] * len(todo),
         [settings] * len(todo),
-        [plan] * len(todo),
         key=[f"cota-shard-{i}-of-{shards}-{name}" for i in todo],
         retries=retries,
         pure=False,
     )
-    reduced = client.submit(_reduce, futures, plan, out, shards, retries=retries, pure=False,
+    reduced = client.submit(_reduce, futures, out, shards, retries=retries, pure=False,
                             key=f"cota-reduce-{shards}-{name}")
-    tiles_done, coarse, read = reduced.result()
+    tiles_done, read = reduced.result()
+    coarse = plan["coarse_tiles"] if plan is not None else None
     return {
         "shards": shards,
         "skipped_shards": shards - len(todo),
