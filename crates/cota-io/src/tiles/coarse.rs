@@ -24,9 +24,9 @@ use cota_core::tiles::{
 };
 use rayon::prelude::*;
 
+use super::frame::ShardFrame;
 use super::pyramid::{finish_tile, tile_path, write_file_atomically, PyramidError, PyramidOptions};
 use super::quantized_mesh::TileExtensions;
-use super::shard::ShardFrame;
 
 const CORNERS_MAGIC: &[u8; 8] = b"COTACRN1";
 const PARTIAL_MAGIC: &[u8; 8] = b"COTAPRT1";

@@ -30,6 +30,7 @@
 pub mod coarse;
 pub mod decode;
 pub mod ellipsoid;
+pub mod frame;
 pub mod layer;
 pub mod part;
 pub mod plan_frame;
@@ -43,6 +44,7 @@ pub use coarse::{
     write_reduced_coarse, write_shard_partial, PartialHeader,
 };
 pub use decode::{decode, DecodeError, DecodedTile, Header};
+pub use frame::{read_shard_frame, shard_frame_path, write_shard_frame, ShardFrame};
 pub use layer::layer_json;
 pub use part::{
     file_extents, frame_of, load_part, read_part_files, read_part_files_in_turn, Part, PartError,
@@ -54,7 +56,4 @@ pub use pyramid::{
 };
 pub use quantized_mesh::{encode, encode_tile, EncodeError, Extensions, TileExtensions, TileFrame};
 pub use seams::{compare_border, edge_lists_match, BorderCheck, Neighbour};
-pub use shard::{
-    read_shard_frame, reduce_shards, shard_frame_path, shard_record_path, write_plan, write_shard,
-    write_shard_frame, ReduceReport, ShardFrame,
-};
+pub use shard::{reduce_shards, shard_record_path, write_plan, write_shard, ReduceReport};

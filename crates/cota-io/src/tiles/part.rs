@@ -12,7 +12,7 @@ use cota_core::tiles::{
 };
 use cota_core::{GeoRef, HeightGrid};
 
-use super::shard::{shard_frame_path, ShardFrame};
+use super::frame::{shard_frame_path, ShardFrame};
 use super::PyramidError;
 use crate::{read_region, read_region_in_turn, DemSummary, Region, RegionError, RegionOptions};
 

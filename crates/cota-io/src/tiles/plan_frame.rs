@@ -23,8 +23,8 @@ use cota_core::tiles::{
 };
 use cota_core::HeightGrid;
 
+use super::frame::{shard_frame_path, ShardFrame};
 use super::part::{file_extents, frame_with, read_span, PartError};
-use super::shard::{shard_frame_path, ShardFrame};
 use super::PyramidError;
 use crate::{read_dem, DemSummary, ReadOptions, RegionError};
 

@@ -1,0 +1,198 @@
+//! The plan step's frame of a sharded pyramid over parts,
+//! `OUT/.cota-shards-N.json`: what every shard needs of the whole lattice
+//! (its frame, statistics and where each input file lies), written once by
+//! the plan step ([`super::shard::write_plan`]) and read by every shard and
+//! the reduce. JSON, with every `f64` as the hexadecimal of its bits.
+
+use std::path::{Path, PathBuf};
+
+use cota_core::tiles::{GeographicScheme, LatticeFrame, LatticeStats};
+use cota_core::{Crs, GeoRef, PixelIs};
+use serde_json::{json, Value};
+
+use super::pyramid::{write_file_atomically, PyramidError};
+
+/// What the plan step records for shards that hold only their part of the
+/// lattice: `OUT/.cota-shards-N.json`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShardFrame {
+    /// The settings it was made with (a shard with other settings refuses it).
+    pub key: String,
+    /// The number of shards.
+    pub shards: u32,
+    /// The band zoom: the tiles coarser than it are cut by the reduce.
+    pub band_zoom: u8,
+    /// How many tiles are coarser than the band zoom.
+    pub coarse_tiles: u64,
+    /// The whole lattice's frame.
+    pub frame: LatticeFrame,
+    /// The whole lattice's statistics.
+    pub stats: LatticeStats,
+    /// Each input file and its samples in the whole source, `[c0, r0, c1,
+    /// r1]` inclusive; empty when a shard must read every file (voids to
+    /// fill, a `--bbox`, a single file).
+    pub files: Vec<(String, [usize; 4])>,
+}
+
+/// The path of the frame of `shards` shards under `out`.
+pub fn shard_frame_path(out: &Path, shards: u32) -> PathBuf {
+    out.join(format!(".cota-shards-{shards}.json"))
+}
+
+/// An `f64` as the hexadecimal of its bits: JSON numbers do not round-trip
+/// every `f64` exactly through serde_json's parser.
+fn bits(v: f64) -> String {
+    format!("{:016x}", v.to_bits())
+}
+
+fn unbits(v: &Value) -> Option<f64> {
+    u64::from_str_radix(v.as_str()?, 16)
+        .ok()
+        .map(f64::from_bits)
+}
+
+impl ShardFrame {
+    fn to_json(&self) -> Value {
+        let (f, g) = (&self.frame, &self.frame.source_georef);
+        json!({
+            "key": self.key,
+            "shards": self.shards,
+            "band_zoom": self.band_zoom,
+            "coarse_tiles": self.coarse_tiles,
+            "max_zoom": f.scheme.max_zoom,
+            "tile_cells": f.scheme.tile_cells,
+            "footprint": f.footprint.map(bits),
+            "window": f.window,
+            "align_zoom": f.align_zoom,
+            "source": [bits(g.origin_x), bits(g.origin_y), bits(g.pixel_x), bits(g.pixel_y)],
+            "source_area": matches!(g.pixel_is, PixelIs::Area),
+            "source_size": f.source_size,
+            "stats": [bits(f64::from(self.stats.lo_m)), bits(f64::from(self.stats.hi_m)), bits(self.stats.max_step_m)],
+            "files": self.files.iter().map(|(p, e)| json!([p, e])).collect::<Vec<_>>(),
+        })
+    }
+
+    fn from_json(v: &Value) -> Option<ShardFrame> {
+        let f64s = |k: &str, n: usize| -> Option<Vec<f64>> {
+            let a = v[k].as_array()?;
+            (a.len() == n).then_some(())?;
+            a.iter().map(unbits).collect()
+        };
+        let u64s =
+            |v: &Value| -> Option<Vec<u64>> { v.as_array()?.iter().map(Value::as_u64).collect() };
+        let small = |k: &str| v[k].as_u64().and_then(|n| u8::try_from(n).ok());
+        let fp = f64s("footprint", 4)?;
+        let src = f64s("source", 4)?;
+        let st = f64s("stats", 3)?;
+        let win = u64s(&v["window"])?;
+        let size = u64s(&v["source_size"])?;
+        let files = v["files"]
+            .as_array()?
+            .iter()
+            .map(|f| {
+                let e = u64s(&f[1])?;
+                let e: Vec<usize> = e
+                    .iter()
+                    .map(|&n| usize::try_from(n).ok())
+                    .collect::<Option<_>>()?;
+                Some((f[0].as_str()?.to_owned(), <[usize; 4]>::try_from(e).ok()?))
+            })
+            .collect::<Option<Vec<_>>>()?;
+        Some(ShardFrame {
+            key: v["key"].as_str()?.to_owned(),
+            shards: u32::try_from(v["shards"].as_u64()?).ok()?,
+            band_zoom: small("band_zoom")?,
+            coarse_tiles: v["coarse_tiles"].as_u64()?,
+            frame: LatticeFrame {
+                scheme: GeographicScheme {
+                    max_zoom: small("max_zoom")?,
+                    tile_cells: u32::try_from(v["tile_cells"].as_u64()?).ok()?,
+                },
+                footprint: [fp[0], fp[1], fp[2], fp[3]],
+                window: <[u64; 4]>::try_from(win).ok()?,
+                align_zoom: small("align_zoom")?,
+                source_georef: GeoRef {
+                    crs: Crs::Epsg(4326),
+                    origin_x: src[0],
+                    origin_y: src[1],
+                    pixel_x: src[2],
+                    pixel_y: src[3],
+                    pixel_is: if v["source_area"].as_bool()? {
+                        PixelIs::Area
+                    } else {
+                        PixelIs::Point
+                    },
+                    known: true,
+                },
+                source_size: [
+                    usize::try_from(size.first().copied()?).ok()?,
+                    usize::try_from(size.get(1).copied()?).ok()?,
+                ],
+            },
+            stats: LatticeStats {
+                lo_m: st[0] as f32,
+                hi_m: st[1] as f32,
+                max_step_m: st[2],
+            },
+            files,
+        })
+    }
+}
+
+/// A window inside the world, at least a cell wide and high.
+fn sane_window(w: [u64; 4], s: &GeographicScheme) -> bool {
+    w[0] < w[2] && w[1] < w[3] && w[2] <= 2 * s.root_cells() && w[3] <= s.root_cells()
+}
+
+/// Writes `frame` to [`shard_frame_path`] atomically.
+///
+/// # Errors
+/// [`PyramidError::Io`].
+pub fn write_shard_frame(out: &Path, frame: &ShardFrame) -> Result<(), PyramidError> {
+    let text = format!("{}\n", frame.to_json());
+    write_file_atomically(&shard_frame_path(out, frame.shards), text.as_bytes(), false)
+}
+
+/// The frame of `shards` shards under `out`, `None` when there is none.
+///
+/// # Errors
+/// [`PyramidError::Shard`] for a file that is not a frame.
+pub fn read_shard_frame(out: &Path, shards: u32) -> Result<Option<ShardFrame>, PyramidError> {
+    let path = shard_frame_path(out, shards);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let v = read_record(&path)?;
+    ShardFrame::from_json(&v)
+        .filter(|f| {
+            let s = &f.frame.scheme;
+            f.band_zoom <= s.max_zoom
+                && f.frame.align_zoom <= f.band_zoom
+                && s.tile_cells.is_power_of_two()
+                && (2..=4096).contains(&s.tile_cells)
+                && s.max_zoom <= 30 - s.tile_cells.trailing_zeros() as u8
+                && f.shards > 0
+                && sane_window(f.frame.window, s)
+                && f.frame.source_size.iter().all(|&n| n >= 2)
+                && f.stats.lo_m.is_finite()
+                && f.stats.hi_m.is_finite()
+                && f.stats.max_step_m.is_finite()
+        })
+        .map(Some)
+        .ok_or_else(|| PyramidError::Shard {
+            path,
+            message: "expected the plan step's frame (key, shards, band_zoom, window, source, stats, files, a valid scheme), found another JSON object".into(),
+        })
+}
+
+/// A shard's record or the frame as JSON, naming the file when it is not.
+pub(super) fn read_record(path: &Path) -> Result<Value, PyramidError> {
+    let text = std::fs::read_to_string(path).map_err(|e| PyramidError::Shard {
+        path: path.to_path_buf(),
+        message: format!("expected a shard's record, could not read it: {e}"),
+    })?;
+    serde_json::from_str(&text).map_err(|e| PyramidError::Shard {
+        path: path.to_path_buf(),
+        message: format!("expected a shard's record (JSON), found invalid JSON: {e}"),
+    })
+}
