@@ -5,7 +5,9 @@ block of copies of the two void-free SRTM tiles N00E010 and N00E011, real
 samples at false positions). Each worker is one process with one thread and a
 one-thread rayon pool (``RAYON_NUM_THREADS=1``), so K workers use K cores: the
 Dask deployment of one worker per core. Every pyramid is compared byte for byte
-with the first one. Medians of ``COTA_REPS`` runs (default 3).
+with the first one. ``COTA_REPS`` rounds (default 3), each running every K in
+turn on clusters started beforehand; the speed-up is the median of the
+rounds' ratios.
 
 usage: python bench/dask_scaling.py [K ...]   (default: 1 2)
 env:   COTA_SHARED_DATA (../shared/data), COTA_MAX_ZOOM (12), COTA_SHARDS (8), COTA_REPS (3)
@@ -13,6 +15,7 @@ env:   COTA_SHARED_DATA (../shared/data), COTA_MAX_ZOOM (12), COTA_SHARDS (8), C
 
 from __future__ import annotations
 
+import contextlib
 import filecmp
 import os
 import shutil
@@ -60,31 +63,35 @@ def main() -> None:
     tmp = Path(tempfile.mkdtemp())
     try:
         inputs = mosaic8(tmp)
-        first = None
-        rows = []
-        for k in ks:
-            with distributed.LocalCluster(n_workers=k, threads_per_worker=1, processes=True,
-                                          dashboard_address=None) as cluster, \
-                    distributed.Client(cluster) as client:
-                times = []
-                for r in range(reps):
+        with contextlib.ExitStack() as stack:
+            clients = {k: stack.enter_context(distributed.Client(stack.enter_context(
+                distributed.LocalCluster(n_workers=k, threads_per_worker=1, processes=True,
+                                         dashboard_address=None)))) for k in ks}
+            first, times, tiles = None, {k: [] for k in ks}, {}
+            # Rounds of every K in turn, so that a drift of this shared
+            # machine's speed touches every K alike.
+            for r in range(reps):
+                for k in ks:
                     out = tmp / f"k{k}r{r}"
                     t0 = time.perf_counter()
-                    rep = cota.dask.build_pyramid(inputs, out, client=client, shards=shards,
-                                                  max_zoom=max_zoom)
-                    times.append(time.perf_counter() - t0)
+                    rep = cota.dask.build_pyramid(inputs, out, client=clients[k],
+                                                  shards=shards, max_zoom=max_zoom)
+                    times[k].append(time.perf_counter() - t0)
+                    tiles[k] = rep["tiles"]
                     if first is None:
                         first = out
                     else:
                         assert same_tree(first, out), f"{out} differs from {first}"
                         shutil.rmtree(out)
-            rows.append((k, statistics.median(times), rep["tiles"]))
-        base = rows[0][1]
-        print(f"mosaic8, max zoom {max_zoom}, {shards} shards, median of {reps}, one thread per worker")
-        print("| workers | seconds | tiles | speed-up |")
+        base = times[ks[0]]
+        print(f"mosaic8, max zoom {max_zoom}, {shards} shards, {reps} rounds, one thread per worker")
+        print(f"| workers | seconds (median) | tiles | speed-up (median of the rounds' ratios) |")
         print("|---:|---:|---:|---:|")
-        for k, t, n in rows:
-            print(f"| {k} | {t:.2f} | {n} | {base / t:.2f}x |")
+        for k in ks:
+            ratio = statistics.median(b / t for b, t in zip(base, times[k]))
+            print(f"| {k} | {statistics.median(times[k]):.2f} | {tiles[k]} | {ratio:.2f}x |")
+        for k in ks:
+            print(f"workers {k}, each round (s): " + ", ".join(f"{t:.2f}" for t in times[k]))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

@@ -944,12 +944,25 @@ pub struct TilesArgs {
     /// Print the report as one JSON object.
     #[arg(long)]
     pub json: bool,
-    /// The plan step of --shards N shards: reads the whole input, writes the
-    /// tiles coarser than the band zoom and OUT/.cota-shards-N.json (what the
-    /// shards need of the whole), and prints each shard's tiles, zoom by zoom.
-    /// Shards run after it read only their files and hold only their part.
+    /// The plan step of --shards N shards: reads the input one shard's part at
+    /// a time (the whole input where shards must read every file), writes
+    /// OUT/.cota-shards-N.json (what the shards need of the whole) and the band
+    /// corners, and prints each shard's tiles, zoom by zoom. Shards run after
+    /// it read only their files and hold only their part. Parts already done
+    /// by --plan --part I are not read again.
     #[arg(long, conflicts_with_all = ["shard", "reduce"])]
     pub plan: bool,
+    /// With --plan: only part I of the plan step (0-based, I < N; shard I's
+    /// part read for the statistics and band corners) into
+    /// OUT/.cota-plan-I-of-N.bin, after the layout (OUT/.cota-layout-N.json,
+    /// made when missing). Idempotent; the parts run as separate processes, then
+    /// --plan --shards N merges them.
+    #[arg(long, value_name = "I", requires = "plan", conflicts_with = "layout")]
+    pub part: Option<u32>,
+    /// With --plan: only the plan step's layout (each file read alone for its
+    /// shape), OUT/.cota-layout-N.json, before running the --part I processes.
+    #[arg(long, requires = "plan")]
+    pub layout: bool,
     /// Number of shards for --plan and --reduce.
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub shards: u32,

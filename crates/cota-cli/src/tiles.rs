@@ -11,8 +11,8 @@ use cota_core::tiles::{
     Shard, TilerOptions, ZoomPlan,
 };
 use cota_io::tiles::{
-    read_shard_frame, reduce_shards, write_plan, write_pyramid, write_shard, PyramidOptions,
-    PyramidReport, ShardFrame, TileExtensions,
+    plan_layout_path, plan_part_path, read_shard_frame, reduce_shards, write_plan, write_pyramid,
+    write_shard, PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
 };
 use serde_json::json;
 
@@ -34,9 +34,12 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     }
     if a.plan {
         // Without the whole input where the files allow it (each file
-        // alone, then each shard's part in turn).
-        if let Some((frame, corners)) = tiles_part::stream_frame(a, &opts)? {
-            return write_plan_step(a, &opts, &frame, &corners);
+        // alone, then each shard's part: in turn, or as --part processes).
+        if let Some(layout) = tiles_part::layout(a, &opts)? {
+            return plan_in_parts(a, &opts, layout);
+        }
+        if a.layout || a.part.is_some() {
+            return whole_input_plan(a);
         }
     }
     let t0 = Instant::now();
@@ -149,6 +152,63 @@ fn plan_step(
     write_plan_step(a, opts, &frame, &corners)
 }
 
+/// `--plan` with a layout: `--layout` alone, `--part I`, or the whole plan
+/// step from the parts already done and the others in turn.
+fn plan_in_parts(
+    a: &TilesArgs,
+    opts: &TilerOptions,
+    layout: ShardFrame,
+) -> anyhow::Result<std::process::ExitCode> {
+    let n = a.shards;
+    if a.layout {
+        let path = plan_layout_path(&a.output, n);
+        if a.json {
+            println!(
+                "{}",
+                json!({"layout": path, "shards": n, "files": layout.files.len()})
+            );
+        } else {
+            println!(
+                "layout      {} ({} files, {n} parts)",
+                path.display(),
+                layout.files.len()
+            );
+        }
+        return Ok(std::process::ExitCode::SUCCESS);
+    }
+    if let Some(i) = a.part {
+        let r = tiles_part::plan_part(a, &layout, opts, i)?;
+        let path = plan_part_path(&a.output, i, n);
+        if a.json {
+            let v = json!({"part": i, "shards": n, "skipped": r.skipped, "files_read": r.files_read, "wrote": path});
+            println!("{v}");
+        } else if r.skipped {
+            println!("plan part   {i} of {n} already done ({})", path.display());
+        } else {
+            println!(
+                "plan part   {i} of {n}: read {}; wrote {}",
+                r.files_read.join(" + "),
+                path.display()
+            );
+        }
+        return Ok(std::process::ExitCode::SUCCESS);
+    }
+    let (frame, _, _) = tiles_part::finish(a, layout, opts)
+        .with_context(|| format!("writing the plan step in {}", a.output.display()))?;
+    print_plan_step(a, opts, &frame)
+}
+
+/// `--plan --layout` or `--part I` for an input whose shards read every file.
+fn whole_input_plan(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
+    let why = "the plan step reads the whole input here (one file, voids, samples no file covers, a crop or standard input): nothing to do in parts; run --plan --shards N alone";
+    if a.json {
+        println!("{}", json!({"whole_input": true, "message": why}));
+    } else {
+        println!("plan        {why}");
+    }
+    Ok(std::process::ExitCode::SUCCESS)
+}
+
 /// Writes the plan step's frame and band corners, and prints the plan.
 fn write_plan_step(
     a: &TilesArgs,
@@ -158,6 +218,15 @@ fn write_plan_step(
 ) -> anyhow::Result<std::process::ExitCode> {
     write_plan(&a.output, frame, corners)
         .with_context(|| format!("writing {}", a.output.display()))?;
+    print_plan_step(a, opts, frame)
+}
+
+/// Prints the plan of the plan step's frame.
+fn print_plan_step(
+    a: &TilesArgs,
+    opts: &TilerOptions,
+    frame: &ShardFrame,
+) -> anyhow::Result<std::process::ExitCode> {
     let f = &frame.frame;
     let zooms = plan_with(&f.scheme, f.window, &frame.stats, opts)?;
     print_plan(

@@ -6,7 +6,9 @@ use std::path::PathBuf;
 
 use cota_core::tiles::{BandCorners, Lattice, LatticeOptions, TilerOptions, ZoomPlan};
 use cota_core::HeightGrid;
-use cota_io::tiles::{Part, ShardFrame};
+use cota_io::tiles::{
+    finish_plan, plan_layout, plan_layout_or, run_plan_part, Part, PlanPartReport, ShardFrame,
+};
 
 use crate::args::TilesArgs;
 use crate::input;
@@ -98,30 +100,50 @@ pub fn load_part(
     )
 }
 
-/// The plan step's frame without the whole input (each file read alone for
-/// the mosaic's frame, then each shard's part in turn for the statistics):
-/// the same frame as [`frame_of`] of the whole lattice. `None` where a shard
-/// would read every file (see [`file_extents`]; also standard input or the
-/// bundled sample): the plan step must then read the whole input.
-pub fn stream_frame(
-    a: &TilesArgs,
-    opts: &TilerOptions,
-) -> anyhow::Result<Option<(ShardFrame, BandCorners)>> {
-    let inp = &a.input;
-    let crop = inp.bbox.is_some() || inp.zoom.is_some();
-    if crop || inp.files.len() < 2 || inp.files.iter().any(|f| input::is_dash(f)) {
-        return Ok(None);
-    }
-    let files = input::summaries(inp)?;
-    let lattice = lattice_options(a);
-    let mosaic = input::mosaic_options(inp);
-    let Some(m) = cota_io::tiles::mosaic_frame(&files, &lattice, &mosaic)? else {
-        return Ok(None);
+/// The plan step's layout (the frame before the statistics: each file read
+/// alone for the mosaic's frame), from OUT when a plan step in parts already
+/// wrote it, else made and written there. `None` where a shard would read
+/// every file (see [`file_extents`]; also standard input or the bundled
+/// sample): the plan step must then read the whole input, and has no parts.
+pub fn layout(a: &TilesArgs, opts: &TilerOptions) -> anyhow::Result<Option<ShardFrame>> {
+    let make = || -> anyhow::Result<Option<ShardFrame>> {
+        let inp = &a.input;
+        let crop = inp.bbox.is_some() || inp.zoom.is_some();
+        if crop || inp.files.len() < 2 || inp.files.iter().any(|f| input::is_dash(f)) {
+            return Ok(None);
+        }
+        let files = input::summaries(inp)?;
+        let lattice = lattice_options(a);
+        let mosaic = input::mosaic_options(inp);
+        let Some(m) = cota_io::tiles::mosaic_frame(&files, &lattice, &mosaic)? else {
+            return Ok(None);
+        };
+        Ok(Some(plan_layout(frame_key(a), a.shards, &m, opts)?))
     };
-    // The parts are read in turn, each file on this thread, so each part
-    // reuses the memory the last one freed.
-    let (key, read) = (frame_key(a), part_reader(a, true));
-    cota_io::tiles::stream_frame(&a.output, key, a.shards, &m, opts, read).map(Some)
+    plan_layout_or(&a.output, &frame_key(a), a.shards, make)
+}
+
+/// The plan step from its layout (the same frame as [`frame_of`] of the
+/// whole lattice): the parts a `--plan --part I` already wrote, the others
+/// read in turn, each file on this thread so each part reuses the memory
+/// the last one freed; written to OUT. Returns the frame, its corners and
+/// how many parts came from their files.
+pub fn finish(
+    a: &TilesArgs,
+    layout: ShardFrame,
+    opts: &TilerOptions,
+) -> anyhow::Result<(ShardFrame, BandCorners, u32)> {
+    finish_plan(&a.output, layout, opts, part_reader(a, true))
+}
+
+/// `--plan --part I`: part I of the plan step, into its file.
+pub fn plan_part(
+    a: &TilesArgs,
+    layout: &ShardFrame,
+    opts: &TilerOptions,
+    index: u32,
+) -> anyhow::Result<PlanPartReport> {
+    run_plan_part(&a.output, layout, opts, index, part_reader(a, false))
 }
 
 #[cfg(test)]
@@ -143,7 +165,7 @@ mod tests {
     }
 
     /// `cota tiles W E --plan --shards 3`: the streamed frame is the one the
-    /// whole input gives; one file, or a `--bbox` crop, is not streamed.
+    /// whole input gives; one file, or a `--bbox` crop, has no layout.
     #[test]
     fn streamed_frame_is_the_whole_inputs() {
         let (Some(w), Some(e)) = (
@@ -165,7 +187,11 @@ mod tests {
             "10",
         ]);
         let opts = TilerOptions::DEFAULT;
-        let (streamed, corners) = stream_frame(&a, &opts).unwrap().unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let mut a = a;
+        a.output = dir.path().join("out");
+        let layout = layout(&a, &opts).unwrap().unwrap();
+        let (streamed, corners, _) = finish(&a, layout, &opts).unwrap();
         assert_eq!(corners.missing(), 0);
         let inp = input::load(&a.input).unwrap();
         let lat = Lattice::resample(&inp.grid, &lattice_options(&a)).unwrap();
@@ -174,7 +200,7 @@ mod tests {
         assert_eq!(format!("{streamed:?}"), format!("{whole:?}"));
         assert_eq!(streamed.stats.hi_m.to_bits(), whole.stats.hi_m.to_bits());
         let one = tiles_args(&[w, "-o", "out", "--plan", "--shards", "3"]);
-        assert!(stream_frame(&one, &opts).unwrap().is_none());
+        assert!(layout(&one, &opts).unwrap().is_none());
         let crop = [
             w,
             e,
@@ -186,6 +212,6 @@ mod tests {
             "--bbox",
             "10.2,0.2,11.5,0.8",
         ];
-        assert!(stream_frame(&tiles_args(&crop), &opts).unwrap().is_none());
+        assert!(layout(&tiles_args(&crop), &opts).unwrap().is_none());
     }
 }

@@ -13,8 +13,8 @@
 //!   check, measure);
 //! * `mesh`: `cota.Mesh` (numpy vertices and triangles, `write`);
 //! * `tiles`: `cota.tiles` (a quantized-mesh pyramid, whole or one shard),
-//!   `cota.tiles_plan`, `cota.tiles_plan_step`, `cota.tiles_reduce` (used by
-//!   `cota.dask`).
+//!   `cota.tiles_plan`, `cota.tiles_plan_layout`, `cota.tiles_plan_part`,
+//!   `cota.tiles_plan_step`, `cota.tiles_reduce` (used by `cota.dask`).
 
 use pyo3::prelude::*;
 
@@ -36,6 +36,8 @@ fn _cota(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tiles::tiles, m)?)?;
     m.add_function(wrap_pyfunction!(tiles::tiles_plan, m)?)?;
     m.add_function(wrap_pyfunction!(tiles::tiles_plan_step, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::tiles_plan_layout, m)?)?;
+    m.add_function(wrap_pyfunction!(tiles::tiles_plan_part, m)?)?;
     m.add_function(wrap_pyfunction!(tiles::tiles_reduce, m)?)?;
     m.add_function(wrap_pyfunction!(tiles::shard_record, m)?)?;
     m.add_function(wrap_pyfunction!(tiles::shard_frame, m)?)?;

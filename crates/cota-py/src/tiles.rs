@@ -12,10 +12,10 @@ use cota_core::tiles::{
 };
 use cota_core::FillOptions;
 use cota_io::tiles::{
-    file_extents, frame_of, load_part, mosaic_frame, read_part_files, read_part_files_in_turn,
-    read_shard_frame, reduce_shards, shard_frame_path, shard_record_path, stream_frame,
-    summarize_files, write_plan, write_pyramid, write_shard, PartError, PyramidOptions,
-    PyramidReport, ShardFrame, TileExtensions,
+    file_extents, finish_plan, frame_of, load_part, mosaic_frame, plan_layout, plan_layout_or,
+    read_part_files, read_part_files_in_turn, read_shard_frame, reduce_shards, run_plan_part,
+    shard_frame_path, shard_record_path, summarize_files, write_plan, write_pyramid, write_shard,
+    PartError, PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
 };
 use cota_io::{read_region, RegionOptions};
 use pyo3::prelude::*;
@@ -63,22 +63,24 @@ fn lattice_options(s: &Settings) -> LatticeOptions {
         .with_tile_cells(s.tile_cells)
 }
 
-/// The plan step's frame without the whole input (each file read alone,
-/// then each shard's part in turn): the frame [`frame_of`] makes of the
-/// whole lattice; `None` when a shard must read every file.
-fn streamed_frame(
+/// The plan step's layout under `out` (the frame before the statistics,
+/// from the files' shapes), made and written there when missing; `None`
+/// when a shard must read every file (one file, voids, holes).
+fn layout_of(
     paths: &[PathBuf],
     s: &Settings,
     out: &Path,
     shards: u32,
-) -> Result<Option<(ShardFrame, BandCorners)>, PartError> {
-    let ro = region_options();
-    let files = summarize_files(paths, &ro.read)?;
-    let Some(m) = mosaic_frame(&files, &lattice_options(s), &ro.mosaic)? else {
-        return Ok(None);
-    };
-    let read = |files| read_part_files_in_turn(paths, files, &ro);
-    stream_frame(out, frame_key(paths, s), shards, &m, &tiler(s), read).map(Some)
+) -> Result<Option<ShardFrame>, PartError> {
+    let key = frame_key(paths, s);
+    plan_layout_or(out, &key, shards, || {
+        let ro = region_options();
+        let files = summarize_files(paths, &ro.read)?;
+        let Some(m) = mosaic_frame(&files, &lattice_options(s), &ro.mosaic)? else {
+            return Ok(None);
+        };
+        Ok(Some(plan_layout(key.clone(), shards, &m, &tiler(s))?))
+    })
 }
 
 /// A part's error as Python's.
@@ -170,12 +172,13 @@ pub(crate) fn tiles<'py>(
     shard: Option<(u32, u32)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let paths = paths_of(paths)?;
-    let s = Settings {
+    let s = settings(
         min_zoom,
         max_zoom,
         tile_cells,
-        error: schedule(error_factor, max_error_m_at_max_zoom),
-    };
+        error_factor,
+        max_error_m_at_max_zoom,
+    );
     let opts = PyramidOptions::DEFAULT
         .with_extensions(TileExtensions::with(normals, watermask, metadata))
         .with_gzip(gzip)
@@ -218,13 +221,15 @@ pub(crate) fn tiles<'py>(
     Ok(d)
 }
 
-/// The plan step of `cota tiles --plan --shards n`: reads every input once,
-/// writes the tiles coarser than the band zoom and the frame
-/// `out/.cota-shards-n.json`; each `tiles(..., shard=(i, n))` then reads
-/// only the files its part of the lattice needs. Idempotent (tiles already
-/// there are skipped). Returns a dict: `band_zoom`, `coarse_tiles`,
-/// `written`, `skipped`, `files` (each input's samples in the mosaic; empty
-/// when every shard must read every file: one file, voids or holes).
+/// The plan step of `cota tiles --plan --shards n`: reads the inputs one
+/// shard's part at a time (parts that `tiles_plan_part` already wrote are not
+/// read again; the whole input when every shard must read every file), and
+/// writes the frame `out/.cota-shards-n.json` and the band corners; each
+/// `tiles(..., shard=(i, n))` then reads only the files its part of the
+/// lattice needs. Writes no tile. Returns a dict: `band_zoom`,
+/// `coarse_tiles`, `written`, `skipped` (both 0), `files` (each input's
+/// samples in the mosaic; empty when every shard must read every file: one
+/// file, voids or holes).
 #[pyfunction]
 #[pyo3(signature = (paths, out, shards, *, min_zoom = 0, max_zoom = None, tile_cells = 64,
     error_factor = None, max_error_m_at_max_zoom = None, normals = false, watermask = false,
@@ -248,24 +253,23 @@ pub(crate) fn tiles_plan_step<'py>(
     check: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let paths = paths_of(paths)?;
-    let s = Settings {
+    let s = settings(
         min_zoom,
         max_zoom,
         tile_cells,
-        error: schedule(error_factor, max_error_m_at_max_zoom),
-    };
+        error_factor,
+        max_error_m_at_max_zoom,
+    );
     // The tiles' settings are the shards' (each records them with its
     // partial maxima, and the reduce cuts the coarse tiles with them).
     let _ = (normals, watermask, metadata, gzip, force, check);
-    if shards == 0 {
-        return Err(errors::value("expected at least 1 shard, found 0"));
-    }
+    let shards = at_least_one(shards)?;
     let (frame, coarse) = py.detach(|| -> PyResult<_> {
-        // Without the whole input where the files allow it.
-        if let Some((frame, corners)) =
-            streamed_frame(&paths, &s, &out, shards).map_err(part_error)?
-        {
-            write_plan(&out, &frame, &corners).map_err(errors::write)?;
+        // Without the whole input where the files allow it: the parts
+        // `tiles_plan_part` already wrote, the others in turn.
+        if let Some(layout) = layout_of(&paths, &s, &out, shards).map_err(part_error)? {
+            let read = |files| read_part_files_in_turn(&paths, files, &region_options());
+            let (frame, _, _) = finish_plan(&out, layout, &tiler(&s), read).map_err(part_error)?;
             let coarse = frame.coarse_tiles;
             return Ok((frame, coarse));
         }
@@ -287,6 +291,117 @@ pub(crate) fn tiles_plan_step<'py>(
     Ok(d)
 }
 
+/// The plan step's layout (`cota tiles --plan --layout`): each input read
+/// alone for its shape, `out/.cota-layout-n.json` written (kept when there).
+/// Returns a dict: `streamed` (False when every shard must read every file:
+/// then the plan step reads the whole input and has no parts), `files`.
+#[pyfunction]
+#[pyo3(signature = (paths, out, shards, *, min_zoom = 0, max_zoom = None, tile_cells = 64,
+    error_factor = None, max_error_m_at_max_zoom = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn tiles_plan_layout<'py>(
+    py: Python<'py>,
+    paths: &Bound<'py, PyAny>,
+    out: PathBuf,
+    shards: u32,
+    min_zoom: u8,
+    max_zoom: Option<u8>,
+    tile_cells: u32,
+    error_factor: Option<f64>,
+    max_error_m_at_max_zoom: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let paths = paths_of(paths)?;
+    let s = settings(
+        min_zoom,
+        max_zoom,
+        tile_cells,
+        error_factor,
+        max_error_m_at_max_zoom,
+    );
+    let shards = at_least_one(shards)?;
+    let layout = py.detach(|| layout_of(&paths, &s, &out, shards).map_err(part_error))?;
+    let d = PyDict::new(py);
+    d.set_item("streamed", layout.is_some())?;
+    d.set_item("files", layout.map_or(0, |l| l.files.len()))?;
+    Ok(d)
+}
+
+/// Part `part` of the plan step (`cota tiles --plan --part i`): shard
+/// `part`'s files read and its part resampled for the statistics and band
+/// corners, into `out/.cota-plan-i-of-n.bin`, after the layout (made when
+/// missing). Idempotent; `tiles_plan_step` then merges the parts. Returns a
+/// dict: `streamed` (False: nothing to do, the plan step reads the whole
+/// input), `skipped` (its file was there), `files_read`.
+#[pyfunction]
+#[pyo3(signature = (paths, out, shards, part, *, min_zoom = 0, max_zoom = None,
+    tile_cells = 64, error_factor = None, max_error_m_at_max_zoom = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn tiles_plan_part<'py>(
+    py: Python<'py>,
+    paths: &Bound<'py, PyAny>,
+    out: PathBuf,
+    shards: u32,
+    part: u32,
+    min_zoom: u8,
+    max_zoom: Option<u8>,
+    tile_cells: u32,
+    error_factor: Option<f64>,
+    max_error_m_at_max_zoom: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let paths = paths_of(paths)?;
+    let s = settings(
+        min_zoom,
+        max_zoom,
+        tile_cells,
+        error_factor,
+        max_error_m_at_max_zoom,
+    );
+    let shards = at_least_one(shards)?;
+    if part >= shards {
+        return Err(errors::value(format!(
+            "expected a part 0 <= part < {shards}, found {part}"
+        )));
+    }
+    let report = py.detach(|| -> Result<_, PartError> {
+        let Some(layout) = layout_of(&paths, &s, &out, shards)? else {
+            return Ok(None);
+        };
+        let read = |files| read_part_files(&paths, files, &region_options());
+        run_plan_part(&out, &layout, &tiler(&s), part, read).map(Some)
+    });
+    let report = report.map_err(part_error)?;
+    let d = PyDict::new(py);
+    d.set_item("streamed", report.is_some())?;
+    d.set_item("skipped", report.as_ref().is_some_and(|r| r.skipped))?;
+    d.set_item(
+        "files_read",
+        report.map(|r| r.files_read).unwrap_or_default(),
+    )?;
+    Ok(d)
+}
+
+fn settings(
+    min_zoom: u8,
+    max_zoom: Option<u8>,
+    tile_cells: u32,
+    error_factor: Option<f64>,
+    at_max: Option<f64>,
+) -> Settings {
+    Settings {
+        min_zoom,
+        max_zoom,
+        tile_cells,
+        error: schedule(error_factor, at_max),
+    }
+}
+
+fn at_least_one(shards: u32) -> PyResult<u32> {
+    if shards == 0 {
+        return Err(errors::value("expected at least 1 shard, found 0"));
+    }
+    Ok(shards)
+}
+
 /// The shard plan of `cota tiles --plan --shards n`: a list of `n` dicts
 /// (`shard`, `shards`, `tiles`, `ranges`: a list of `(zoom, x0, x1, y0, y1)`,
 /// TMS, inclusive). Deterministic: every process computes the same.
@@ -305,12 +420,13 @@ pub(crate) fn tiles_plan<'py>(
     max_error_m_at_max_zoom: Option<f64>,
 ) -> PyResult<Bound<'py, PyList>> {
     let paths = paths_of(paths)?;
-    let s = Settings {
+    let s = settings(
         min_zoom,
         max_zoom,
         tile_cells,
-        error: schedule(error_factor, max_error_m_at_max_zoom),
-    };
+        error_factor,
+        max_error_m_at_max_zoom,
+    );
     let parts = py.detach(|| -> PyResult<_> {
         let lat = lattice(&paths, &s)?;
         let zooms = plan(&lat, &tiler(&s)).map_err(errors::mesh)?;

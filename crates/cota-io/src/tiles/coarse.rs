@@ -41,7 +41,7 @@ pub fn partial_path(out: &Path, index: u32, shards: u32) -> PathBuf {
     out.join(format!(".cota-partial-{index}-of-{shards}.bin"))
 }
 
-fn bad(path: &Path, message: String) -> PyramidError {
+pub(super) fn bad(path: &Path, message: String) -> PyramidError {
     PyramidError::Shard {
         path: path.to_path_buf(),
         message,
@@ -109,22 +109,22 @@ pub fn read_band_corners(out: &Path, frame: &ShardFrame) -> Result<BandCorners, 
 }
 
 /// A bounds-checked little-endian reader naming its file.
-struct Reader<'a> {
+pub(super) struct Reader<'a> {
     b: &'a [u8],
     at: usize,
     path: &'a Path,
 }
 
 impl<'a> Reader<'a> {
-    fn new(b: &'a [u8], path: &'a Path) -> Self {
+    pub(super) fn new(b: &'a [u8], path: &'a Path) -> Self {
         Reader { b, at: 0, path }
     }
 
-    fn left(&self) -> usize {
+    pub(super) fn left(&self) -> usize {
         self.b.len() - self.at
     }
 
-    fn take(&mut self, n: usize) -> Result<&'a [u8], PyramidError> {
+    pub(super) fn take(&mut self, n: usize) -> Result<&'a [u8], PyramidError> {
         if self.left() < n {
             return Err(bad(
                 self.path,
@@ -140,7 +140,7 @@ impl<'a> Reader<'a> {
         Ok(s)
     }
 
-    fn magic(&mut self, m: &[u8; 8]) -> Result<(), PyramidError> {
+    pub(super) fn magic(&mut self, m: &[u8; 8]) -> Result<(), PyramidError> {
         let found = self.take(8).unwrap_or_default();
         if found != m {
             return Err(bad(
@@ -155,33 +155,33 @@ impl<'a> Reader<'a> {
         Ok(())
     }
 
-    fn arr<const N: usize>(&mut self) -> Result<[u8; N], PyramidError> {
+    pub(super) fn arr<const N: usize>(&mut self) -> Result<[u8; N], PyramidError> {
         let mut a = [0u8; N];
         a.copy_from_slice(self.take(N)?);
         Ok(a)
     }
 
-    fn u8(&mut self) -> Result<u8, PyramidError> {
+    pub(super) fn u8(&mut self) -> Result<u8, PyramidError> {
         Ok(self.arr::<1>()?[0])
     }
-    fn u16(&mut self) -> Result<u16, PyramidError> {
+    pub(super) fn u16(&mut self) -> Result<u16, PyramidError> {
         Ok(u16::from_le_bytes(self.arr()?))
     }
-    fn u32(&mut self) -> Result<u32, PyramidError> {
+    pub(super) fn u32(&mut self) -> Result<u32, PyramidError> {
         Ok(u32::from_le_bytes(self.arr()?))
     }
-    fn u64(&mut self) -> Result<u64, PyramidError> {
+    pub(super) fn u64(&mut self) -> Result<u64, PyramidError> {
         Ok(u64::from_le_bytes(self.arr()?))
     }
-    fn f32(&mut self) -> Result<f32, PyramidError> {
+    pub(super) fn f32(&mut self) -> Result<f32, PyramidError> {
         Ok(f32::from_le_bytes(self.arr()?))
     }
-    fn f64(&mut self) -> Result<f64, PyramidError> {
+    pub(super) fn f64(&mut self) -> Result<f64, PyramidError> {
         Ok(f64::from_le_bytes(self.arr()?))
     }
 
     /// A count of records of `size` bytes, at most what is left.
-    fn count(&mut self, size: usize) -> Result<usize, PyramidError> {
+    pub(super) fn count(&mut self, size: usize) -> Result<usize, PyramidError> {
         let n = self.u64()?;
         if n > (self.left() / size) as u64 {
             return Err(bad(

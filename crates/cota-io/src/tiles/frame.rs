@@ -144,13 +144,33 @@ fn sane_window(w: [u64; 4], s: &GeographicScheme) -> bool {
     w[0] < w[2] && w[1] < w[3] && w[2] <= 2 * s.root_cells() && w[3] <= s.root_cells()
 }
 
+/// The path of the plan step's layout of `shards` shards under `out`: the
+/// frame before the statistics, written first by a plan step run in parts
+/// ([`super::plan_parts`]) and removed once the frame is written.
+pub fn plan_layout_path(out: &Path, shards: u32) -> PathBuf {
+    out.join(format!(".cota-layout-{shards}.json"))
+}
+
 /// Writes `frame` to [`shard_frame_path`] atomically.
 ///
 /// # Errors
 /// [`PyramidError::Io`].
 pub fn write_shard_frame(out: &Path, frame: &ShardFrame) -> Result<(), PyramidError> {
+    write_frame_to(&shard_frame_path(out, frame.shards), frame)
+}
+
+/// Writes the layout `frame` (statistics not yet known) to
+/// [`plan_layout_path`] atomically.
+///
+/// # Errors
+/// [`PyramidError::Io`].
+pub fn write_plan_layout(out: &Path, frame: &ShardFrame) -> Result<(), PyramidError> {
+    write_frame_to(&plan_layout_path(out, frame.shards), frame)
+}
+
+fn write_frame_to(path: &Path, frame: &ShardFrame) -> Result<(), PyramidError> {
     let text = format!("{}\n", frame.to_json());
-    write_file_atomically(&shard_frame_path(out, frame.shards), text.as_bytes(), false)
+    write_file_atomically(path, text.as_bytes(), false)
 }
 
 /// The frame of `shards` shards under `out`, `None` when there is none.
@@ -158,7 +178,19 @@ pub fn write_shard_frame(out: &Path, frame: &ShardFrame) -> Result<(), PyramidEr
 /// # Errors
 /// [`PyramidError::Shard`] for a file that is not a frame.
 pub fn read_shard_frame(out: &Path, shards: u32) -> Result<Option<ShardFrame>, PyramidError> {
-    let path = shard_frame_path(out, shards);
+    read_frame_at(shard_frame_path(out, shards))
+}
+
+/// The layout of `shards` shards under `out` ([`plan_layout_path`]),
+/// `None` when there is none.
+///
+/// # Errors
+/// [`PyramidError::Shard`] for a file that is not a frame.
+pub fn read_plan_layout(out: &Path, shards: u32) -> Result<Option<ShardFrame>, PyramidError> {
+    read_frame_at(plan_layout_path(out, shards))
+}
+
+fn read_frame_at(path: PathBuf) -> Result<Option<ShardFrame>, PyramidError> {
     if !path.is_file() {
         return Ok(None);
     }

@@ -34,6 +34,7 @@ pub mod frame;
 pub mod layer;
 pub mod part;
 pub mod plan_frame;
+pub mod plan_parts;
 pub mod pyramid;
 pub mod quantized_mesh;
 pub mod seams;
@@ -44,12 +45,19 @@ pub use coarse::{
     write_reduced_coarse, write_shard_partial, PartialHeader,
 };
 pub use decode::{decode, DecodeError, DecodedTile, Header};
-pub use frame::{read_shard_frame, shard_frame_path, write_shard_frame, ShardFrame};
+pub use frame::{
+    plan_layout_path, read_plan_layout, read_shard_frame, shard_frame_path, write_plan_layout,
+    write_shard_frame, ShardFrame,
+};
 pub use layer::layer_json;
 pub use part::{
     file_extents, frame_of, load_part, read_part_files, read_part_files_in_turn, Part, PartError,
 };
-pub use plan_frame::{mosaic_frame, stream_frame, summarize_files, MosaicFrame};
+pub use plan_frame::{
+    merge_plan, mosaic_frame, plan_layout, plan_part, stream_frame, summarize_files, MosaicFrame,
+    PlanPart,
+};
+pub use plan_parts::{finish_plan, plan_layout_or, plan_part_path, run_plan_part, PlanPartReport};
 pub use pyramid::{
     finish_tile, make_tile, tile_path, write_pyramid, MadeTile, PyramidError, PyramidOptions,
     PyramidReport, ZoomReport,

@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 use cota_core::grid::mosaic::{layout, MosaicOptions, TileShape};
 use cota_core::tiles::plan::plan_with;
 use cota_core::tiles::{
-    band_zoom, part_region, shard_plan, BandCorners, Lattice, LatticeFrame, LatticeOptions,
-    LatticeStats, PartStats, SourcePart, TilerOptions,
+    part_region, shard_plan, BandCorners, Lattice, LatticeFrame, LatticeOptions, LatticeStats,
+    PartStats, SourcePart, TilerOptions,
 };
 use cota_core::HeightGrid;
 
@@ -94,12 +94,202 @@ pub fn mosaic_frame(
     Ok((!files.is_empty()).then_some(MosaicFrame { frame, files }))
 }
 
+/// The plan step's *layout* of `shards` shards of the mosaic `m` (`key`:
+/// the settings): the frame with zero statistics. The zooms' ranges, hence
+/// the band zoom, the coarse tiles and the shards' parts, do not depend on
+/// the statistics, so the plan parts ([`plan_part`]) work from it alone.
+///
+/// # Errors
+/// [`PyramidError::Tiles`] for a plan the settings refuse.
+pub fn plan_layout(
+    key: String,
+    shards: u32,
+    m: &MosaicFrame,
+    opts: &TilerOptions,
+) -> Result<ShardFrame, PyramidError> {
+    let fr = &m.frame;
+    let zooms = plan_with(&fr.scheme, fr.window, &ZERO, opts)?;
+    Ok(frame_with(
+        key,
+        shards,
+        fr.clone(),
+        ZERO,
+        &zooms,
+        m.files.clone(),
+    ))
+}
+
+const ZERO: LatticeStats = LatticeStats {
+    lo_m: 0.0,
+    hi_m: 0.0,
+    max_step_m: 0.0,
+};
+
+/// What one part of the plan step gives: its part's statistics and the band
+/// corners it holds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanPart {
+    /// The statistics of the part's lattice.
+    pub stats: PartStats,
+    /// The band zoom's tile corners inside the part (a sub-window of the
+    /// whole corners' grid, every corner known).
+    pub corners: BandCorners,
+    /// The input files read.
+    pub files_read: Vec<String>,
+}
+
+/// Part `index` of the plan step of `layout` (from [`plan_layout`]): reads
+/// the files of shard `index`'s part at the band zoom and finer
+/// (`read(files)`, as [`super::load_part`]'s reader), resamples it and
+/// keeps its statistics and band corners; `None` when the shard has no
+/// tile there. `out`: where the frame goes, for messages.
+///
+/// # Errors
+/// [`PyramidError::Tiles`], [`PyramidError::Shard`] for files off the
+/// layout's grid, and what `read` returns.
+pub fn plan_part<E: From<PyramidError>>(
+    out: &Path,
+    layout: &ShardFrame,
+    opts: &TilerOptions,
+    index: u32,
+    read: impl FnOnce(Option<Vec<PathBuf>>) -> Result<(HeightGrid, Vec<String>), E>,
+) -> Result<Option<PlanPart>, E> {
+    let tiles = |e| E::from(PyramidError::Tiles(e));
+    let fr = &layout.frame;
+    let zooms = plan_with(&fr.scheme, fr.window, &ZERO, opts).map_err(tiles)?;
+    let band = layout.band_zoom;
+    let shards = shard_plan(&zooms, layout.shards).map_err(tiles)?;
+    let Some(shard) = shards.into_iter().nth(index as usize) else {
+        let message = format!("expected a part below {}, found {index}", layout.shards);
+        return Err(refusal(out, layout.shards, message).into());
+    };
+    let shard = shard.from_zoom(band);
+    let Some(region) = part_region(&shard, &fr.scheme, fr.window, band, false) else {
+        return Ok(None);
+    };
+    let refuse = |m: String| refusal(out, layout.shards, m);
+    let (grid, offset, files_read) = read_span(layout, fr.source_span(region), read, &refuse)?;
+    let part = SourcePart {
+        grid: &grid,
+        offset,
+    };
+    let lattice = Lattice::resample_part(fr, part, region).map_err(tiles)?;
+    let mut corners = corners_within(fr.window, fr.scheme.cells_at(band), lattice.stored());
+    corners.fill_from(&lattice);
+    Ok(Some(PlanPart {
+        stats: PartStats::of(&lattice),
+        corners,
+        files_read,
+    }))
+}
+
+fn refusal(out: &Path, shards: u32, message: String) -> PyramidError {
+    PyramidError::Shard {
+        path: shard_frame_path(out, shards),
+        message,
+    }
+}
+
+/// The corners of the whole window's grid (every `cells` cells) inside
+/// `stored`, as a sub-window of that grid (empty: a 0 × 0 window at its
+/// origin, when none is inside).
+fn corners_within(window: [u64; 4], cells: u64, stored: [u64; 4]) -> BandCorners {
+    let c = cells.max(1);
+    let first = |lo: u64, w0: u64| lo.saturating_sub(w0).div_ceil(c);
+    let last = |hi: u64, w0: u64, w1: u64| (hi.min(w1).saturating_sub(w0)) / c;
+    let (i0, j0) = (first(stored[0], window[0]), first(stored[1], window[1]));
+    let (i1, j1) = (
+        last(stored[2], window[0], window[2]),
+        last(stored[3], window[1], window[3]),
+    );
+    if i0 > i1 || j0 > j1 || stored[2] < window[0] || stored[3] < window[1] {
+        return BandCorners {
+            cells: c,
+            window: [window[0], window[1], window[0], window[1]],
+            heights_m: Vec::new(),
+        };
+    }
+    let at = |i: u64, j: u64| [window[0] + i * c, window[1] + j * c];
+    let ([x0, y0], [x1, y1]) = (at(i0, j0), at(i1, j1));
+    BandCorners::new([x0, y0, x1, y1], c)
+}
+
+/// The plan step's frame and band corners from `layout` and every part's
+/// [`PlanPart`] (in any order): the statistics merged, the corners set.
+///
+/// # Errors
+/// [`PyramidError::Tiles`] for a plan the settings refuse,
+/// [`PyramidError::Shard`] for a part's corners off the layout's grid.
+pub fn merge_plan(
+    layout: ShardFrame,
+    parts: impl IntoIterator<Item = PlanPart>,
+    opts: &TilerOptions,
+    out: &Path,
+) -> Result<(ShardFrame, BandCorners), PyramidError> {
+    let fr = &layout.frame;
+    let mut corners = BandCorners::new(fr.window, fr.scheme.cells_at(layout.band_zoom));
+    let mut merged = PartStats::default();
+    for p in parts {
+        merged = merged.merge(p.stats);
+        if !set_corners(&mut corners, &p.corners) {
+            let message = format!(
+                "expected a plan part's corners on the band zoom's grid (every {} cells over {:?}), found every {} over {:?}",
+                corners.cells, corners.window, p.corners.cells, p.corners.window
+            );
+            return Err(refusal(out, layout.shards, message));
+        }
+    }
+    let stats = merged.stats();
+    let zooms = plan_with(&fr.scheme, fr.window, &stats, opts)?;
+    let ShardFrame {
+        key,
+        shards,
+        frame,
+        files,
+        ..
+    } = layout;
+    Ok((
+        frame_with(key, shards, frame, stats, &zooms, files),
+        corners,
+    ))
+}
+
+/// Sets `part`'s known corners in `whole`; false when `part` is not a
+/// sub-window of `whole`'s grid.
+fn set_corners(whole: &mut BandCorners, part: &BandCorners) -> bool {
+    let (w, p, c) = (whole.window, part.window, whole.cells);
+    let aligned = |v: u64, o: u64| v >= o && (v - o).is_multiple_of(c);
+    let inside = p[0] <= p[2] && p[1] <= p[3] && p[2] <= w[2] && p[3] <= w[3];
+    if part.heights_m.is_empty() {
+        return true;
+    }
+    if part.cells != c || !inside || !aligned(p[0], w[0]) || !aligned(p[1], w[1]) {
+        return false;
+    }
+    let [nx, _] = BandCorners::dims(w, c);
+    let [px, py] = BandCorners::dims(p, c);
+    if part.heights_m.len() != px * py {
+        return false;
+    }
+    let (i0, j0) = (((p[0] - w[0]) / c) as usize, ((p[1] - w[1]) / c) as usize);
+    for j in 0..py {
+        for i in 0..px {
+            let h = part.heights_m[j * px + i];
+            if !h.is_nan() {
+                whole.heights_m[(j0 + j) * nx + i0 + i] = h;
+            }
+        }
+    }
+    true
+}
+
 /// The plan step's frame of `shards` shards of the mosaic `m` (`key`: the
 /// settings; `out`: where it goes, for messages), its statistics merged
 /// from each shard's part in turn, and the band zoom's tile corners read
 /// from those parts. `read(files)` reads and joins the mosaic
 /// of `files` (as [`super::load_part`]'s reader); at most one part is held
-/// at a time.
+/// at a time. The same as [`plan_layout`], each [`plan_part`] and
+/// [`merge_plan`].
 ///
 /// # Errors
 /// [`PyramidError::Tiles`] for a plan the settings refuse, and what `read`
@@ -112,44 +302,12 @@ pub fn stream_frame<E: From<PyramidError>>(
     opts: &TilerOptions,
     mut read: impl FnMut(Option<Vec<PathBuf>>) -> Result<(HeightGrid, Vec<String>), E>,
 ) -> Result<(ShardFrame, BandCorners), E> {
-    let tiles = |e| E::from(PyramidError::Tiles(e));
-    let fr = &m.frame;
-    let zero = LatticeStats {
-        lo_m: 0.0,
-        hi_m: 0.0,
-        max_step_m: 0.0,
-    };
-    // The zooms' ranges, hence the band zoom and the shards, do not depend
-    // on the statistics.
-    let zooms = plan_with(&fr.scheme, fr.window, &zero, opts).map_err(tiles)?;
-    let band = band_zoom(&zooms, fr.align_zoom, shards);
-    let provisional = frame_with(key, shards, fr.clone(), zero, &zooms, m.files.clone());
-    let refuse = |message: String| PyramidError::Shard {
-        path: shard_frame_path(out, shards),
-        message,
-    };
-    let mut merged = PartStats::default();
-    let mut corners = BandCorners::new(fr.window, fr.scheme.cells_at(band));
-    for shard in shard_plan(&zooms, shards).map_err(tiles)? {
-        let shard = shard.from_zoom(band);
-        let Some(region) = part_region(&shard, &fr.scheme, fr.window, band, false) else {
-            continue;
-        };
-        let span = fr.source_span(region);
-        let (grid, offset, _) = read_span(&provisional, span, &mut read, &refuse)?;
-        let part = SourcePart {
-            grid: &grid,
-            offset,
-        };
-        let lattice = Lattice::resample_part(fr, part, region).map_err(tiles)?;
-        merged = merged.merge(PartStats::of(&lattice));
-        corners.fill_from(&lattice);
+    let layout = plan_layout(key, shards, m, opts)?;
+    let mut parts = Vec::new();
+    for i in 0..shards {
+        parts.extend(plan_part(out, &layout, opts, i, &mut read)?);
     }
-    let stats = merged.stats();
-    let zooms = plan_with(&fr.scheme, fr.window, &stats, opts).map_err(tiles)?;
-    let ShardFrame { key, files, .. } = provisional;
-    let frame = frame_with(key, shards, fr.clone(), stats, &zooms, files);
-    Ok((frame, corners))
+    Ok(merge_plan(layout, parts, opts, out)?)
 }
 
 #[cfg(test)]

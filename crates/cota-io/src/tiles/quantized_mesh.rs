@@ -168,10 +168,12 @@ fn first_use(mesh: &Mesh) -> Result<(Vec<u32>, Vec<u32>), EncodeError> {
     let mut order = Vec::with_capacity(n);
     for t in &mesh.triangles {
         for &i in t {
-            let slot = new_of.get_mut(i as usize).ok_or(EncodeError::BadVertex {
-                vertex: i as usize,
-                why: format!("index out of range ({n} vertices)"),
-            })?;
+            let slot = new_of
+                .get_mut(i as usize)
+                .ok_or_else(|| EncodeError::BadVertex {
+                    vertex: i as usize,
+                    why: format!("index out of range ({n} vertices)"),
+                })?;
             if *slot == u32::MAX {
                 *slot = order.len() as u32;
                 order.push(i);

@@ -33,6 +33,8 @@ from ._cota import (
     shard_record,
     tiles,
     tiles_plan,
+    tiles_plan_layout,
+    tiles_plan_part,
     tiles_plan_step,
     tiles_reduce,
 )
@@ -51,6 +53,8 @@ __all__ = [
     "shard_record",
     "tiles",
     "tiles_plan",
+    "tiles_plan_layout",
+    "tiles_plan_part",
     "tiles_plan_step",
     "tiles_reduce",
 ]

@@ -119,7 +119,8 @@ def tiles_plan_step(
     force: bool = False,
     check: bool = False,
 ) -> PlanStepReport:
-    """The plan step of ``cota tiles --plan --shards n``: read every input once, write
+    """The plan step of ``cota tiles --plan --shards n``: read the inputs one shard's
+    part at a time (parts ``tiles_plan_part`` already wrote are not read again), write
     the frame ``out/.cota-shards-n.json`` and the band zoom's tile-corner heights.
 
     Idempotent. Then ``tiles(..., shard=(i, n))`` with the same settings reads only
@@ -127,6 +128,55 @@ def tiles_plan_step(
     maxima of the coarser ones, which ``tiles_reduce`` merges and cuts. The tile
     settings (``normals`` … ``check``) are the shards'. Raises ReadError,
     MeshError, WriteError. Releases the GIL.
+    """
+
+class PlanLayoutReport(TypedDict):
+    """What ``tiles_plan_layout`` found."""
+    streamed: bool
+    """False when every shard must read every file: the plan step then reads the whole input and has no parts."""
+    files: int
+
+class PlanPartReport(TypedDict):
+    """What ``tiles_plan_part`` did."""
+    streamed: bool
+    """False: nothing to do in parts (``tiles_plan_step`` reads the whole input)."""
+    skipped: bool
+    """Its file ``out/.cota-plan-i-of-n.bin`` was already there."""
+    files_read: list[str]
+
+def tiles_plan_layout(
+    paths: Union[_Path, Sequence[_Path]],
+    out: _Path,
+    shards: int,
+    *,
+    min_zoom: int = 0,
+    max_zoom: int | None = None,
+    tile_cells: int = 64,
+    error_factor: float | None = None,
+    max_error_m_at_max_zoom: float | None = None,
+) -> PlanLayoutReport:
+    """The plan step's layout (``cota tiles --plan --layout``): each input read alone
+    for its shape; ``out/.cota-layout-n.json`` written (kept when there). Run once
+    before the ``tiles_plan_part`` tasks. Raises ReadError, WriteError. Releases the GIL.
+    """
+
+def tiles_plan_part(
+    paths: Union[_Path, Sequence[_Path]],
+    out: _Path,
+    shards: int,
+    part: int,
+    *,
+    min_zoom: int = 0,
+    max_zoom: int | None = None,
+    tile_cells: int = 64,
+    error_factor: float | None = None,
+    max_error_m_at_max_zoom: float | None = None,
+) -> PlanPartReport:
+    """Part ``part`` of the plan step (``cota tiles --plan --part i``): shard ``part``'s
+    files read and its part resampled for the lattice's statistics and band corners,
+    into ``out/.cota-plan-i-of-n.bin`` (the layout made first when missing).
+    Idempotent; independent of the other parts, so they run in parallel; then
+    ``tiles_plan_step`` merges them. Raises ReadError, WriteError. Releases the GIL.
     """
 
 def tiles_plan(

@@ -1,11 +1,17 @@
 """Tile pyramids sharded across a Dask cluster: ``build_pyramid``.
 
-Three kinds of Dask task, as ``cota tiles --plan`` / ``--shard I/N`` /
-``--reduce``:
+The Dask tasks, as ``cota tiles --plan [--layout | --part I]`` / ``--shard I/N``
+/ ``--reduce``:
 
-1. the **plan step** (``cota.tiles_plan_step``): reads every input once, writes
-   the frame ``out/.cota-shards-N.json`` (where each input file lies in the
-   mosaic, the lattice's statistics) and the band zoom's tile-corner heights;
+1. the **plan step**, itself in parts: the *layout* (``cota.tiles_plan_layout``:
+   each input read alone for its shape, where each file lies in the mosaic),
+   then one task per *plan part* (``cota.tiles_plan_part``, through
+   ``client.map``: shard I's files read and its part resampled for the
+   lattice's statistics and the band zoom's tile-corner heights), then the
+   *merge* (``cota.tiles_plan_step``), which writes the frame
+   ``out/.cota-shards-N.json`` and the band corners. An input whose shards
+   must read every file (one file, voids) has no plan parts: the merge task
+   reads the whole input;
 2. one task per **shard** (``cota.tiles(..., shard=(i, n))``), after the plan
    step: it finds the frame, reads only the input files its part of the lattice
    needs and holds only that part; it writes its tiles of the band zoom and
@@ -19,13 +25,14 @@ The output is byte-identical to a single-process ``cota.tiles`` / ``cota tiles``
 run with the same settings.
 
 * **Resumable:** the plan step is skipped when its frame exists (it is written
-  last); a shard whose record file exists is not submitted
-  again.
+  last); a plan part whose file exists is not computed again; a shard whose
+  record file exists is not submitted again.
 * **Retries:** a failed or lost task is retried (``retries``); a worker killed
   mid-task leaves only complete tiles (each written to a temporary file and
   renamed), which the retry skips.
 * **Progress:** the tasks are ordinary Dask tasks, visible in the dashboard
-  (named ``cota-plan-…``, ``cota-shard-…`` and ``cota-reduce-…``).
+  (named ``cota-layout-…``, ``cota-plan-part-…``, ``cota-plan-…``,
+  ``cota-shard-…`` and ``cota-reduce-…``).
 
 The directory ``out`` and the inputs must be reachable by every worker (a
 shared filesystem).
@@ -36,13 +43,67 @@ from __future__ import annotations
 import os
 from typing import Any, Optional, Sequence, Union
 
-from ._cota import shard_frame, shard_record, tiles, tiles_plan_step, tiles_reduce
+from ._cota import (
+    shard_frame,
+    shard_record,
+    tiles,
+    tiles_plan_layout,
+    tiles_plan_part,
+    tiles_plan_step,
+    tiles_reduce,
+)
 
 _Path = Union[str, "os.PathLike[str]"]
 
+# The settings that decide the lattice and the plan (the plan parts' key).
+_PLAN_SETTINGS = ("min_zoom", "max_zoom", "tile_cells", "error_factor", "max_error_m_at_max_zoom")
 
-def _plan_step(inputs: list, out: str, shards: int, settings: dict) -> dict:
+
+def _plan_layout(inputs: list, out: str, shards: int, settings: dict) -> dict:
+    return tiles_plan_layout(inputs, out, shards, **settings)
+
+
+def _plan_part(inputs: list, out: str, shards: int, part: int, settings: dict) -> dict:
+    return tiles_plan_part(inputs, out, shards, part, **settings)
+
+
+def _plan_step(parts: list, inputs: list, out: str, shards: int, settings: dict) -> dict:
+    # ``parts`` (the plan parts' reports) orders this task after them: it
+    # merges their files, computing any that is missing.
     return tiles_plan_step(inputs, out, shards, **settings)
+
+
+def _run_plan_step(client: Any, paths: list, out: str, shards: int, retries: int,
+                   settings: dict) -> tuple:
+    """The layout, the plan parts (in parallel) and the merge; the client
+    waits for the merge (a barrier, not a data dependency: shard tasks that
+    took its result would all queue on the worker holding it)."""
+    name = os.path.basename(out)
+    plan_settings = {k: v for k, v in settings.items() if k in _PLAN_SETTINGS}
+    layout = client.submit(_plan_layout, paths, out, shards, plan_settings, retries=retries,
+                           pure=False, key=f"cota-layout-{shards}-{name}")
+    streamed = layout.result()["streamed"]
+    layout.release()
+    parts = []
+    if streamed:
+        parts = client.map(
+            _plan_part,
+            [paths] * shards,
+            [out] * shards,
+            [shards] * shards,
+            range(shards),
+            [plan_settings] * shards,
+            key=[f"cota-plan-part-{i}-of-{shards}-{name}" for i in range(shards)],
+            retries=retries,
+            pure=False,
+        )
+    future = client.submit(_plan_step, parts, paths, out, shards, settings, retries=retries,
+                           pure=False, key=f"cota-plan-{shards}-{name}")
+    plan = future.result()
+    future.release()
+    for p in parts:
+        p.release()
+    return plan, len(parts)
 
 
 def _shard(inputs: list, out: str, index: int, shards: int, settings: dict) -> dict:
@@ -76,7 +137,8 @@ def build_pyramid(
     Returns a dict: ``shards``, ``skipped_shards`` (already done before this
     call), ``plan_step`` (``"ran"``, or ``"skipped"`` when its frame was there,
     or some shards were done without it: the others then run without it
-    too), ``files_read`` (for each shard run here, the
+    too), ``plan_parts`` (plan-part tasks run: ``shards``, or 0 when the plan
+    step was skipped or reads the whole input), ``files_read`` (for each shard run here, the
     input files it read), ``coarse_tiles`` (the tiles coarser than the band
     zoom, cut by the reduce; None when the plan step was skipped),
     ``tiles`` (in the pyramid: the shards' tiles plus the coarser ones). Raises what ``cota.tiles``, ``cota.tiles_plan_step`` or
@@ -92,16 +154,11 @@ def build_pyramid(
     out = os.fspath(out)
     name = os.path.basename(out)
     todo = [i for i in range(shards) if not os.path.exists(shard_record(out, i, shards))]
-    plan = None
+    plan, plan_parts = None, 0
     # The plan step runs on a fresh run; a resumed run whose finished shards
     # ran without it (no frame) goes on without it.
     if len(todo) == shards and not os.path.exists(shard_frame(out, shards)):
-        future = client.submit(_plan_step, paths, out, shards, settings, retries=retries,
-                               pure=False, key=f"cota-plan-{shards}-{name}")
-        # A barrier, not a data dependency: shard tasks that took its result
-        # would all queue on the worker holding it.
-        plan = future.result()
-        future.release()
+        plan, plan_parts = _run_plan_step(client, paths, out, shards, retries, settings)
     futures = client.map(
         _shard,
         [paths] * len(todo),
@@ -121,6 +178,7 @@ def build_pyramid(
         "shards": shards,
         "skipped_shards": shards - len(todo),
         "plan_step": "skipped" if plan is None else "ran",
+        "plan_parts": plan_parts,
         "files_read": dict(zip(todo, read)),
         "coarse_tiles": coarse,
         "tiles": tiles_done,
