@@ -11,8 +11,9 @@ use cota_core::tiles::{
     Shard, TilerOptions, ZoomPlan,
 };
 use cota_io::tiles::{
-    plan_layout_path, plan_part_path, read_shard_frame, reduce_shards, write_plan, write_pyramid,
-    write_shard, PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
+    plan_layout_path, plan_part_path, read_shard_frame, reduce_shards, shard_frame_path,
+    write_plan, write_pyramid, write_shard, PyramidOptions, PyramidReport, ShardFrame,
+    TileExtensions,
 };
 use serde_json::json;
 
@@ -33,6 +34,11 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         }
     }
     if a.plan {
+        if a.layout || a.part.is_some() {
+            if let Some(code) = plan_part_not_needed(a)? {
+                return Ok(code);
+            }
+        }
         // Without the whole input where the files allow it (each file
         // alone, then each shard's part: in turn, or as --part processes).
         if let Some(layout) = tiles_part::layout(a, &opts)? {
@@ -196,6 +202,24 @@ fn plan_in_parts(
     let (frame, _, _) = tiles_part::finish(a, layout, opts)
         .with_context(|| format!("writing the plan step in {}", a.output.display()))?;
     print_plan_step(a, opts, &frame)
+}
+
+/// `--plan --part I` past the last part (an error), or `--layout`/`--part`
+/// once the plan step is done (nothing to do: `Some`).
+fn plan_part_not_needed(a: &TilesArgs) -> anyhow::Result<Option<std::process::ExitCode>> {
+    if let Some(i) = a.part.filter(|&i| i >= a.shards) {
+        anyhow::bail!("--part {i}: expected a part below --shards {}", a.shards);
+    }
+    let frame = shard_frame_path(&a.output, a.shards);
+    if !frame.is_file() {
+        return Ok(None);
+    }
+    if a.json {
+        println!("{}", json!({"done": true, "frame": frame}));
+    } else {
+        println!("plan        already done ({})", frame.display());
+    }
+    Ok(Some(std::process::ExitCode::SUCCESS))
 }
 
 /// `--plan --layout` or `--part I` for an input whose shards read every file.

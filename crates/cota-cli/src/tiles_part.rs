@@ -190,8 +190,8 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let mut a = a;
         a.output = dir.path().join("out");
-        let layout = layout(&a, &opts).unwrap().unwrap();
-        let (streamed, corners, _) = finish(&a, layout, &opts).unwrap();
+        let lay = layout(&a, &opts).unwrap().unwrap();
+        let (streamed, corners, _) = finish(&a, lay, &opts).unwrap();
         assert_eq!(corners.missing(), 0);
         let inp = input::load(&a.input).unwrap();
         let lat = Lattice::resample(&inp.grid, &lattice_options(&a)).unwrap();

@@ -302,3 +302,78 @@ fn reduce_refuses_a_missing_or_damaged_partial_naming_it() {
         .collect();
     assert!(left.is_empty(), "the reduce leaves {left:?}");
 }
+
+/// The plan step in parts (`--plan --layout`, `--plan --part I` as
+/// separate processes, then `--plan` merging them): the westmost plan part
+/// runs with the eastern tile gone, a part run again is skipped, and the
+/// pyramid after the shards and the reduce is byte-identical to the plain
+/// run; the layout and part files are gone after the merge. A single file
+/// has no parts: `--part` says the plan step reads the whole input.
+#[test]
+fn plan_step_in_parts_equals_plain_run() {
+    let (Some(a), Some(b)) = (
+        common::shared("srtm/N00E010.hgt"),
+        common::shared("srtm/N00E011.hgt.zip"),
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (wa, eb) = (
+        dir.path().join("N00E010.hgt"),
+        dir.path().join("N00E011.hgt.zip"),
+    );
+    std::fs::copy(&a, &wa).unwrap();
+    std::fs::copy(&b, &eb).unwrap();
+    let (west, east) = (wa.to_str().unwrap(), eb.to_str().unwrap());
+    let plain = dir.path().join("plain");
+    let out = dir.path().join("sharded");
+    let (p, o) = (plain.to_str().unwrap(), out.to_str().unwrap());
+    let base = ["tiles", west, east, "--max-zoom", "9", "--normals"];
+    run_ok(&[&base[..], &["-o", p]].concat());
+    let plan = [&base[..], &["-o", o, "--plan", "--shards", "3"]].concat();
+    let layout = run_ok(&[&plan[..], &["--layout", "--json"]].concat());
+    assert!(layout.contains(".cota-layout-3.json"), "{layout}");
+    let hidden = dir.path().join("elsewhere.zip");
+    std::fs::rename(&eb, &hidden).unwrap();
+    let first = run_ok(&[&plan[..], &["--part", "0", "--json"]].concat());
+    let first: serde_json::Value = serde_json::from_str(&first).unwrap();
+    assert_eq!(first["files_read"], serde_json::json!([west]), "{first}");
+    std::fs::rename(&hidden, &eb).unwrap();
+    for i in ["2", "1", "0"] {
+        let r = run_ok(&[&plan[..], &["--part", i, "--json"]].concat());
+        let r: serde_json::Value = serde_json::from_str(&r).unwrap();
+        assert_eq!(r["skipped"].as_bool(), Some(i == "0"), "{r}");
+    }
+    assert!(out.join(".cota-plan-2-of-3.bin").is_file());
+    run_ok(&plan);
+    for f in [".cota-layout-3.json", ".cota-plan-0-of-3.bin"] {
+        assert!(!out.join(f).exists(), "{f} left after the plan step");
+    }
+    let done = run_ok(&[&plan[..], &["--part", "1"]].concat());
+    assert!(done.contains("already done"), "{done}");
+    assert!(!out.join(".cota-layout-3.json").exists());
+    for i in 0..3 {
+        run_ok(&[&base[..], &["-o", o, "--shard", &format!("{i}/3")]].concat());
+    }
+    run_ok(&["tiles", "-o", o, "--reduce", "--shards", "3"]);
+    assert!(
+        files(&out) == files(&plain),
+        "the plan step in parts gave another pyramid"
+    );
+    let one = dir.path().join("one");
+    let r = run_ok(&[
+        "tiles",
+        west,
+        "-o",
+        one.to_str().unwrap(),
+        "--plan",
+        "--shards",
+        "2",
+        "--part",
+        "1",
+    ]);
+    assert!(r.contains("reads the whole input"), "{r}");
+    let bad = cota(&[&plan[..], &["--part", "3"]].concat());
+    assert!(!bad.status.success());
+    assert!(stderr(&bad).contains("below 3"), "{}", stderr(&bad));
+}

@@ -15,7 +15,7 @@ use cota_io::tiles::{
     file_extents, finish_plan, frame_of, load_part, mosaic_frame, plan_layout, plan_layout_or,
     read_part_files, read_part_files_in_turn, read_shard_frame, reduce_shards, run_plan_part,
     shard_frame_path, shard_record_path, summarize_files, write_plan, write_pyramid, write_shard,
-    PartError, PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
+    PartError, PlanPartReport, PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
 };
 use cota_io::{read_region, RegionOptions};
 use pyo3::prelude::*;
@@ -331,7 +331,8 @@ pub(crate) fn tiles_plan_layout<'py>(
 /// corners, into `out/.cota-plan-i-of-n.bin`, after the layout (made when
 /// missing). Idempotent; `tiles_plan_step` then merges the parts. Returns a
 /// dict: `streamed` (False: nothing to do, the plan step reads the whole
-/// input), `skipped` (its file was there), `files_read`.
+/// input), `skipped` (its file, or the plan step's frame, was there),
+/// `files_read`.
 #[pyfunction]
 #[pyo3(signature = (paths, out, shards, part, *, min_zoom = 0, max_zoom = None,
     tile_cells = 64, error_factor = None, max_error_m_at_max_zoom = None))]
@@ -363,6 +364,13 @@ pub(crate) fn tiles_plan_part<'py>(
         )));
     }
     let report = py.detach(|| -> Result<_, PartError> {
+        if shard_frame_path(&out, shards).is_file() {
+            // The plan step is done.
+            return Ok(Some(PlanPartReport {
+                skipped: true,
+                files_read: Vec::new(),
+            }));
+        }
         let Some(layout) = layout_of(&paths, &s, &out, shards)? else {
             return Ok(None);
         };

@@ -182,6 +182,39 @@ def test_dask_shards_read_only_their_part(pair, tmp_path):
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         r = cota.dask.build_pyramid([west, east], out, client=client, shards=4, **PAIR_SETTINGS)
-    assert r["plan_step"] == "ran"
+    assert r["plan_step"] == "ran" and r["plan_parts"] == 4, r
     assert r["files_read"][0] == [str(west)] and r["files_read"][3] == [str(east)], r
     assert files(out) == plain
+
+
+def test_plan_step_in_parts_equals_plain(pair, tmp_path):
+    """The plan step in parts: the layout, the westmost plan part with the eastern file
+    gone, a part run again skipped, the merge computing the part left; the frame and
+    band corners are the plan step's in turn, and the pyramid is byte-identical."""
+    west, east, plain = pair
+    whole, out = tmp_path / "whole", tmp_path / "parts"
+    cota.tiles_plan_step([west, east], whole, 4, **PAIR_SETTINGS)
+    lay = cota.tiles_plan_layout([west, east], out, 4, **PAIR_SETTINGS)
+    assert lay == {"streamed": True, "files": 2}
+    hidden = tmp_path / "elsewhere.zip"
+    east.rename(hidden)
+    r = cota.tiles_plan_part([west, east], out, 4, 0, **PAIR_SETTINGS)
+    assert r == {"streamed": True, "skipped": False, "files_read": [str(west)]}
+    hidden.rename(east)
+    assert cota.tiles_plan_part([west, east], out, 4, 0, **PAIR_SETTINGS)["skipped"]
+    cota.tiles_plan_part([west, east], out, 4, 2, **PAIR_SETTINGS)
+    with pytest.raises(ValueError, match="part < 4"):
+        cota.tiles_plan_part([west, east], out, 4, 4, **PAIR_SETTINGS)
+    with pytest.raises(cota.WriteError, match="other settings"):
+        cota.tiles_plan_part([west, east], out, 4, 1, max_zoom=9)
+    cota.tiles_plan_step([west, east], out, 4, **PAIR_SETTINGS)
+    for name in (".cota-shards-4.json", ".cota-shards-4.corners"):
+        assert (out / name).read_bytes() == (whole / name).read_bytes(), name
+    assert not (out / ".cota-layout-4.json").exists()
+    assert cota.tiles_plan_part([west, east], out, 4, 1, **PAIR_SETTINGS)["skipped"]
+    for i in range(4):
+        cota.tiles([west, east], out, shard=(i, 4), **PAIR_SETTINGS)
+    cota.tiles_reduce(out, 4)
+    assert files(out) == plain
+    single = cota.tiles_plan_layout(west, tmp_path / "single", 2, **PAIR_SETTINGS)
+    assert single == {"streamed": False, "files": 0}
