@@ -9,6 +9,10 @@ with the first one. ``COTA_REPS`` rounds (default 3), each running every K in
 turn on clusters started beforehand; the speed-up is the median of the
 rounds' ratios.
 
+Each K runs with the plan step in parts (``plan_in_parts=True``, the
+default: plan-part tasks through ``client.map``) and, for comparison, as one
+task reading the parts in turn (``plan_in_parts=False``), in the same rounds.
+
 usage: python bench/dask_scaling.py [K ...]   (default: 1 2)
 env:   COTA_SHARED_DATA (../shared/data), COTA_MAX_ZOOM (12), COTA_SHARDS (8), COTA_REPS (3)
 """
@@ -67,31 +71,36 @@ def main() -> None:
             clients = {k: stack.enter_context(distributed.Client(stack.enter_context(
                 distributed.LocalCluster(n_workers=k, threads_per_worker=1, processes=True,
                                          dashboard_address=None)))) for k in ks}
-            first, times, tiles = None, {k: [] for k in ks}, {}
-            # Rounds of every K in turn, so that a drift of this shared
-            # machine's speed touches every K alike.
+            runs = [(k, parts) for k in ks for parts in (True, False)]
+            first, times, tiles = None, {run: [] for run in runs}, {}
+            # Rounds of every run in turn, so that a drift of this shared
+            # machine's speed touches every run alike.
             for r in range(reps):
-                for k in ks:
-                    out = tmp / f"k{k}r{r}"
+                for k, parts in runs:
+                    out = tmp / f"k{k}{parts}r{r}"
                     t0 = time.perf_counter()
                     rep = cota.dask.build_pyramid(inputs, out, client=clients[k],
-                                                  shards=shards, max_zoom=max_zoom)
-                    times[k].append(time.perf_counter() - t0)
-                    tiles[k] = rep["tiles"]
+                                                  shards=shards, max_zoom=max_zoom,
+                                                  plan_in_parts=parts)
+                    times[(k, parts)].append(time.perf_counter() - t0)
+                    tiles[(k, parts)] = rep["tiles"]
                     if first is None:
                         first = out
                     else:
                         assert same_tree(first, out), f"{out} differs from {first}"
                         shutil.rmtree(out)
-        base = times[ks[0]]
         print(f"mosaic8, max zoom {max_zoom}, {shards} shards, {reps} rounds, one thread per worker")
-        print(f"| workers | seconds (median) | tiles | speed-up (median of the rounds' ratios) |")
-        print("|---:|---:|---:|---:|")
-        for k in ks:
-            ratio = statistics.median(b / t for b, t in zip(base, times[k]))
-            print(f"| {k} | {statistics.median(times[k]):.2f} | {tiles[k]} | {ratio:.2f}x |")
-        for k in ks:
-            print(f"workers {k}, each round (s): " + ", ".join(f"{t:.2f}" for t in times[k]))
+        print("| workers | plan step | seconds (median) | tiles | speed-up (median of the rounds' ratios) |")
+        print("|---:|---|---:|---:|---:|")
+        for k, parts in runs:
+            base = times[(ks[0], parts)]
+            mine = times[(k, parts)]
+            ratio = statistics.median(b / t for b, t in zip(base, mine))
+            how = "in parts" if parts else "one task"
+            print(f"| {k} | {how} | {statistics.median(mine):.2f} | {tiles[(k, parts)]} | {ratio:.2f}x |")
+        for (k, parts), ts in times.items():
+            how = "in parts" if parts else "one task"
+            print(f"workers {k}, plan step {how}, each round (s): " + ", ".join(f"{t:.2f}" for t in ts))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

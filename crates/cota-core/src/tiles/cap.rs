@@ -241,6 +241,29 @@ pub(crate) fn t_heights(t: &Tri, height: impl Fn(u64, u64) -> f32) -> [f64; 3] {
     [t.a, t.b, t.c].map(|q| f64::from(height(u64::from(q[0]), u64::from(q[1]))))
 }
 
+/// Largest `|plane(x, y) − h|` over `heights`, the samples of row `y` from
+/// column `x0` on: each value computed as `Plane::at` computes it, in four
+/// independent lanes (so the compiler can use vector registers) whose
+/// maxima are then merged; a maximum does not depend on the order it is
+/// taken in, so the result is the one-by-one loop's, bit for bit.
+fn max_deviation(plane: &Plane, x0: i64, y: f64, heights: &[f32]) -> f64 {
+    let mut lanes = [0f64; 4];
+    let mut chunks = heights.chunks_exact(4);
+    let mut x = x0;
+    for c in &mut chunks {
+        for (k, (m, h)) in lanes.iter_mut().zip(c).enumerate() {
+            let d = (plane.at((x + k as i64) as f64, y) - f64::from(*h)).abs();
+            *m = if d > *m { d } else { *m };
+        }
+        x += 4;
+    }
+    let mut e = lanes[0].max(lanes[1]).max(lanes[2].max(lanes[3]));
+    for (k, h) in chunks.remainder().iter().enumerate() {
+        e = e.max((plane.at((x + k as i64) as f64, y) - f64::from(*h)).abs());
+    }
+    e
+}
+
 /// Largest |plane − h| of a coarse triangle `t` whose corners have heights
 /// `z`, over the window `window`: with `beyond`, the 0 m outside the window
 /// (by the ends of each row's span, the plane being linear along a row);
@@ -297,10 +320,8 @@ pub(crate) fn own_rows(
             let g = lattice.grid();
             let [ox, oy] = lattice.origin();
             let row = &g.heights()[(y - oy as i64) as usize * g.width()..];
-            for x in ca..=cb {
-                let d = (plane.at(x as f64, y as f64) - row[(x - ox as i64) as usize] as f64).abs();
-                e = e.max(d);
-            }
+            let (i, j) = ((ca - ox as i64) as usize, (cb - ox as i64) as usize);
+            e = e.max(max_deviation(&plane, ca, y as f64, &row[i..=j]));
         }
         e
     };

@@ -74,17 +74,19 @@ def _plan_step(parts: list, inputs: list, out: str, shards: int, settings: dict)
 
 
 def _run_plan_step(client: Any, paths: list, out: str, shards: int, retries: int,
-                   settings: dict) -> tuple:
+                   in_parts: bool, settings: dict) -> tuple:
     """The layout, the plan parts (in parallel) and the merge; the client
     waits for the merge (a barrier, not a data dependency: shard tasks that
     took its result would all queue on the worker holding it)."""
     name = os.path.basename(out)
     plan_settings = {k: v for k, v in settings.items() if k in _PLAN_SETTINGS}
-    layout = client.submit(_plan_layout, paths, out, shards, plan_settings, retries=retries,
-                           pure=False, key=f"cota-layout-{shards}-{name}")
-    streamed = layout.result()["streamed"]
-    layout.release()
     parts = []
+    streamed = False
+    if in_parts:
+        layout = client.submit(_plan_layout, paths, out, shards, plan_settings,
+                               retries=retries, pure=False, key=f"cota-layout-{shards}-{name}")
+        streamed = layout.result()["streamed"]
+        layout.release()
     if streamed:
         parts = client.map(
             _plan_part,
@@ -123,13 +125,16 @@ def build_pyramid(
     client: Optional[Any] = None,
     shards: int = 4,
     retries: int = 2,
+    plan_in_parts: bool = True,
     **settings: Any,
 ) -> dict:
     """Builds the pyramid of ``inputs`` under ``out`` on a Dask cluster.
 
     ``client``: a ``distributed.Client`` (default: the current one,
     ``distributed.get_client()``). ``shards``: the number of tasks.
-    ``retries``: per task. ``settings``: the keyword arguments of
+    ``retries``: per task. ``plan_in_parts``: run the plan step as a layout
+    task, one plan-part task per shard and a merge task (default), or as one
+    task reading the parts in turn. ``settings``: the keyword arguments of
     ``cota.tiles`` that decide the tiles (``min_zoom``, ``max_zoom``,
     ``tile_cells``, ``error_factor``, ``max_error_m_at_max_zoom``,
     ``normals``, ``watermask``, ``metadata``, ``gzip``, ``check``).
@@ -158,7 +163,8 @@ def build_pyramid(
     # The plan step runs on a fresh run; a resumed run whose finished shards
     # ran without it (no frame) goes on without it.
     if len(todo) == shards and not os.path.exists(shard_frame(out, shards)):
-        plan, plan_parts = _run_plan_step(client, paths, out, shards, retries, settings)
+        plan, plan_parts = _run_plan_step(client, paths, out, shards, retries, plan_in_parts,
+                                          settings)
     futures = client.map(
         _shard,
         [paths] * len(todo),
