@@ -208,7 +208,10 @@ fn plan_in_parts(
 /// once the plan step is done (nothing to do: `Some`).
 fn plan_part_not_needed(a: &TilesArgs) -> anyhow::Result<Option<std::process::ExitCode>> {
     if let Some(i) = a.part.filter(|&i| i >= a.shards) {
-        anyhow::bail!("--part: expected a part below {} (--shards), found {i}", a.shards);
+        anyhow::bail!(
+            "--part: expected a part below {} (--shards), found {i}",
+            a.shards
+        );
     }
     let frame = shard_frame_path(&a.output, a.shards);
     if !frame.is_file() {

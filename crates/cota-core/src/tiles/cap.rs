@@ -24,7 +24,7 @@
 //! `O(window samples)` per level, two passes (sides and halves of each
 //! square), in parallel; a few dozen coarse levels at most.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use rayon::prelude::*;
 

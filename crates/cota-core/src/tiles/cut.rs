@@ -19,7 +19,7 @@
 //! mask (samples at or below 0 m: sea level in SRTM, and the 0 m beyond the
 //! source; a heuristic, not a coastline).
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use super::cap::{square_halves, Cap};
 use super::error::TilesError;
@@ -350,7 +350,8 @@ pub(crate) fn mesh_of_leaves(
     o: [u64; 2],
     height: impl Fn(u64, u64) -> f32,
 ) -> Mesh {
-    let mut ids: HashMap<Pt, u32> = HashMap::with_capacity(leaves.len());
+    let mut ids: HashMap<Pt, u32> =
+        HashMap::with_capacity_and_hasher(leaves.len(), Default::default());
     let mut mesh = Mesh {
         vertices: Vec::with_capacity(leaves.len() / 2 + 4),
         triangles: Vec::with_capacity(leaves.len()),

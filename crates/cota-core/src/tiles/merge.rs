@@ -20,8 +20,8 @@
 //!    the shards' fine split points below; its vertices' heights, normals
 //!    and water-mask samples come from the shards and the band corners.
 
+use rustc_hash::FxHashMap as HashMap;
 use std::cell::Cell;
-use std::collections::HashMap;
 use std::sync::Mutex;
 
 use super::cap::{own_rows, square_tris, t_heights, Cap};
@@ -93,11 +93,11 @@ impl CoarseHierarchy {
             rules,
             band,
             corners,
-            fine: HashMap::new(),
-            coded: HashMap::new(),
+            fine: HashMap::default(),
+            coded: HashMap::default(),
             cap: Cap::default(),
-            normals: HashMap::new(),
-            water: HashMap::new(),
+            normals: HashMap::default(),
+            water: HashMap::default(),
         };
         let own = h.absorb(partials);
         h.bitree_levels(&own)?;
@@ -107,7 +107,7 @@ impl CoarseHierarchy {
 
     /// Takes the shards' data in; returns the merged own errors.
     fn absorb(&mut self, partials: Vec<CoarsePartial>) -> HashMap<u64, f32> {
-        let mut own: HashMap<u64, f32> = HashMap::new();
+        let mut own: HashMap<u64, f32> = HashMap::default();
         let t = self.frame.scheme.cells_at(self.band);
         for p in partials {
             for f in p.fine {

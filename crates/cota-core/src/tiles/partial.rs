@@ -24,7 +24,7 @@
 //!    band-tile corners within [`NORMAL_REACH_CELLS`] of the window) and the
 //!    coarse tiles' **water-mask samples** inside its squares.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use rayon::prelude::*;
 
@@ -291,7 +291,8 @@ fn fine_points(
             out
         })
         .collect();
-    let mut by_key: HashMap<u64, FinePoint> = HashMap::with_capacity(found.len());
+    let mut by_key: HashMap<u64, FinePoint> =
+        HashMap::with_capacity_and_hasher(found.len(), Default::default());
     for p in found {
         by_key.entry(key(p.at)).or_insert(p);
     }
@@ -321,7 +322,7 @@ fn own_partials(
     let s = lat.scheme();
     let top = s.cells_at(lat.align_zoom());
     let [x0, y0, x1, y1] = lat.window();
-    let mut own: HashMap<u64, f32> = HashMap::new();
+    let mut own: HashMap<u64, f32> = HashMap::default();
     let mut size = 2 * t;
     while size <= s.root_cells() {
         let (nx, ny) = (2 * s.root_cells() / size, s.root_cells() / size);
