@@ -159,6 +159,10 @@ def build_pyramid(
     out = os.fspath(out)
     name = os.path.basename(out)
     todo = [i for i in range(shards) if not os.path.exists(shard_record(out, i, shards))]
+    # The two outer shards are the smallest (their part has a margin on one
+    # side only): submitted last, they fill the gaps at the end instead of
+    # leaving one worker finishing a large shard alone.
+    todo.sort(key=lambda i: i in (0, shards - 1))
     plan, plan_parts = None, 0
     # The plan step runs on a fresh run; a resumed run whose finished shards
     # ran without it (no frame) goes on without it.
