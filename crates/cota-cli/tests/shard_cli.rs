@@ -148,19 +148,12 @@ fn shard_is_idempotent_and_reduce_needs_every_shard() {
     assert!(stderr(&bad).contains("expected I/N"), "{}", stderr(&bad));
 }
 
-/// After the plan step, a shard reads only the files its part of the
-/// lattice needs: with N=4 on the two-tile mosaic the westmost shard runs
-/// with the eastern tile gone, holds a lattice part narrower than the
-/// window, and the pyramid after the other shards and the reduce is still
-/// byte-identical to the plain run.
-#[test]
-fn shard_reads_only_the_files_of_its_part() {
-    let (Some(a), Some(b)) = (
-        common::shared("srtm/N00E010.hgt"),
-        common::shared("srtm/N00E011.hgt.zip"),
-    ) else {
-        return;
-    };
+/// The two-tile mosaic copied into a temporary directory (so a test can
+/// move a file away): the directory, the western and the eastern file;
+/// `None` without the shared data.
+fn copied_pair() -> Option<(tempfile::TempDir, PathBuf, PathBuf)> {
+    let a = common::shared("srtm/N00E010.hgt")?;
+    let b = common::shared("srtm/N00E011.hgt.zip")?;
     let dir = tempfile::tempdir().unwrap();
     let (wa, eb) = (
         dir.path().join("N00E010.hgt"),
@@ -168,6 +161,19 @@ fn shard_reads_only_the_files_of_its_part() {
     );
     std::fs::copy(&a, &wa).unwrap();
     std::fs::copy(&b, &eb).unwrap();
+    Some((dir, wa, eb))
+}
+
+/// After the plan step, a shard reads only the files its part of the
+/// lattice needs: with N=4 on the two-tile mosaic the westmost shard runs
+/// with the eastern tile gone, holds a lattice part narrower than the
+/// window, and the pyramid after the other shards and the reduce is still
+/// byte-identical to the plain run.
+#[test]
+fn shard_reads_only_the_files_of_its_part() {
+    let Some((dir, wa, eb)) = copied_pair() else {
+        return;
+    };
     let (west, east) = (wa.to_str().unwrap(), eb.to_str().unwrap());
     let plain = dir.path().join("plain");
     let out = dir.path().join("sharded");
@@ -311,19 +317,9 @@ fn reduce_refuses_a_missing_or_damaged_partial_naming_it() {
 /// has no parts: `--part` says the plan step reads the whole input.
 #[test]
 fn plan_step_in_parts_equals_plain_run() {
-    let (Some(a), Some(b)) = (
-        common::shared("srtm/N00E010.hgt"),
-        common::shared("srtm/N00E011.hgt.zip"),
-    ) else {
+    let Some((dir, wa, eb)) = copied_pair() else {
         return;
     };
-    let dir = tempfile::tempdir().unwrap();
-    let (wa, eb) = (
-        dir.path().join("N00E010.hgt"),
-        dir.path().join("N00E011.hgt.zip"),
-    );
-    std::fs::copy(&a, &wa).unwrap();
-    std::fs::copy(&b, &eb).unwrap();
     let (west, east) = (wa.to_str().unwrap(), eb.to_str().unwrap());
     let plain = dir.path().join("plain");
     let out = dir.path().join("sharded");
