@@ -80,7 +80,7 @@ pub use criteria::{Criterion, CriterionKind, CriterionOptions, MaxVerticalError}
 pub use error::{MeshError, Result};
 pub use grid::mosaic::{mosaic, MosaicOptions, SeamPolicy, SeamReport};
 pub use grid::voids::{fill_voids, FillMethod, FillOptions, VoidPolicy};
-pub use grid::{Crs, GeoRef, GridError, HeightGrid, PixelIs};
+pub use grid::{Crs, GeoRef, GeoTransform, GridError, HeightGrid, LonLat, PixelIs};
 pub use mesh::check::{check_mesh, CheckOptions};
 pub use mesh::metrics::{measure, Metrics};
 pub use mesh::{Mesh, MeshVertex};

@@ -16,6 +16,7 @@
 
 pub mod extend;
 mod frame;
+pub mod geo;
 pub mod mosaic;
 pub mod voids;
 
@@ -24,6 +25,7 @@ use std::fmt;
 use rayon::prelude::*;
 
 pub use frame::LocalFrame;
+pub use geo::{GeoTransform, LonLat};
 
 /// Largest number of samples a grid may hold (2^31, 8 GiB of f32 heights).
 ///
@@ -132,6 +134,9 @@ pub enum Crs {
     Geographic(String),
     /// A projected CRS known only by description (e.g. "UTM zone 25S"); linear units in metres.
     Projected(String),
+    /// A CRS given by its PROJ definition (`+proj=utm +zone=33 +datum=WGS84 …`):
+    /// from `--src-crs`, or built from a file's own projection parameters.
+    Proj(String),
 }
 
 impl Crs {
@@ -143,6 +148,7 @@ impl Crs {
         match self {
             Crs::Epsg(code) => is_geographic_epsg(*code),
             Crs::Geographic(_) => true,
+            Crs::Proj(def) => def.contains("+proj=longlat") || def.contains("+proj=latlong"),
             _ => false,
         }
     }
@@ -159,7 +165,7 @@ impl fmt::Display for Crs {
         match self {
             Crs::Unknown => write!(f, "unknown"),
             Crs::Epsg(code) => write!(f, "EPSG:{code}"),
-            Crs::Geographic(s) | Crs::Projected(s) => write!(f, "{s}"),
+            Crs::Geographic(s) | Crs::Projected(s) | Crs::Proj(s) => write!(f, "{s}"),
         }
     }
 }
