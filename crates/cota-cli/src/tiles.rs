@@ -127,7 +127,7 @@ fn run_part(
     let part = tiles_part::load_part(a, f, opts, index)?;
     let name = part.files_read.join(" + ");
     let t_prep = Instant::now();
-    let prepared = Prepared::new_part(&part.lattice, part.zooms.clone())
+    let prepared = Prepared::new_part(&part.lattice, part.zooms.clone(), &part.stats)
         .with_context(|| format!("tiling {name}"))?;
     let prep_s = t_prep.elapsed().as_secs_f64();
     let report = write(a, &prepared, Some((part.shard.clone(), f)))?;
@@ -255,7 +255,7 @@ fn print_plan_step(
     frame: &ShardFrame,
 ) -> anyhow::Result<std::process::ExitCode> {
     let f = &frame.frame;
-    let zooms = plan_with(&f.scheme, f.window, &frame.stats, opts)?;
+    let zooms = plan_with(f, &frame.stats, opts)?;
     print_plan(
         &zooms,
         a.shards,

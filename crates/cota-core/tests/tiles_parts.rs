@@ -6,9 +6,9 @@
 
 use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
-    band_zoom, owned_region, part_region, shard_plan, BandCorners, CoarseHierarchy, Lattice,
-    LatticeFrame, LatticeOptions, LatticeStats, PartStats, Prepared, Shard, SourcePart,
-    TilerOptions,
+    band_zoom, coarse_level_stats_in, owned_region, part_region, shard_plan, BandCorners,
+    CoarseHierarchy, Lattice, LatticeFrame, LatticeOptions, LatticeStats, PartStats, Prepared,
+    Shard, SourcePart, TilerOptions,
 };
 use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
 
@@ -62,6 +62,8 @@ fn parts_cut_the_tiles_of_the_whole_hierarchy() {
         let band = band_zoom(&zooms, whole.align_zoom(), n);
         let mut merged = PartStats::default();
         let mut regions = Vec::new();
+        let t_band = frame.scheme.cells_at(band);
+        let mut corners = BandCorners::new(frame.window, t_band);
         for shard in shard_plan(&zooms, n).unwrap() {
             let shard = shard.from_zoom(band);
             let Some(region) = part_region(&shard, &frame.scheme, frame.window, band, false) else {
@@ -75,7 +77,8 @@ fn parts_cut_the_tiles_of_the_whole_hierarchy() {
             };
             let lat = Lattice::resample_part(&frame, part, region).unwrap();
             parts_seen += usize::from(lat.is_part());
-            merged = merged.merge(PartStats::of(&lat));
+            merged = merged.merge(PartStats::of(&lat, t_band));
+            corners.fill_from(&lat);
             regions.push(region);
             // Bit for bit the whole lattice's heights.
             for r in region[1]..=region[3] {
@@ -87,10 +90,9 @@ fn parts_cut_the_tiles_of_the_whole_hierarchy() {
                     );
                 }
             }
-            let zs = cota_core::tiles::plan::plan_with(&frame.scheme, frame.window, &stats, &opts)
-                .unwrap();
+            let zs = cota_core::tiles::plan::plan_with(&frame, &stats, &opts).unwrap();
             assert_eq!(zs, zooms);
-            let part_prep = Prepared::new_part(&lat, zs).unwrap();
+            let part_prep = Prepared::new_part(&lat, zs, &stats).unwrap();
             for t in shard.tiles() {
                 assert!(part_prep.holds(t), "{t} n={n}");
                 let (a, b) = (
@@ -116,7 +118,19 @@ fn parts_cut_the_tiles_of_the_whole_hierarchy() {
         // The parts' statistics merge into the whole's, bit for bit: the
         // regions cover every pair of neighbouring samples of the window.
         assert_pairs_covered(&regions, frame.window, n);
-        let (got, want) = (merged.stats(), stats);
+        let height = |x: u64, y: u64| corners.height(x, y).unwrap_or(0.0);
+        let coarse = coarse_level_stats_in(
+            &frame.scheme,
+            frame.window,
+            frame.align_zoom,
+            2 * t_band,
+            &height,
+        );
+        merged.levels = merged.levels.merge(&coarse);
+        let (got, want) = (merged.stats(), stats.clone());
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&got.levels.slope), bits(&want.levels.slope), "n={n}");
+        assert_eq!(bits(&got.levels.span_m), bits(&want.levels.span_m), "n={n}");
         assert_eq!(got.lo_m.to_bits(), want.lo_m.to_bits(), "n={n}");
         assert_eq!(got.hi_m.to_bits(), want.hi_m.to_bits(), "n={n}");
         assert_eq!(got.max_step_m.to_bits(), want.max_step_m.to_bits(), "n={n}");
@@ -202,6 +216,7 @@ fn merged_partial_maxima_cut_the_coarse_tiles_of_the_whole_hierarchy() {
     let opts = TilerOptions::DEFAULT;
     let prep = Prepared::new(&whole, &opts).unwrap();
     let zooms = plan(&whole, &opts).unwrap();
+    let stats = LatticeStats::of(&whole);
     let frame = whole.frame().clone();
     let mut below_align = 0;
     for n in [1, 2, 3, 5, 8, 11] {
@@ -220,14 +235,15 @@ fn merged_partial_maxima_cut_the_coarse_tiles_of_the_whole_hierarchy() {
         }
         let mut got = Vec::new();
         for (lat, owned) in &partials {
-            let part_prep = Prepared::new_part(lat, zooms.clone()).unwrap();
+            let part_prep = Prepared::new_part(lat, zooms.clone(), &stats).unwrap();
             got.push(
                 part_prep
                     .coarse_partial(*owned, band, &corners, true, true)
                     .unwrap(),
             );
         }
-        let merged = CoarseHierarchy::new(&frame, zooms.clone(), band, corners, got).unwrap();
+        let merged =
+            CoarseHierarchy::new(&frame, &stats, zooms.clone(), band, corners, got).unwrap();
         let mut cut = 0;
         for t in merged.tiles() {
             let (a, b) = (
@@ -255,6 +271,7 @@ fn a_missing_partial_is_refused() {
     let src = source();
     let whole = Lattice::resample(&src, &LatticeOptions::DEFAULT).unwrap();
     let zooms = plan(&whole, &TilerOptions::DEFAULT).unwrap();
+    let stats = LatticeStats::of(&whole);
     let frame = whole.frame().clone();
     let band = band_zoom(&zooms, whole.align_zoom(), 3);
     let mut corners = BandCorners::new(frame.window, frame.scheme.cells_at(band));
@@ -265,12 +282,12 @@ fn a_missing_partial_is_refused() {
         let shard = shard.from_zoom(band);
         let lat = part_of(&src, &frame, &shard, band, false).unwrap();
         let owned = owned_region(&shard, &frame.scheme, band).unwrap();
-        let p = Prepared::new_part(&lat, zooms.clone()).unwrap();
+        let p = Prepared::new_part(&lat, zooms.clone(), &stats).unwrap();
         partials.push(
             p.coarse_partial(owned, band, &corners, false, false)
                 .unwrap(),
         );
     }
-    let err = CoarseHierarchy::new(&frame, zooms, band, corners, partials).unwrap_err();
+    let err = CoarseHierarchy::new(&frame, &stats, zooms, band, corners, partials).unwrap_err();
     assert!(err.to_string().contains("missing"), "{err}");
 }

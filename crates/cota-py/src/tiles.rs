@@ -131,7 +131,8 @@ fn write_part(
     let normals = opts.extensions.normals;
     let part =
         load_part(out, f, &frame_key(paths, s), &tiler(s), i, normals, read).map_err(part_error)?;
-    let prep = Prepared::new_part(&part.lattice, part.zooms.clone()).map_err(errors::mesh)?;
+    let prep =
+        Prepared::new_part(&part.lattice, part.zooms.clone(), &part.stats).map_err(errors::mesh)?;
     let report =
         write_shard(&prep, out, opts, &part.shard, Some(f), &|_| {}).map_err(errors::write)?;
     Ok((part.shard.tile_count(), report, part.files_read))

@@ -22,11 +22,11 @@
 use rustc_hash::FxHashMap as HashMap;
 
 use super::cap::{square_halves, Cap};
+use super::drawn::{DrawnBound, LevelRule, ZoomRules};
 use super::error::TilesError;
 use super::lattice::Lattice;
-use super::plan::{children_in, plan, TileRange, TilerOptions, ZoomPlan};
+use super::plan::{children_in, plan_with, LatticeStats, TileRange, TilerOptions, ZoomPlan};
 use super::scheme::{GeographicScheme, TileId};
-use crate::bitree::error_code::SplitRule;
 use crate::bitree::Bitree;
 use crate::grid::metres_per_degree;
 use crate::hierarchy::{orient_up, Pt, Tri};
@@ -88,6 +88,27 @@ pub struct Prepared<'l> {
     tree: Bitree<'l>,
     cap: Cap,
     zooms: Vec<ZoomPlan>,
+    bound: DrawnBound,
+    /// Per zoom of `zooms`, the rules per level ([`super::drawn`]).
+    rules: Vec<ZoomRules>,
+}
+
+/// The drawn bound of a lattice frame with statistics `stats`, and each
+/// zoom's rules.
+pub(crate) fn rules_of(
+    scheme: &GeographicScheme,
+    window: [u64; 4],
+    stats: &LatticeStats,
+    zooms: &[ZoomPlan],
+) -> (DrawnBound, Vec<ZoomRules>) {
+    let range = [
+        f64::from(stats.lo_m),
+        f64::from(stats.hi_m),
+        stats.max_step_m,
+    ];
+    let bound = DrawnBound::new(scheme, window, range, &stats.levels, stats.residual_m);
+    let rules = zooms.iter().map(|p| bound.rules(p.threshold_m)).collect();
+    (bound, rules)
 }
 
 impl<'l> Prepared<'l> {
@@ -107,20 +128,25 @@ impl<'l> Prepared<'l> {
                     .into(),
             ));
         }
-        let zooms = plan(lattice, opts)?;
+        let stats = LatticeStats::of(lattice);
+        let zooms = plan_with(lattice.frame(), &stats, opts)?;
         let tree = Bitree::build(lattice.grid())?;
         let cap = Cap::build(lattice, &tree);
+        let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), &stats, &zooms);
         Ok(Prepared {
             lattice,
             tree,
             cap,
             zooms,
+            bound,
+            rules,
         })
     }
 
     /// Builds the bitree of a part of the lattice ([`Lattice::resample_part`])
     /// with the whole pyramid's plan `zooms` (from
-    /// [`super::plan::plan_with`] and the whole lattice's statistics). It
+    /// [`super::plan::plan_with`] and the whole lattice's statistics
+    /// `stats`, which also set the drawn bound). It
     /// cuts exactly the tiles a whole lattice cuts, for the tiles of zooms at
     /// or finer than the alignment zoom whose square, grown by half a tile,
     /// lies in the part (the split points a tile reads lie in that square,
@@ -132,14 +158,26 @@ impl<'l> Prepared<'l> {
     ///
     /// # Runtime
     /// The part's [`Bitree::build`].
-    pub fn new_part(lattice: &'l Lattice, zooms: Vec<ZoomPlan>) -> Result<Self, TilesError> {
+    pub fn new_part(
+        lattice: &'l Lattice,
+        zooms: Vec<ZoomPlan>,
+        stats: &LatticeStats,
+    ) -> Result<Self, TilesError> {
         let tree = Bitree::build(lattice.grid())?;
+        let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), stats, &zooms);
         Ok(Prepared {
             lattice,
             tree,
             cap: Cap::default(),
             zooms,
+            bound,
+            rules,
         })
+    }
+
+    /// The drawn bound its decisions keep ([`super::drawn`]).
+    pub fn drawn_bound(&self) -> &DrawnBound {
+        &self.bound
     }
 
     /// True when this hierarchy cuts tile `t` exactly: always for a whole
@@ -244,7 +282,8 @@ impl<'l> Prepared<'l> {
         let s = self.lattice.scheme();
         let cells = s.cells_at(t.z);
         let origin = s.tile_origin(t);
-        let leaves = self.walk(origin, cells, plan.threshold_m);
+        let zi = self.zoom_index(t.z).unwrap_or(0);
+        let leaves = walk_leaves(origin, cells, |tri| self.splits(tri, zi));
         let mesh = self.mesh_of(&leaves, origin);
         Ok(TileMesh {
             tile: t,
@@ -259,16 +298,20 @@ impl<'l> Prepared<'l> {
         })
     }
 
-    /// The leaves under the tile's square (north-west corner `o`, side
-    /// `cells`) at threshold `thr`, depth-first.
-    fn walk(&self, o: [u64; 2], cells: u64, thr: f64) -> Vec<Tri> {
-        walk_leaves(o, cells, thr, |t, rule| self.splits(t, rule))
+    /// The index of zoom `z` in [`Prepared::zooms`].
+    pub(crate) fn zoom_index(&self, z: u8) -> Option<usize> {
+        self.zooms.iter().position(|p| p.zoom == z)
     }
 
-    /// Whether `t` splits under `rule`: the window's bitree up to the
+    /// Whether `t` splits at the `zi`-th zoom: the drawn bound's rule for
+    /// its level ([`super::drawn`]), against the window's bitree up to the
     /// alignment zoom's squares, the cap above.
     #[inline]
-    pub(crate) fn splits(&self, t: &Tri, rule: &SplitRule) -> bool {
+    pub(crate) fn splits(&self, t: &Tri, zi: usize) -> bool {
+        let rule = match self.rules[zi].of(t, self.lattice.window()) {
+            LevelRule::Always => return true,
+            LevelRule::Above(rule) => rule,
+        };
         let m = t.mid();
         let size = t.a[0].abs_diff(t.b[0]).max(t.a[1].abs_diff(t.b[1]));
         let top = self.lattice.scheme().cells_at(self.lattice.align_zoom());
@@ -284,7 +327,7 @@ impl<'l> Prepared<'l> {
         }
         let w = self.lattice.grid().width();
         self.tree
-            .splits_index((y - y0) as usize * w + (x - x0) as usize, rule)
+            .splits_index((y - y0) as usize * w + (x - x0) as usize, &rule)
     }
 
     /// The leaves as a mesh in tile coordinates, vertices in first-use order.
@@ -316,15 +359,9 @@ impl<'l> Prepared<'l> {
     }
 }
 
-/// The leaves under the square with north-west corner `o` and side `cells`
-/// at threshold `thr`, depth-first, splitting where `splits` says.
-pub(crate) fn walk_leaves(
-    o: [u64; 2],
-    cells: u64,
-    thr: f64,
-    splits: impl Fn(&Tri, &SplitRule) -> bool,
-) -> Vec<Tri> {
-    let rule = SplitRule::new(thr);
+/// The leaves under the square with north-west corner `o` and side `cells`,
+/// depth-first, splitting where `splits` says.
+pub(crate) fn walk_leaves(o: [u64; 2], cells: u64, splits: impl Fn(&Tri) -> bool) -> Vec<Tri> {
     let (x0, y0, s) = (o[0] as u32, o[1] as u32, cells as u32);
     let (nw, ne, sw, se) = ([x0, y0], [x0 + s, y0], [x0, y0 + s], [x0 + s, y0 + s]);
     let even = (u64::from(x0) / cells + u64::from(y0) / cells).is_multiple_of(2);
@@ -332,7 +369,7 @@ pub(crate) fn walk_leaves(
     let mut stack: Vec<Tri> = roots.iter().rev().copied().collect();
     let mut out = Vec::new();
     while let Some(t) = stack.pop() {
-        if !t.is_unit() && splits(&t, &rule) {
+        if !t.is_unit() && splits(&t) {
             let (c0, c1) = t.children();
             stack.push(c1);
             stack.push(c0);

@@ -19,12 +19,13 @@
 //!    inside the window or outside it, and is a square of the window's bitree.
 //! 3. **Heights.** Inside the footprint, bilinear interpolation of the four
 //!    surrounding source samples. Outside it, the terrain is 0 m (the
-//!    ellipsoid, what a globe shows with no terrain); in the margin between
-//!    the footprint and the window's border the footprint's edge value is
-//!    carried outwards and ramped linearly to 0 at the border, so coarse
-//!    tiles meet no cliff, and the window's border is 0 m like everything
-//!    beyond it. The antimeridian is an edge of the tiling, not a seam that
-//!    wraps.
+//!    ellipsoid, what a globe shows with no terrain): the footprint's edge
+//!    value is held one cell beyond it (so the unit cells across the edge
+//!    interpolate the source's edge) and falls linearly to 0 over
+//!    [`ramp_cells`] cells (an eighth of a maximum-zoom tile): no terrain is
+//!    shown farther than that from the data, and the window's last
+//!    alignment tile is 0 m like everything beyond it. The antimeridian is
+//!    an edge of the tiling, not a seam that wraps.
 
 use rayon::prelude::*;
 
@@ -82,6 +83,7 @@ pub struct Lattice {
     frame: LatticeFrame,
     grid: HeightGrid,
     origin: [u64; 2],
+    residual_m: f64,
 }
 
 /// The window of a footprint at one alignment zoom: `[x0, y0, x1, y1]`
@@ -260,7 +262,14 @@ impl Lattice {
             frame: frame.clone(),
             grid,
             origin: [region[0], region[1]],
+            residual_m: 0.0,
         })
+    }
+
+    /// The largest |lattice − source| at the source's samples it holds,
+    /// metres: what the lattice's own surface leaves of the source.
+    pub fn residual_m(&self) -> f64 {
+        self.residual_m
     }
 
     /// The frame (scheme, footprint, window, source mapping).
@@ -453,6 +462,15 @@ fn zero_band(s: &GeographicScheme, win: Window, a: u8) -> [f64; 4] {
     ]
 }
 
+/// Lattice cells over which the data's edge falls to the ellipsoid beyond
+/// the footprint: an eighth of a maximum-zoom tile (8 cells for tiles of 64,
+/// 600 m at zoom 12), at least one. Narrow, so that no terrain shows beyond
+/// the data; not a cliff, so that its steps stay near the terrain's own
+/// (they set the quantization margin, [`super::plan`]).
+pub fn ramp_cells(s: &GeographicScheme) -> f64 {
+    f64::from((s.tile_cells / 8).max(1))
+}
+
 /// Per lattice column (or row): the source's first sample index, the
 /// interpolation weight, and the ramp factor outside the footprint.
 #[derive(Debug, Clone, Copy)]
@@ -473,6 +491,7 @@ fn axis(
     [fp0, fp1]: [f64; 2],
     [w0, w1]: [f64; 2],
     n: usize,
+    ramp_cells: f64,
 ) -> Vec<Axis> {
     let last = (n - 1) as f64;
     (0..count)
@@ -481,11 +500,14 @@ fn axis(
             let sx = to_source(gx).clamp(0.0, last);
             let i0 = (sx.floor() as usize).min(n - 2);
             // Full edge value up to one cell beyond the footprint, so the
-            // unit cells across its edge interpolate the source's edge.
-            let ramp = if gx < fp0 - 1.0 && fp0 - 1.0 > w0 {
-                ((gx - w0) / (fp0 - 1.0 - w0)).clamp(0.0, 1.0)
-            } else if gx > fp1 + 1.0 && w1 > fp1 + 1.0 {
-                ((w1 - gx) / (w1 - fp1 - 1.0)).clamp(0.0, 1.0)
+            // unit cells across its edge interpolate the source's edge, then
+            // down to 0 m over `ramp` cells (never into the zero band).
+            let ramp = if gx < fp0 - 1.0 {
+                let end = (fp0 - 1.0 - ramp_cells).max(w0);
+                ((gx - end) / (fp0 - 1.0 - end).max(1.0)).clamp(0.0, 1.0)
+            } else if gx > fp1 + 1.0 {
+                let end = (fp1 + 1.0 + ramp_cells).min(w1);
+                ((end - gx) / (end - fp1 - 1.0).max(1.0)).clamp(0.0, 1.0)
             } else {
                 1.0
             };
@@ -510,6 +532,7 @@ fn axes(frame: &LatticeFrame, region: Window) -> (Vec<Axis>, Vec<Axis>) {
         (region[3] - region[1] + 1) as usize,
     );
     let band = zero_band(s, frame.window, frame.align_zoom);
+    let ramp = ramp_cells(s);
     let cols = axis(
         w,
         region[0],
@@ -517,6 +540,7 @@ fn axes(frame: &LatticeFrame, region: Window) -> (Vec<Axis>, Vec<Axis>) {
         [fp[0], fp[2]],
         [band[0], band[2]],
         frame.source_size[0],
+        ramp,
     );
     let rows = axis(
         h,
@@ -525,6 +549,7 @@ fn axes(frame: &LatticeFrame, region: Window) -> (Vec<Axis>, Vec<Axis>) {
         [fp[1], fp[3]],
         [band[1], band[3]],
         frame.source_size[1],
+        ramp,
     );
     (cols, rows)
 }

@@ -25,15 +25,17 @@ use std::cell::Cell;
 use std::sync::Mutex;
 
 use super::cap::{own_rows, square_tris, t_heights, Cap};
+use super::cut::rules_of;
 use super::cut::{
     mesh_of_leaves, normal_at, walk_leaves, water_of, TileMesh, WaterMask, NORMAL_REACH_CELLS,
 };
+use super::drawn::{LevelRule, ZoomRules};
 use super::error::TilesError;
 use super::lattice::LatticeFrame;
-use super::partial::{bits_above, coarse_rules, key, BandCorners, CoarsePartial, WATER_UNKNOWN};
-use super::plan::{children_in, ZoomPlan};
+use super::partial::{coarse_rules, key, BandCorners, CoarsePartial, WATER_UNKNOWN};
+use super::plan::{children_in, LatticeStats, ZoomPlan};
 use super::scheme::TileId;
-use crate::bitree::error_code::{decode, encode_up, SplitRule};
+use crate::bitree::error_code::{decode, encode_up};
 use crate::bitree::round_up_f32;
 use crate::hierarchy::{Pt, Tri};
 
@@ -43,14 +45,15 @@ use crate::hierarchy::{Pt, Tri};
 pub struct CoarseHierarchy {
     frame: LatticeFrame,
     zooms: Vec<ZoomPlan>,
-    rules: Vec<(ZoomPlan, SplitRule)>,
+    rules: Vec<(ZoomPlan, ZoomRules)>,
     band: u8,
     corners: BandCorners,
     /// Fine split points: bits, height.
     fine: HashMap<u64, (u32, f32)>,
     /// The band squares' centres and the window bitree's levels above:
-    /// code, bits.
-    coded: HashMap<u64, (u16, u32)>,
+    /// their 16-bit codes (the rules' thresholds are code values, so a code
+    /// decides exactly, see [`super::drawn::DrawnBound::rules`]).
+    coded: HashMap<u64, u16>,
     cap: Cap,
     normals: HashMap<(u64, u8), [f32; 3]>,
     water: HashMap<TileId, Vec<u8>>,
@@ -65,7 +68,8 @@ fn incomplete(what: String) -> TilesError {
 
 impl CoarseHierarchy {
     /// Merges `partials` (one per shard, any order) of the pyramid planned
-    /// as `zooms` over `frame`, band zoom `band`, with the band `corners`.
+    /// as `zooms` over `frame` (whole-lattice statistics `stats`), band zoom
+    /// `band`, with the band `corners`.
     ///
     /// # Errors
     /// [`TilesError::BadOptions`] when a partial or a corner is missing.
@@ -75,6 +79,7 @@ impl CoarseHierarchy {
     /// level and the cap's levels (beyond-window parts by row ends).
     pub fn new(
         frame: &LatticeFrame,
+        stats: &LatticeStats,
         zooms: Vec<ZoomPlan>,
         band: u8,
         corners: BandCorners,
@@ -86,7 +91,8 @@ impl CoarseHierarchy {
                 corners.missing()
             )));
         }
-        let rules = coarse_rules(&zooms, band);
+        let (bound, _) = rules_of(&frame.scheme, frame.window, stats, &[]);
+        let rules = coarse_rules(&zooms, band, &bound);
         let mut h = CoarseHierarchy {
             frame: frame.clone(),
             zooms,
@@ -113,8 +119,8 @@ impl CoarseHierarchy {
             for f in p.fine {
                 let centre = f.at.map(u64::from).map(|v| v % t == t / 2);
                 if centre == [true, true] {
-                    let slot = self.coded.entry(key(f.at)).or_insert((0, 0));
-                    *slot = (slot.0.max(f.code), slot.1 | f.splits);
+                    let slot = self.coded.entry(key(f.at)).or_insert(0);
+                    *slot = (*slot).max(f.code);
                 }
                 let slot = self.fine.entry(key(f.at)).or_insert((0, f.height_m));
                 slot.0 |= f.splits;
@@ -173,19 +179,18 @@ impl CoarseHierarchy {
     /// Adds triangle `tri`'s own error and its children's to its split point.
     fn join(&mut self, own: &HashMap<u64, f32>, tri: &Tri) -> Result<(), TilesError> {
         let e = own.get(&key(tri.mid())).copied().unwrap_or(0.0);
-        let (mut code, mut bits) = (encode_up(e), bits_above(e, &self.rules));
+        let mut code = encode_up(e);
         let (c0, c1) = tri.children();
         for c in [c0.mid(), c1.mid()] {
-            let (cc, cb) = self
+            let cc = self
                 .coded
                 .get(&key(c))
                 .copied()
                 .ok_or_else(|| incomplete(format!("the split point {c:?}")))?;
             code = code.max(cc);
-            bits |= cb;
         }
-        let slot = self.coded.entry(key(tri.mid())).or_insert((0, 0));
-        *slot = (slot.0.max(code), slot.1 | bits);
+        let slot = self.coded.entry(key(tri.mid())).or_insert(0);
+        *slot = (*slot).max(code);
         Ok(())
     }
 
@@ -207,7 +212,7 @@ impl CoarseHierarchy {
                 return 0.0;
             }
             match self.coded.get(&key(m)) {
-                Some(&(code, _)) => decode(code),
+                Some(&code) => decode(code),
                 None => {
                     if let Ok(mut g) = missing.lock() {
                         *g = Some(m);
@@ -237,8 +242,13 @@ impl CoarseHierarchy {
         self.band
     }
 
-    /// Whether `tri` splits at the `i`-th coarse zoom (rule `rule`).
-    fn splits(&self, tri: &Tri, rule: &SplitRule, i: usize) -> bool {
+    /// Whether `tri` splits at the `i`-th coarse zoom, as
+    /// [`super::Prepared`] decides it.
+    fn splits(&self, tri: &Tri, i: usize) -> bool {
+        let rule = match self.rules[i].1.of(tri, self.frame.window) {
+            LevelRule::Always => return true,
+            LevelRule::Above(rule) => rule,
+        };
         let m = tri.mid();
         let size = tri.a[0].abs_diff(tri.b[0]).max(tri.a[1].abs_diff(tri.b[1]));
         let s = self.frame.scheme;
@@ -250,12 +260,11 @@ impl CoarseHierarchy {
         if x < x0 || x > x1 || y < y0 || y > y1 {
             return false;
         }
-        let bits = if u64::from(size) > s.cells_at(self.band) {
-            self.coded.get(&key(m)).map_or(0, |c| c.1)
+        if u64::from(size) > s.cells_at(self.band) {
+            self.coded.get(&key(m)).is_some_and(|&c| c > rule.floor)
         } else {
-            self.fine.get(&key(m)).map_or(0, |f| f.0)
-        };
-        bits & (1 << i) != 0
+            self.fine.get(&key(m)).is_some_and(|f| f.0 & (1 << i) != 0)
+        }
     }
 
     /// The height at a vertex: band corners, fine points, 0 m beyond.
@@ -284,9 +293,7 @@ impl CoarseHierarchy {
             })?;
         let s = self.frame.scheme;
         let (cells, o) = (s.cells_at(t.z), s.tile_origin(t));
-        let leaves = walk_leaves(o, cells, plan.threshold_m, |tri, rule| {
-            self.splits(tri, rule, i)
-        });
+        let leaves = walk_leaves(o, cells, |tri| self.splits(tri, i));
         let missing: Cell<Option<[u64; 2]>> = Cell::new(None);
         let mesh = mesh_of_leaves(&leaves, o, |x, y| {
             self.height(x, y).unwrap_or_else(|| {

@@ -30,6 +30,7 @@
 
 pub mod cap;
 pub mod cut;
+pub mod drawn;
 mod error;
 pub mod lattice;
 pub mod merge;
@@ -39,13 +40,14 @@ pub mod scheme;
 pub mod shard;
 
 pub use cut::{Prepared, TileMesh, WaterMask, NORMAL_REACH_CELLS};
+pub use drawn::{DrawnBound, LevelStats};
 pub use error::TilesError;
 pub use lattice::{
     resampling_deviation, Deviation, Lattice, LatticeFrame, LatticeOptions, SourcePart,
 };
 pub use merge::CoarseHierarchy;
 pub use partial::{BandCorners, CoarsePartial, FinePoint, WATER_UNKNOWN};
-pub use plan::{LatticeStats, PartStats, TileRange, TilerOptions, ZoomPlan};
+pub use plan::{coarse_level_stats_in, LatticeStats, PartStats, TileRange, TilerOptions, ZoomPlan};
 pub use scheme::{ErrorSchedule, GeographicScheme, TileId};
 pub use shard::{band_zoom, owned_region, part_region, shard_plan, Shard};
 

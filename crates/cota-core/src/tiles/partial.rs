@@ -30,11 +30,11 @@ use rayon::prelude::*;
 
 use super::cap::{own_rows, square_halves, square_tris, t_heights};
 use super::cut::{normal_at, water_sample, Prepared, NORMAL_REACH_CELLS};
+use super::drawn::{DrawnBound, ZoomRules};
 use super::error::TilesError;
 use super::lattice::Lattice;
 use super::plan::ZoomPlan;
 use super::scheme::{GeographicScheme, TileId};
-use crate::bitree::error_code::SplitRule;
 use crate::bitree::{clipped_span_error, round_up_f32};
 use crate::hierarchy::{Pt, Tri};
 
@@ -142,22 +142,18 @@ pub struct CoarsePartial {
     pub water: Vec<(TileId, Vec<u8>)>,
 }
 
-/// The coarse zooms (those below `band`) of `zooms`, with their rules.
-pub(crate) fn coarse_rules(zooms: &[ZoomPlan], band: u8) -> Vec<(ZoomPlan, SplitRule)> {
+/// The coarse zooms (those below `band`) of `zooms`, with their rules per
+/// level under `bound`.
+pub(crate) fn coarse_rules(
+    zooms: &[ZoomPlan],
+    band: u8,
+    bound: &DrawnBound,
+) -> Vec<(ZoomPlan, ZoomRules)> {
     zooms
         .iter()
         .filter(|p| p.zoom < band)
-        .map(|p| (*p, SplitRule::new(p.threshold_m)))
+        .map(|p| (*p, bound.rules(p.threshold_m)))
         .collect()
-}
-
-/// The bits of the coarse zooms whose threshold `e` exceeds.
-pub(crate) fn bits_above(e: f32, rules: &[(ZoomPlan, SplitRule)]) -> u32 {
-    rules
-        .iter()
-        .enumerate()
-        .filter(|(_, (_, r))| e > r.threshold)
-        .fold(0, |m, (i, _)| m | (1 << i))
 }
 
 /// The map key of a global lattice position.
@@ -193,7 +189,7 @@ impl Prepared<'_> {
         normals: bool,
         water: bool,
     ) -> Result<CoarsePartial, TilesError> {
-        let rules = coarse_rules(self.zooms(), band);
+        let rules = coarse_rules(self.zooms(), band, self.drawn_bound());
         let t = self.lattice().scheme().cells_at(band);
         if rules.is_empty() || owned[0] > owned[2] || owned[1] > owned[3] {
             return Ok(CoarsePartial::default());
@@ -241,21 +237,26 @@ fn fine_points(
     prep: &Prepared<'_>,
     owned: [u64; 4],
     t: u64,
-    rules: &[(ZoomPlan, SplitRule)],
+    rules: &[(ZoomPlan, ZoomRules)],
 ) -> Vec<FinePoint> {
+    // The zoom of the lowest threshold splits wherever any coarse zoom does
+    // (the drawn bound's slack depends on the level, not the zoom).
     let lowest = rules
         .iter()
-        .map(|(_, r)| *r)
-        .min_by(|a, b| a.threshold.total_cmp(&b.threshold));
+        .min_by(|a, b| a.0.threshold_m.total_cmp(&b.0.threshold_m))
+        .and_then(|(p, _)| prep.zoom_index(p.zoom));
     let Some(lowest) = lowest else {
         return Vec::new();
     };
+    let zi: Vec<usize> = rules
+        .iter()
+        .filter_map(|(p, _)| prep.zoom_index(p.zoom))
+        .collect();
     let lat = prep.lattice();
     let mask = |tri: &Tri| {
-        rules
-            .iter()
+        zi.iter()
             .enumerate()
-            .filter(|(_, (_, r))| prep.splits(tri, r))
+            .filter(|(_, &z)| prep.splits(tri, z))
             .fold(0u32, |m, (i, _)| m | (1 << i))
     };
     let found: Vec<FinePoint> = band_squares(owned, t)
@@ -273,7 +274,7 @@ fn fine_points(
             }];
             let mut stack: Vec<Tri> = halves.to_vec();
             while let Some(tri) = stack.pop() {
-                if tri.is_unit() || !prep.splits(&tri, &lowest) {
+                if tri.is_unit() || !prep.splits(&tri, lowest) {
                     continue;
                 }
                 let (c0, c1) = tri.children();
@@ -400,7 +401,7 @@ fn vertex_normals(
     owned: [u64; 4],
     t: u64,
     fine: &[FinePoint],
-    rules: &[(ZoomPlan, SplitRule)],
+    rules: &[(ZoomPlan, ZoomRules)],
 ) -> Vec<([u32; 2], u8, [f32; 3])> {
     let lat = prep.lattice();
     let s = lat.scheme();
@@ -458,7 +459,7 @@ pub(crate) fn reach_corners(
 fn water_samples(
     lat: &Lattice,
     owned: [u64; 4],
-    rules: &[(ZoomPlan, SplitRule)],
+    rules: &[(ZoomPlan, ZoomRules)],
 ) -> Vec<(TileId, Vec<u8>)> {
     let s = lat.scheme();
     let tiles: Vec<TileId> = rules

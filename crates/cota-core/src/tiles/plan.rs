@@ -25,8 +25,9 @@
 
 use rayon::prelude::*;
 
+use super::drawn::{level_stats, LevelStats};
 use super::error::TilesError;
-use super::lattice::Lattice;
+use super::lattice::{Lattice, LatticeFrame};
 use super::scheme::{ErrorSchedule, GeographicScheme, TileId};
 use super::QUANTIZED_MAX;
 
@@ -96,8 +97,11 @@ impl TileRange {
 pub struct ZoomPlan {
     /// The zoom.
     pub zoom: u8,
-    /// The tiles made at this zoom.
+    /// The tiles made at this zoom: those that meet the data.
     pub range: TileRange,
+    /// The tiles that meet the lattice window's interior (the shard plan
+    /// splits these, so that shards' parts cover the window).
+    pub window_range: TileRange,
     /// The bound every tile meets after quantization, metres.
     pub max_error_m: f64,
     /// What quantization may cost (see the module docs), metres.
@@ -106,9 +110,12 @@ pub struct ZoomPlan {
     pub threshold_m: f64,
 }
 
-/// The tiles at zoom `z` that meet the window's interior (both root tiles
-/// at zoom 0, so that a client always finds them).
-pub fn range_at(s: &GeographicScheme, window: [u64; 4], z: u8) -> TileRange {
+/// The tiles at zoom `z` whose square meets the data's `footprint` with a
+/// positive area (its interior: a tile that only touches the footprint's
+/// edge holds no data), and both root tiles at zoom 0, which CesiumJS needs
+/// to draw the globe at all (`GlobeSurfaceTile`'s `upsample`: a root tile
+/// that fails has no parent to stand in for it).
+pub fn range_at(s: &GeographicScheme, footprint: [f64; 4], z: u8) -> TileRange {
     if z == 0 {
         return TileRange {
             x0: 0,
@@ -117,16 +124,27 @@ pub fn range_at(s: &GeographicScheme, window: [u64; 4], z: u8) -> TileRange {
             y1: 0,
         };
     }
-    let t = s.cells_at(z);
+    let t = s.cells_at(z) as f64;
     let [nx, ny] = GeographicScheme::tiles_at(z);
-    let (c0, c1) = ((window[0] / t) as u32, ((window[2] - 1) / t) as u32);
-    let (r0, r1) = ((window[1] / t) as u32, ((window[3] - 1) / t) as u32);
+    let [w, n, e, so] = footprint;
+    let first = |v: f64, count: u32| ((v / t).floor().max(0.0) as u32).min(count - 1);
+    let last = |v: f64, count: u32| (((v / t).ceil() as u32).max(1) - 1).min(count - 1);
+    let (c0, c1) = (first(w, nx), last(e, nx).max(first(w, nx)));
+    let (r0, r1) = (first(n, ny), last(so, ny).max(first(n, ny)));
     TileRange {
-        x0: c0.min(nx - 1),
-        x1: c1.min(nx - 1),
-        y0: ny - 1 - r1.min(ny - 1),
-        y1: ny - 1 - r0.min(ny - 1),
+        x0: c0,
+        x1: c1,
+        y0: ny - 1 - r1,
+        y1: ny - 1 - r0,
     }
+}
+
+/// The tiles at zoom `z` that meet the window's interior (both root tiles
+/// at zoom 0).
+pub fn window_range_at(s: &GeographicScheme, window: [u64; 4], z: u8) -> TileRange {
+    let [x0, y0, x1, y1] = window;
+    let grow = |v: u64| v as f64;
+    range_at(s, [grow(x0), grow(y0), grow(x1), grow(y1)], z)
 }
 
 /// `G` of the module docs: the largest height step along a row plus the
@@ -167,8 +185,10 @@ fn max_steps_m(lattice: &Lattice) -> [f64; 2] {
 }
 
 /// What the plan needs of the whole lattice: its height range and `G` (see
-/// [`PartStats`] for reducing them from parts).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// [`PartStats`] for reducing them from parts), and what the drawn bound
+/// needs ([`super::drawn`]): the planes' slopes and spreads per level, and
+/// the fitted lattice's residual at the source's samples.
+#[derive(Debug, Clone, PartialEq)]
 pub struct LatticeStats {
     /// The lowest height, metres (0 for an empty lattice).
     pub lo_m: f32,
@@ -176,13 +196,64 @@ pub struct LatticeStats {
     pub hi_m: f32,
     /// `G` of the module docs ([`max_step_m`]), metres per cell.
     pub max_step_m: f64,
+    /// Per level, the steepest plane and largest vertex spread.
+    pub levels: LevelStats,
+    /// The largest |lattice − source| at the source's samples, metres.
+    pub residual_m: f64,
 }
 
 impl LatticeStats {
-    /// The statistics of `lattice`'s stored heights.
+    /// The statistics of `lattice`'s stored heights (the whole window): every
+    /// level of the window's squares and of the coarse levels above it.
     pub fn of(lattice: &Lattice) -> LatticeStats {
-        PartStats::of(lattice).stats()
+        let top = lattice.scheme().cells_at(lattice.align_zoom());
+        let mut part = PartStats::of(lattice, top);
+        part.levels = part
+            .levels
+            .merge(&coarse_level_stats(lattice, 2 * top, &|x, y| {
+                lattice.height_at(x, y)
+            }));
+        part.stats()
     }
+}
+
+/// The level statistics of the squares of side `from` and larger over the
+/// window of `lattice`'s frame (the window's squares up to the alignment
+/// zoom's, then the coarse levels' squares within two squares of the
+/// window), heights from `height` (0 m beyond the window).
+pub fn coarse_level_stats(
+    lattice: &Lattice,
+    from: u64,
+    height: &(impl Fn(u64, u64) -> f32 + Sync),
+) -> LevelStats {
+    let f = lattice.frame();
+    coarse_level_stats_in(&f.scheme, f.window, f.align_zoom, from, height)
+}
+
+/// [`coarse_level_stats`] of a frame given by its parts.
+pub fn coarse_level_stats_in(
+    scheme: &GeographicScheme,
+    window: [u64; 4],
+    align_zoom: u8,
+    from: u64,
+    height: &(impl Fn(u64, u64) -> f32 + Sync),
+) -> LevelStats {
+    let top = scheme.cells_at(align_zoom);
+    let mut out = level_stats(scheme, window, [from, top], height);
+    let mut size = (2 * top).max(from);
+    while size <= scheme.root_cells() {
+        let [x0, y0, x1, y1] = window;
+        let (w, h) = (2 * scheme.root_cells(), scheme.root_cells());
+        let grown = [
+            (x0 / size).saturating_sub(2) * size,
+            (y0 / size).saturating_sub(2) * size,
+            ((x1 / size + 3) * size).min(w),
+            ((y1 / size + 3) * size).min(h),
+        ];
+        out = out.merge(&level_stats(scheme, grown, [size, size], height));
+        size *= 2;
+    }
+    out
 }
 
 /// [`LatticeStats`] of a part of the lattice, in a form that merges: the
@@ -192,21 +263,36 @@ impl LatticeStats {
 /// samples within one of them (regions that overlap by a sample do), merge
 /// into the whole lattice's statistics bit for bit: each is a minimum or a
 /// maximum of the same values.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct PartStats {
     /// The lowest and highest height, metres; `None` when no sample was seen.
     pub range_m: Option<(f32, f32)>,
     /// The largest height step along a row and along a column, metres per
     /// cell.
     pub step_m: [f64; 2],
+    /// The level statistics of the squares of side up to the part's limit
+    /// that lie in its stored region.
+    pub levels: LevelStats,
+    /// The largest |lattice − source| at the source samples inside it, metres.
+    pub residual_m: f64,
 }
 
 impl PartStats {
-    /// The statistics of `lattice`'s stored heights (a part's or the window's).
-    pub fn of(lattice: &Lattice) -> PartStats {
+    /// The statistics of `lattice`'s stored heights (a part's or the
+    /// window's), the level statistics over its squares of side up to
+    /// `max_square` cells.
+    pub fn of(lattice: &Lattice, max_square: u64) -> PartStats {
+        let levels = level_stats(
+            lattice.scheme(),
+            lattice.stored(),
+            [2, max_square],
+            &|x, y| lattice.height_at(x, y),
+        );
         PartStats {
             range_m: lattice.grid().valid_range(),
             step_m: max_steps_m(lattice),
+            levels,
+            residual_m: lattice.residual_m(),
         }
     }
 
@@ -222,6 +308,8 @@ impl PartStats {
                 self.step_m[0].max(other.step_m[0]),
                 self.step_m[1].max(other.step_m[1]),
             ],
+            levels: self.levels.merge(&other.levels),
+            residual_m: self.residual_m.max(other.residual_m),
         }
     }
 
@@ -232,6 +320,8 @@ impl PartStats {
             lo_m,
             hi_m,
             max_step_m: self.step_m[0] + self.step_m[1],
+            levels: self.levels.clone(),
+            residual_m: self.residual_m,
         }
     }
 }
@@ -239,23 +329,17 @@ impl PartStats {
 /// The plan of every zoom from `opts.min_zoom` to the lattice's maximum
 /// (the lattice holds its whole window).
 pub fn plan(lattice: &Lattice, opts: &TilerOptions) -> Result<Vec<ZoomPlan>, TilesError> {
-    plan_with(
-        lattice.scheme(),
-        lattice.window(),
-        &LatticeStats::of(lattice),
-        opts,
-    )
+    plan_with(lattice.frame(), &LatticeStats::of(lattice), opts)
 }
 
 /// The plan of every zoom from `opts.min_zoom` to the scheme's maximum, for
-/// a lattice over `window` whose statistics are `stats`.
+/// a lattice of `frame` whose statistics are `stats`.
 pub fn plan_with(
-    scheme: &GeographicScheme,
-    window: [u64; 4],
+    frame: &LatticeFrame,
     stats: &LatticeStats,
     opts: &TilerOptions,
 ) -> Result<Vec<ZoomPlan>, TilesError> {
-    let s = *scheme;
+    let s = frame.scheme;
     if opts.min_zoom > s.max_zoom {
         return Err(TilesError::BadOptions(format!(
             "expected a minimum zoom of at most the maximum zoom {}, found {}",
@@ -287,7 +371,8 @@ pub fn plan_with(
             }
             Ok(ZoomPlan {
                 zoom: z,
-                range: range_at(&s, window, z),
+                range: range_at(&s, frame.footprint, z),
+                window_range: window_range_at(&s, frame.window, z),
                 max_error_m,
                 margin_m,
                 threshold_m: max_error_m - margin_m,

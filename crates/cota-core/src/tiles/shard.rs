@@ -37,28 +37,31 @@ pub struct Shard {
     pub index: u32,
     /// The number of shards.
     pub shards: u32,
-    /// Its tiles, zoom by zoom, coarse to fine (zooms where it has none are
-    /// left out).
+    /// Its share of the window's tiles, zoom by zoom, coarse to fine (zooms
+    /// where it has none are left out): what its part of the lattice and
+    /// its owned squares follow.
     pub ranges: Vec<(u8, TileRange)>,
+    /// The tiles it makes: its ranges' tiles that meet the data.
+    pub made: Vec<(u8, TileRange)>,
 }
 
 impl Shard {
-    /// True when tile `t` belongs to this shard.
+    /// True when tile `t` is one this shard makes.
     pub fn contains(&self, t: TileId) -> bool {
-        self.ranges
+        self.made
             .iter()
             .any(|(z, r)| *z == t.z && r.contains(t.x, t.y))
     }
 
-    /// Number of tiles.
+    /// Number of tiles it makes.
     pub fn tile_count(&self) -> u64 {
-        self.ranges.iter().map(|(_, r)| r.count()).sum()
+        self.made.iter().map(|(_, r)| r.count()).sum()
     }
 
-    /// Its tiles, zoom by zoom (rows, then columns, as
+    /// The tiles it makes, zoom by zoom (rows, then columns, as
     /// [`super::Prepared::tiles`] orders them).
     pub fn tiles(&self) -> impl Iterator<Item = TileId> + '_ {
-        self.ranges.iter().flat_map(|&(z, r)| {
+        self.made.iter().flat_map(|&(z, r)| {
             (r.y0..=r.y1).flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z, x, y }))
         })
     }
@@ -67,13 +70,10 @@ impl Shard {
 impl Shard {
     /// The same shard without its tiles coarser than zoom `z`.
     pub fn from_zoom(&self, z: u8) -> Shard {
+        let keep = |v: &[(u8, TileRange)]| v.iter().filter(|(k, _)| *k >= z).copied().collect();
         Shard {
-            ranges: self
-                .ranges
-                .iter()
-                .filter(|(k, _)| *k >= z)
-                .copied()
-                .collect(),
+            ranges: keep(&self.ranges),
+            made: keep(&self.made),
             ..self.clone()
         }
     }
@@ -87,7 +87,7 @@ pub fn band_zoom(zooms: &[ZoomPlan], align_zoom: u8, shards: u32) -> u8 {
     let (Some(first), Some(finest)) = (zooms.first(), zooms.last()) else {
         return align_zoom;
     };
-    let f = finest.range;
+    let f = finest.window_range;
     let len = (f.x1 - f.x0).max(f.y1 - f.y0) + 1;
     let band = len / shards.max(1);
     let mut z = finest.zoom;
@@ -200,7 +200,7 @@ pub fn shard_plan(zooms: &[ZoomPlan], shards: u32) -> Result<Vec<Shard>, TilesEr
             "expected at least one shard, found 0".into(),
         ));
     }
-    let f = finest.range;
+    let f = finest.window_range;
     let by_columns = f.x1 - f.x0 >= f.y1 - f.y0;
     let (start, len) = if by_columns {
         (u64::from(f.x0), u64::from(f.x1 - f.x0) + 1)
@@ -219,14 +219,30 @@ pub fn shard_plan(zooms: &[ZoomPlan], shards: u32) -> Result<Vec<Shard>, TilesEr
             index,
             shards,
             ranges: Vec::new(),
+            made: Vec::new(),
         })
         .collect();
     for p in zooms {
         for (owner, part) in bands.split(p) {
-            out[owner as usize].ranges.push((p.zoom, part));
+            let shard = &mut out[owner as usize];
+            shard.ranges.push((p.zoom, part));
+            if let Some(made) = intersect(part, p.range) {
+                shard.made.push((p.zoom, made));
+            }
         }
     }
     Ok(out)
+}
+
+/// The tiles in both ranges, if any.
+fn intersect(a: TileRange, b: TileRange) -> Option<TileRange> {
+    let r = TileRange {
+        x0: a.x0.max(b.x0),
+        x1: a.x1.min(b.x1),
+        y0: a.y0.max(b.y0),
+        y1: a.y1.min(b.y1),
+    };
+    (r.x0 <= r.x1 && r.y0 <= r.y1).then_some(r)
 }
 
 /// The cut of the finest zoom's range into bands.
@@ -245,9 +261,9 @@ impl Bands {
         band_of(q, self.start, self.len, self.shards)
     }
 
-    /// Zoom `p`'s range as (shard, rectangle) runs along the cut axis.
+    /// Zoom `p`'s window range as (shard, rectangle) runs along the cut axis.
     fn split(&self, p: &ZoomPlan) -> Vec<(u32, TileRange)> {
-        let r = p.range;
+        let r = p.window_range;
         let (a, b) = if self.by_columns {
             (r.x0, r.x1)
         } else {
@@ -290,6 +306,7 @@ mod tests {
         ZoomPlan {
             zoom: z,
             range: TileRange { x0, x1, y0, y1 },
+            window_range: TileRange { x0, x1, y0, y1 },
             max_error_m: 1.0,
             margin_m: 0.1,
             threshold_m: 0.9,

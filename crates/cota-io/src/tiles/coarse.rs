@@ -226,7 +226,10 @@ fn encode_partial(h: &PartialHeader, p: &CoarsePartial) -> Vec<u8> {
     b.extend((h.zooms.len() as u64).to_le_bytes());
     for z in &h.zooms {
         b.push(z.zoom);
-        for v in [z.range.x0, z.range.x1, z.range.y0, z.range.y1] {
+        let w = z.window_range;
+        for v in [
+            z.range.x0, z.range.x1, z.range.y0, z.range.y1, w.x0, w.x1, w.y0, w.y1,
+        ] {
             b.extend(v.to_le_bytes());
         }
         for v in [z.max_error_m, z.margin_m, z.threshold_m] {
@@ -270,19 +273,23 @@ fn decode_partial(r: &mut Reader<'_>) -> Result<(PartialHeader, CoarsePartial), 
     let shard = [r.u32()?, r.u32()?];
     let band_zoom = r.u8()?;
     let flags = r.u8()?;
-    let mut zooms = Vec::with_capacity(r.count(41)?);
+    let mut zooms = Vec::with_capacity(r.count(57)?);
     for _ in 0..zooms.capacity() {
         let zoom = r.u8()?;
-        let range = TileRange {
-            x0: r.u32()?,
-            x1: r.u32()?,
-            y0: r.u32()?,
-            y1: r.u32()?,
+        let mut range = || -> Result<TileRange, PyramidError> {
+            Ok(TileRange {
+                x0: r.u32()?,
+                x1: r.u32()?,
+                y0: r.u32()?,
+                y1: r.u32()?,
+            })
         };
+        let (range, window_range) = (range()?, range()?);
         let (max_error_m, margin_m, threshold_m) = (r.f64()?, r.f64()?, r.f64()?);
         zooms.push(ZoomPlan {
             zoom,
             range,
+            window_range,
             max_error_m,
             margin_m,
             threshold_m,
@@ -453,7 +460,14 @@ pub fn write_reduced_coarse(
     let Some(h) = first else {
         return Ok([0, 0]);
     };
-    let hier = CoarseHierarchy::new(&frame.frame, h.zooms, frame.band_zoom, corners, partials)?;
+    let hier = CoarseHierarchy::new(
+        &frame.frame,
+        &frame.stats,
+        h.zooms,
+        frame.band_zoom,
+        corners,
+        partials,
+    )?;
     let opts = PyramidOptions::DEFAULT
         .with_extensions(h.extensions)
         .with_gzip(h.gzip)

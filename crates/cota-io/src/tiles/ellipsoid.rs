@@ -29,6 +29,30 @@ pub fn ecef(lon_deg: f64, lat_deg: f64, h_m: f64) -> [f64; 3] {
     ]
 }
 
+/// The geodetic longitude, latitude (degrees) and height (metres) of an
+/// ECEF position: the inverse of [`ecef`], by fixed-point iteration on the
+/// latitude (converges to well under a millimetre in a few steps away from
+/// the Earth's centre).
+pub fn geodetic(p: [f64; 3]) -> [f64; 3] {
+    let e2 = 1.0 - (B_M * B_M) / (A_M * A_M);
+    let r = (p[0] * p[0] + p[1] * p[1]).sqrt();
+    let lon = p[1].atan2(p[0]);
+    let mut lat = p[2].atan2(r * (1.0 - e2));
+    let mut h = 0.0;
+    for _ in 0..10 {
+        let s = lat.sin();
+        let n = A_M / (1.0 - e2 * s * s).sqrt();
+        // Near the poles the height from the z axis is better conditioned.
+        h = if lat.cos().abs() > 1e-3 {
+            r / lat.cos() - n
+        } else {
+            p[2] / s - n * (1.0 - e2)
+        };
+        lat = p[2].atan2(r * (1.0 - e2 * n / (n + h)));
+    }
+    [lon.to_degrees(), lat.to_degrees(), h]
+}
+
 /// The east, north, up unit vectors in ECEF at a geodetic position.
 pub fn enu_axes(lon_deg: f64, lat_deg: f64) -> [[f64; 3]; 3] {
     let (lon, lat) = (lon_deg.to_radians(), lat_deg.to_radians());
@@ -149,6 +173,20 @@ mod test {
         assert!((p[0] - A_M).abs() < 1e-6 && p[1].abs() < 1e-6 && p[2].abs() < 1e-6);
         let n = ecef(0.0, 90.0, 0.0);
         assert!((n[2] - B_M).abs() < 1e-6);
+    }
+
+    #[test]
+    fn geodetic_inverts_ecef() {
+        for (lon, lat, h) in [
+            (10.5, 47.25, 1234.5),
+            (-71.3, -28.7, -12.0),
+            (179.9, 89.99, 8000.0),
+            (0.0, 0.0, -6000.0),
+        ] {
+            let [a, b, c] = geodetic(ecef(lon, lat, h));
+            assert!((a - lon).abs() < 1e-9 && (b - lat).abs() < 1e-9, "{a} {b}");
+            assert!((c - h).abs() < 1e-4, "{c} {h}");
+        }
     }
 
     #[test]

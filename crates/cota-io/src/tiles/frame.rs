@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use cota_core::tiles::{GeographicScheme, LatticeFrame, LatticeStats};
+use cota_core::tiles::{GeographicScheme, LatticeFrame, LatticeStats, LevelStats};
 use cota_core::{Crs, GeoRef, PixelIs};
 use serde_json::{json, Value};
 
@@ -67,7 +67,9 @@ impl ShardFrame {
             "source": [bits(g.origin_x), bits(g.origin_y), bits(g.pixel_x), bits(g.pixel_y)],
             "source_area": matches!(g.pixel_is, PixelIs::Area),
             "source_size": f.source_size,
-            "stats": [bits(f64::from(self.stats.lo_m)), bits(f64::from(self.stats.hi_m)), bits(self.stats.max_step_m)],
+            "stats": [bits(f64::from(self.stats.lo_m)), bits(f64::from(self.stats.hi_m)), bits(self.stats.max_step_m), bits(self.stats.residual_m)],
+            "level_slopes": self.stats.levels.slope.iter().map(|v| bits(*v)).collect::<Vec<_>>(),
+            "level_spans": self.stats.levels.span_m.iter().map(|v| bits(*v)).collect::<Vec<_>>(),
             "files": self.files.iter().map(|(p, e)| json!([p, e])).collect::<Vec<_>>(),
         })
     }
@@ -83,7 +85,13 @@ impl ShardFrame {
         let small = |k: &str| v[k].as_u64().and_then(|n| u8::try_from(n).ok());
         let fp = f64s("footprint", 4)?;
         let src = f64s("source", 4)?;
-        let st = f64s("stats", 3)?;
+        let st = f64s("stats", 4)?;
+        let list = |k: &str| -> Option<Vec<f64>> { v[k].as_array()?.iter().map(unbits).collect() };
+        let levels = LevelStats {
+            slope: list("level_slopes")?,
+            span_m: list("level_spans")?,
+        };
+        (levels.slope.len() == levels.span_m.len()).then_some(())?;
         let win = u64s(&v["window"])?;
         let size = u64s(&v["source_size"])?;
         let files = v["files"]
@@ -133,6 +141,8 @@ impl ShardFrame {
                 lo_m: st[0] as f32,
                 hi_m: st[1] as f32,
                 max_step_m: st[2],
+                levels,
+                residual_m: st[3],
             },
             files,
         })

@@ -29,6 +29,7 @@
 
 pub mod coarse;
 pub mod decode;
+pub mod drawn;
 pub mod ellipsoid;
 pub mod frame;
 pub mod layer;

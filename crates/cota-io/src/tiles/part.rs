@@ -103,6 +103,8 @@ pub struct Part {
     pub lattice: Lattice,
     /// Every zoom's plan (the whole pyramid's).
     pub zooms: Vec<ZoomPlan>,
+    /// The whole lattice's statistics (the plan's and the drawn bound's).
+    pub stats: LatticeStats,
     /// The shard's tiles of the band zoom and finer.
     pub shard: Shard,
     /// The resampling's deviation over the source samples in the part.
@@ -138,7 +140,7 @@ pub fn load_part<E: From<PyramidError>>(
     }
     let fr = &f.frame;
     let tiles = |e| E::from(PyramidError::Tiles(e));
-    let zooms = plan_with(&fr.scheme, fr.window, &f.stats, opts).map_err(tiles)?;
+    let zooms = plan_with(fr, &f.stats, opts).map_err(tiles)?;
     let shard = shard_plan(&zooms, f.shards).map_err(tiles)?;
     let Some(shard) = shard.into_iter().nth(index as usize) else {
         return Err(refuse(format!(
@@ -166,6 +168,7 @@ pub fn load_part<E: From<PyramidError>>(
     Ok(Part {
         lattice,
         zooms,
+        stats: f.stats.clone(),
         shard,
         deviation,
         files_read,

@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 use cota_core::grid::mosaic::{layout, MosaicOptions, TileShape};
 use cota_core::tiles::plan::plan_with;
 use cota_core::tiles::{
-    part_region, shard_plan, BandCorners, Lattice, LatticeFrame, LatticeOptions, LatticeStats,
-    PartStats, SourcePart, TilerOptions,
+    coarse_level_stats_in, part_region, shard_plan, BandCorners, Lattice, LatticeFrame,
+    LatticeOptions, LatticeStats, LevelStats, PartStats, SourcePart, TilerOptions,
 };
 use cota_core::HeightGrid;
 
@@ -108,7 +108,7 @@ pub fn plan_layout(
     opts: &TilerOptions,
 ) -> Result<ShardFrame, PyramidError> {
     let fr = &m.frame;
-    let zooms = plan_with(&fr.scheme, fr.window, &ZERO, opts)?;
+    let zooms = plan_with(fr, &ZERO, opts)?;
     Ok(frame_with(
         key,
         shards,
@@ -123,6 +123,11 @@ const ZERO: LatticeStats = LatticeStats {
     lo_m: 0.0,
     hi_m: 0.0,
     max_step_m: 0.0,
+    levels: LevelStats {
+        slope: Vec::new(),
+        span_m: Vec::new(),
+    },
+    residual_m: 0.0,
 };
 
 /// What one part of the plan step gives: its part's statistics and the band
@@ -156,7 +161,7 @@ pub fn plan_part<E: From<PyramidError>>(
 ) -> Result<Option<PlanPart>, E> {
     let tiles = |e| E::from(PyramidError::Tiles(e));
     let fr = &layout.frame;
-    let zooms = plan_with(&fr.scheme, fr.window, &ZERO, opts).map_err(tiles)?;
+    let zooms = plan_with(fr, &ZERO, opts).map_err(tiles)?;
     let band = layout.band_zoom;
     let shards = shard_plan(&zooms, layout.shards).map_err(tiles)?;
     let Some(shard) = shards.into_iter().nth(index as usize) else {
@@ -177,7 +182,7 @@ pub fn plan_part<E: From<PyramidError>>(
     let mut corners = corners_within(fr.window, fr.scheme.cells_at(band), lattice.stored());
     corners.fill_from(&lattice);
     Ok(Some(PlanPart {
-        stats: PartStats::of(&lattice),
+        stats: PartStats::of(&lattice, fr.scheme.cells_at(band)),
         corners,
         files_read,
     }))
@@ -239,8 +244,13 @@ pub fn merge_plan(
             return Err(refusal(out, layout.shards, message));
         }
     }
+    // The levels above the band squares, from the band corners.
+    let t = fr.scheme.cells_at(layout.band_zoom);
+    let height = |x: u64, y: u64| corners.height(x, y).unwrap_or(0.0);
+    let coarse = coarse_level_stats_in(&fr.scheme, fr.window, fr.align_zoom, 2 * t, &height);
+    merged.levels = merged.levels.merge(&coarse);
     let stats = merged.stats();
-    let zooms = plan_with(&fr.scheme, fr.window, &stats, opts)?;
+    let zooms = plan_with(fr, &stats, opts)?;
     let ShardFrame {
         key,
         shards,

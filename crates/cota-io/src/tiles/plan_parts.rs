@@ -23,7 +23,7 @@
 
 use std::path::{Path, PathBuf};
 
-use cota_core::tiles::{BandCorners, PartStats, TilerOptions};
+use cota_core::tiles::{BandCorners, LevelStats, PartStats, TilerOptions};
 use cota_core::HeightGrid;
 
 use super::coarse::{bad, Reader};
@@ -174,6 +174,13 @@ fn write_plan_part(
         b.extend(hi.to_le_bytes());
         b.extend(p.stats.step_m[0].to_le_bytes());
         b.extend(p.stats.step_m[1].to_le_bytes());
+        b.extend(p.stats.residual_m.to_le_bytes());
+        let levels = &p.stats.levels;
+        b.extend((levels.slope.len() as u64).to_le_bytes());
+        for (a, s) in levels.slope.iter().zip(&levels.span_m) {
+            b.extend(a.to_le_bytes());
+            b.extend(s.to_le_bytes());
+        }
         b.extend(p.corners.cells.to_le_bytes());
         for v in p.corners.window {
             b.extend(v.to_le_bytes());
@@ -240,6 +247,13 @@ fn part_body(r: &mut Reader<'_>) -> Result<PlanPart, PyramidError> {
     let has_range = r.u8()? != 0;
     let (lo, hi) = (r.f32()?, r.f32()?);
     let step_m = [r.f64()?, r.f64()?];
+    let residual_m = r.f64()?;
+    let n = r.count(16)?;
+    let mut levels = LevelStats::default();
+    for _ in 0..n {
+        levels.slope.push(r.f64()?);
+        levels.span_m.push(r.f64()?);
+    }
     let cells = r.u64()?;
     let window = [r.u64()?, r.u64()?, r.u64()?, r.u64()?];
     let n = r.count(4)?;
@@ -253,6 +267,8 @@ fn part_body(r: &mut Reader<'_>) -> Result<PlanPart, PyramidError> {
         stats: PartStats {
             range_m: has_range.then_some((lo, hi)),
             step_m,
+            levels,
+            residual_m,
         },
         corners: BandCorners {
             cells,
