@@ -15,7 +15,8 @@
 //! Also per vertex, on request: a normal from the lattice's slope at the
 //! tile's own scale (a central difference over `T_z / 64` cells, at most
 //! [`NORMAL_REACH_CELLS`], so two tiles that share a vertex give it the same
-//! normal and a shard's part holds what its normals read), and a 256×256 water
+//! normal and a shard's part holds what its normals read; straight up
+//! beyond the window, on the ellipsoid), and a 256×256 water
 //! mask (samples at or below 0 m: sea level in SRTM, and the 0 m beyond the
 //! source; a heuristic, not a coastline).
 
@@ -335,20 +336,21 @@ impl<'l> Prepared<'l> {
         mesh_of_leaves(leaves, o, |x, y| self.lattice.height_at(x, y))
     }
 
-    /// Per-vertex unit normals (east, north, up): [`normal_at`].
+    /// Per-vertex unit normals (east, north, up): [`normal_at`] inside the
+    /// window, straight up (the ellipsoid's) beyond it.
     fn normals(&self, mesh: &Mesh, o: [u64; 2], cells: u64) -> Vec<[f32; 3]> {
         let s = self.lattice.scheme();
         let h = |x: u64, y: u64| self.lattice.height_at(x, y);
+        let w = self.lattice.window();
         mesh.vertices
             .iter()
             .map(|v| {
-                normal_at(
-                    s,
-                    h,
-                    o[0] + u64::from(v.col),
-                    o[1] + u64::from(v.row),
-                    cells,
-                )
+                let (x, y) = (o[0] + u64::from(v.col), o[1] + u64::from(v.row));
+                if in_window(w, x, y) {
+                    normal_at(s, h, x, y, cells)
+                } else {
+                    UP
+                }
             })
             .collect()
     }
@@ -411,6 +413,15 @@ pub(crate) fn mesh_of_leaves(
         mesh.triangles.push(idx);
     }
     mesh
+}
+
+/// The normal of the ellipsoid in east, north, up components.
+pub(crate) const UP: [f32; 3] = [0.0, 0.0, 1.0];
+
+/// Whether global lattice `(x, y)` lies in `window` (inclusive).
+#[inline]
+pub(crate) fn in_window(w: [u64; 4], x: u64, y: u64) -> bool {
+    (w[0]..=w[2]).contains(&x) && (w[1]..=w[3]).contains(&y)
 }
 
 /// How far (lattice cells) a vertex normal looks on each side: `T_z / 64`

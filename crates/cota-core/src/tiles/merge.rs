@@ -26,9 +26,7 @@ use std::sync::Mutex;
 
 use super::cap::{own_rows, square_tris, t_heights, Cap};
 use super::cut::rules_of;
-use super::cut::{
-    mesh_of_leaves, normal_at, walk_leaves, water_of, TileMesh, WaterMask, NORMAL_REACH_CELLS,
-};
+use super::cut::{in_window, mesh_of_leaves, walk_leaves, water_of, TileMesh, WaterMask, UP};
 use super::drawn::{LevelRule, ZoomRules};
 use super::error::TilesError;
 use super::lattice::LatticeFrame;
@@ -321,30 +319,27 @@ impl CoarseHierarchy {
         })
     }
 
-    /// The vertex normals: from the shards, or on the 0 m far from the window.
+    /// The vertex normals: from the shards inside the window, straight up
+    /// beyond it.
     fn normals(
         &self,
         mesh: &crate::mesh::Mesh,
         o: [u64; 2],
         z: u8,
     ) -> Result<Vec<[f32; 3]>, TilesError> {
-        let s = self.frame.scheme;
-        let [x0, y0, x1, y1] = self.frame.window;
-        let r = NORMAL_REACH_CELLS;
         mesh.vertices
             .iter()
             .map(|v| {
                 let (x, y) = (o[0] + u64::from(v.col), o[1] + u64::from(v.row));
-                if let Some(n) = self.normals.get(&(key([x as u32, y as u32]), z)) {
-                    return Ok(*n);
+                if !in_window(self.frame.window, x, y) {
+                    return Ok(UP);
                 }
-                let far = x + r < x0 || x > x1 + r || y + r < y0 || y > y1 + r;
-                if far {
-                    return Ok(normal_at(&s, |_, _| 0.0, x, y, s.cells_at(z)));
-                }
-                Err(incomplete(format!(
-                    "the normal at lattice ({x}, {y}), zoom {z}"
-                )))
+                self.normals
+                    .get(&(key([x as u32, y as u32]), z))
+                    .copied()
+                    .ok_or_else(|| {
+                        incomplete(format!("the normal at lattice ({x}, {y}), zoom {z}"))
+                    })
             })
             .collect()
     }

@@ -21,7 +21,8 @@
 //!    coarse zoom's threshold, which zooms it splits at (a bit per zoom),
 //!    its height, and for the band squares' centres their 16-bit codes;
 //! 3. on request, the **vertex normals** its part can compute (fine points,
-//!    band-tile corners within [`NORMAL_REACH_CELLS`] of the window) and the
+//!    band-tile corners inside the window; beyond it a normal is straight
+//!    up) and the
 //!    coarse tiles' **water-mask samples** inside its squares.
 
 use rustc_hash::FxHashMap as HashMap;
@@ -29,12 +30,12 @@ use rustc_hash::FxHashMap as HashMap;
 use rayon::prelude::*;
 
 use super::cap::{own_rows, square_halves, square_tris, t_heights};
-use super::cut::{normal_at, water_sample, Prepared, NORMAL_REACH_CELLS};
+use super::cut::{normal_at, water_sample, Prepared};
 use super::drawn::{DrawnBound, ZoomRules};
 use super::error::TilesError;
 use super::lattice::Lattice;
 use super::plan::ZoomPlan;
-use super::scheme::{GeographicScheme, TileId};
+use super::scheme::TileId;
 use crate::bitree::{clipped_span_error, round_up_f32};
 use crate::hierarchy::{Pt, Tri};
 
@@ -413,7 +414,7 @@ fn vertex_normals(
             let [x, y] = f.at.map(u64::from);
             out.push((f.at, p.zoom, normal_at(s, h, x, y, cells)));
         }
-        for c in reach_corners(s, lat.window(), owned, t) {
+        for c in window_corners(lat.window(), owned, t) {
             let [x, y] = c.map(u64::from);
             out.push((c, p.zoom, normal_at(s, h, x, y, cells)));
         }
@@ -421,33 +422,16 @@ fn vertex_normals(
     out
 }
 
-/// The band-tile corners within [`NORMAL_REACH_CELLS`] of `window` whose
-/// nearest window sample lies in `owned`.
-pub(crate) fn reach_corners(
-    s: &GeographicScheme,
-    window: [u64; 4],
-    owned: [u64; 4],
-    t: u64,
-) -> Vec<Pt> {
-    let r = NORMAL_REACH_CELLS;
-    let grow = |v: u64, n: u64, up: bool| {
-        if up {
-            ((v + r) / t * t).min(n)
-        } else {
-            v.saturating_sub(r).div_ceil(t) * t
-        }
-    };
-    let (wmax, hmax) = (2 * s.root_cells(), s.root_cells());
-    let xs = grow(window[0], wmax, false)..=grow(window[2], wmax, true);
-    let ys = grow(window[1], hmax, false)..=grow(window[3], hmax, true);
-    let inside = |v: u64, lo: u64, hi: u64, a: u64, b: u64| (a..=b).contains(&v.clamp(lo, hi));
+/// The band-tile corners of `window` (every `t` cells) inside `owned`.
+pub(crate) fn window_corners(window: [u64; 4], owned: [u64; 4], t: u64) -> Vec<Pt> {
+    let (xs, ys) = (window[0]..=window[2], window[1]..=window[3]);
     let mut out = Vec::new();
     for y in ys.step_by(t as usize) {
-        if !inside(y, window[1], window[3], owned[1], owned[3]) {
+        if !(owned[1]..=owned[3]).contains(&y) {
             continue;
         }
         for x in xs.clone().step_by(t as usize) {
-            if inside(x, window[0], window[2], owned[0], owned[2]) {
+            if (owned[0]..=owned[2]).contains(&x) {
                 out.push([x as u32, y as u32]);
             }
         }
