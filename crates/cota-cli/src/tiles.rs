@@ -10,6 +10,8 @@ use cota_core::tiles::{
     resampling_deviation, shard_plan, BandCorners, Deviation, ErrorSchedule, Lattice, Prepared,
     Shard, TilerOptions, ZoomPlan,
 };
+use cota_core::{HeightGrid, LonLat};
+use cota_io::tiles::drawn::{Against, SourceGrid};
 use cota_io::tiles::{
     plan_layout_path, plan_part_path, read_shard_frame, reduce_shards, shard_frame_path,
     write_plan, write_pyramid, write_shard, PyramidOptions, PyramidReport, ShardFrame,
@@ -64,19 +66,42 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     } else {
         Vec::new()
     };
-    drop(inp.grid);
     if a.plan {
+        drop(inp.grid);
         return plan_step(a, &lattice, &opts, files);
     }
+    // With --check, the source stays to check every tile against it as drawn.
+    let source = a.check.then_some(inp.grid);
     let t_prep = Instant::now();
     let spinner = progress::spinner("preparing");
     let prepared = Prepared::new(&lattice, &opts).with_context(|| format!("tiling {name}"))?;
     drop(spinner);
     let prep_s = t_prep.elapsed().as_secs_f64();
-    let report = write(a, &prepared, None)?;
+    let against = source.as_ref().map(|g| against(g, &lattice));
+    let report = write(a, &prepared, None, against.as_ref())?;
     let times = [prep_s, t0.elapsed().as_secs_f64()];
     finish(a, &name, &prepared, &deviation, &report, times, json!(null));
     Ok(std::process::ExitCode::SUCCESS)
+}
+
+/// What `--check` measures the tiles against as drawn: the source's
+/// samples, its bilinear surface, and the ellipsoid farther than two
+/// finest tiles from its footprint.
+fn against<'a>(source: &'a HeightGrid, lattice: &Lattice) -> Against<'a> {
+    let s = lattice.scheme();
+    let fp = lattice.footprint();
+    let rect = [
+        s.lon_of(fp[0]),
+        s.lat_of(fp[3]),
+        s.lon_of(fp[2]),
+        s.lat_of(fp[1]),
+    ];
+    let margin = 2.0 * f64::from(s.tile_cells) * s.cell_deg();
+    let grid = SourceGrid {
+        grid: source,
+        transform: &LonLat,
+    };
+    Against::new(vec![grid], vec![rect], margin)
 }
 
 /// The error schedule and zooms of the arguments.
@@ -130,7 +155,7 @@ fn run_part(
     let prepared = Prepared::new_part(&part.lattice, part.zooms.clone(), &part.stats)
         .with_context(|| format!("tiling {name}"))?;
     let prep_s = t_prep.elapsed().as_secs_f64();
-    let report = write(a, &prepared, Some((part.shard.clone(), f)))?;
+    let report = write(a, &prepared, Some((part.shard.clone(), f)), None)?;
     let times = [prep_s, t0.elapsed().as_secs_f64()];
     let info = json!({
         "band_zoom": f.band_zoom,
@@ -279,6 +304,7 @@ fn write(
     a: &TilesArgs,
     prepared: &Prepared<'_>,
     part: Option<(Shard, &ShardFrame)>,
+    against: Option<&Against<'_>>,
 ) -> anyhow::Result<PyramidReport> {
     let pyramid = pyramid_options(a);
     let frame = part.as_ref().map(|p| p.1);
@@ -295,7 +321,9 @@ fn write(
         Some(s) => write_shard(prepared, &a.output, &pyramid, s, frame, &|n| {
             pb.set_position(n)
         }),
-        None => write_pyramid(prepared, &a.output, &pyramid, &|n| pb.set_position(n)),
+        None => write_pyramid(prepared, &a.output, &pyramid, against, &|n| {
+            pb.set_position(n)
+        }),
     }
     .with_context(|| format!("writing {}", a.output.display()))?;
     pb.finish_and_clear();
@@ -382,7 +410,7 @@ fn print_plan(
 /// What the report says of the check.
 fn check_line(checked: bool) -> &'static str {
     if checked {
-        "passed: every written tile decoded, conforming, within its zoom's bound at every lattice sample"
+        "passed: every written tile decoded, conforming, within its zoom's bound at every lattice sample and, drawn as flat triangles on the globe, at every source sample"
     } else {
         "not run (--check decodes every tile again and checks it before writing)"
     }
@@ -442,11 +470,16 @@ fn print_report(
         dev.max_m,
         dev.rms_m
     );
-    println!("zoom        tiles  skipped   triangles      bytes  bound (m)  measured (m)");
+    println!("zoom        tiles  skipped   triangles      bytes  bound (m)  as drawn (m)");
     for z in &r.zooms {
+        let measured = if z.drawn_error_m.is_nan() {
+            "-".to_string()
+        } else {
+            format!("{:.3}", z.drawn_error_m)
+        };
         println!(
-            "{:>4} {:>12} {:>8} {:>11} {:>10} {:>10.3} {:>13.3}",
-            z.zoom, z.written, z.skipped, z.triangles, z.bytes, z.max_error_m, z.measured_error_m
+            "{:>4} {:>12} {:>8} {:>11} {:>10} {:>10.3} {:>13}",
+            z.zoom, z.written, z.skipped, z.triangles, z.bytes, z.max_error_m, measured
         );
     }
     println!(

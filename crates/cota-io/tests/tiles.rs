@@ -74,7 +74,7 @@ fn fixture_pyramid_decodes_within_bounds_without_seams() {
     let out = tempfile::tempdir().unwrap();
     let ext = TileExtensions::with(true, true, true);
     let opts = PyramidOptions::DEFAULT.with_extensions(ext).with_gzip(true);
-    let report = write_pyramid(&prep, out.path(), &opts, &|_| {}).unwrap();
+    let report = write_pyramid(&prep, out.path(), &opts, None, &|_| {}).unwrap();
     assert_eq!(report.written(), prep.tile_count());
     for z in &report.zooms {
         assert!(z.measured_error_m <= z.max_error_m, "{z:?}");
@@ -114,7 +114,7 @@ fn two_tile_mosaic_small_bounds_and_seams() {
         .with_error(ErrorSchedule::AtMaxZoom { max_error_m: 2.0 });
     let prep = Prepared::new(&lat, &opts).unwrap();
     let out = tempfile::tempdir().unwrap();
-    write_pyramid(&prep, out.path(), &PyramidOptions::DEFAULT, &|_| {}).unwrap();
+    write_pyramid(&prep, out.path(), &PyramidOptions::DEFAULT, None, &|_| {}).unwrap();
     let tiles = decode_all(&prep, out.path());
     let (borders, _) = assert_no_seams(&tiles);
     assert!(borders > 2000, "{borders}");
@@ -127,8 +127,8 @@ fn unchecked_tiles_are_the_checked_tiles() {
     let prep = Prepared::new(&lat, &TilerOptions::DEFAULT).unwrap();
     let opts = PyramidOptions::DEFAULT.with_gzip(true);
     for t in prep.tiles() {
-        let checked = make_tile(&prep, t, &opts).unwrap();
-        let fast = make_tile(&prep, t, &opts.with_check(false)).unwrap();
+        let checked = make_tile(&prep, t, &opts, None).unwrap();
+        let fast = make_tile(&prep, t, &opts.with_check(false), None).unwrap();
         assert_eq!(checked.bytes, fast.bytes, "{t}");
         assert_eq!(
             (checked.triangles, checked.vertices),
@@ -145,21 +145,21 @@ fn resume_skips_force_redoes_and_changed_settings_are_refused() {
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(8))).unwrap();
     let prep = Prepared::new(&lat, &TilerOptions::DEFAULT).unwrap();
     let out = tempfile::tempdir().unwrap();
-    let first = write_pyramid(&prep, out.path(), &PyramidOptions::DEFAULT, &|_| {}).unwrap();
+    let first = write_pyramid(&prep, out.path(), &PyramidOptions::DEFAULT, None, &|_| {}).unwrap();
     let victim = tile_path(out.path(), prep.tiles().last().unwrap());
     std::fs::remove_file(&victim).unwrap();
-    let again = write_pyramid(&prep, out.path(), &PyramidOptions::DEFAULT, &|_| {}).unwrap();
+    let again = write_pyramid(&prep, out.path(), &PyramidOptions::DEFAULT, None, &|_| {}).unwrap();
     assert_eq!((again.written(), again.skipped()), (1, first.written() - 1));
     assert!(victim.is_file());
     let forced = PyramidOptions::DEFAULT.with_force(true);
     assert_eq!(
-        write_pyramid(&prep, out.path(), &forced, &|_| {})
+        write_pyramid(&prep, out.path(), &forced, None, &|_| {})
             .unwrap()
             .written(),
         first.written()
     );
     let gz = PyramidOptions::DEFAULT.with_gzip(true);
-    let err = write_pyramid(&prep, out.path(), &gz, &|_| {}).unwrap_err();
+    let err = write_pyramid(&prep, out.path(), &gz, None, &|_| {}).unwrap_err();
     assert!(matches!(err, PyramidError::Changed { .. }), "{err}");
     assert!(err.to_string().contains("--force"));
     // No temporary file is left behind.
@@ -190,7 +190,7 @@ fn unwritable_output_names_the_path() {
     let prep = Prepared::new(&lat, &TilerOptions::DEFAULT).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let file = common::write_file(dir.path(), "not-a-dir", b"x");
-    let err = write_pyramid(&prep, &file, &PyramidOptions::DEFAULT, &|_| {}).unwrap_err();
+    let err = write_pyramid(&prep, &file, &PyramidOptions::DEFAULT, None, &|_| {}).unwrap_err();
     assert!(err.to_string().contains("not-a-dir"), "{err}");
 }
 

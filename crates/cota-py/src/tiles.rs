@@ -208,7 +208,7 @@ pub(crate) fn tiles<'py>(
                     .swap_remove(i as usize);
                 write_shard(&prep, &out, &opts, &part, None, &|_| {})
             }
-            None => write_pyramid(&prep, &out, &opts, &|_| {}),
+            None => write_pyramid(&prep, &out, &opts, None, &|_| {}),
         }
         .map_err(errors::write)?;
         Ok((prep.tile_count(), report, None))

@@ -70,7 +70,7 @@ async fn tiles_on_demand_are_the_pyramid_s_tiles() {
     // The same pyramid written by `cota tiles`' writer, and served from it.
     let dir = tempfile::tempdir().unwrap();
     let prep = src.prepared();
-    write_pyramid(prep, dir.path(), &OPTIONS, &|_| {}).unwrap();
+    write_pyramid(prep, dir.path(), &OPTIONS, None, &|_| {}).unwrap();
     let from_dir =
         router(common::state().with_tiles(Arc::new(DirTileSource::open(dir.path()).unwrap())));
     let (_, _, b) = get(&from_dir, "/tiles/layer.json").await;

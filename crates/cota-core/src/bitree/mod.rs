@@ -70,6 +70,7 @@
 //! `bench/README.md`.
 
 mod by_level;
+pub(crate) mod closure;
 mod coarse;
 mod error;
 pub mod error_code;

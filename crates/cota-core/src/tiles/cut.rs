@@ -28,6 +28,8 @@ use super::error::TilesError;
 use super::lattice::Lattice;
 use super::plan::{children_in, plan_with, LatticeStats, TileRange, TilerOptions, ZoomPlan};
 use super::scheme::{GeographicScheme, TileId};
+use crate::bitree::closure::max_closure;
+use crate::bitree::error_code::{decode, SplitRule};
 use crate::bitree::Bitree;
 use crate::grid::metres_per_degree;
 use crate::hierarchy::{orient_up, Pt, Tri};
@@ -88,6 +90,11 @@ pub struct Prepared<'l> {
     lattice: &'l Lattice,
     tree: Bitree<'l>,
     cap: Cap,
+    /// Per stored point, the code of the closure of the source's residuals
+    /// ([`super::fit`], `bitree::closure`).
+    dev: Vec<u16>,
+    /// The same closure above the window's bitree.
+    dev_cap: Cap,
     zooms: Vec<ZoomPlan>,
     bound: DrawnBound,
     /// Per zoom of `zooms`, the rules per level ([`super::drawn`]).
@@ -107,7 +114,7 @@ pub(crate) fn rules_of(
         f64::from(stats.hi_m),
         stats.max_step_m,
     ];
-    let bound = DrawnBound::new(scheme, window, range, &stats.levels, stats.residual_m);
+    let bound = DrawnBound::new(scheme, window, range, &stats.levels);
     let rules = zooms.iter().map(|p| bound.rules(p.threshold_m)).collect();
     (bound, rules)
 }
@@ -133,11 +140,15 @@ impl<'l> Prepared<'l> {
         let zooms = plan_with(lattice.frame(), &stats, opts)?;
         let tree = Bitree::build(lattice.grid())?;
         let cap = Cap::build(lattice, &tree);
+        let dev = max_closure(tree.hierarchy(), lattice.near_codes());
+        let dev_cap = Cap::build_closure(lattice, &dev);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), &stats, &zooms);
         Ok(Prepared {
             lattice,
             tree,
             cap,
+            dev,
+            dev_cap,
             zooms,
             bound,
             rules,
@@ -165,11 +176,14 @@ impl<'l> Prepared<'l> {
         stats: &LatticeStats,
     ) -> Result<Self, TilesError> {
         let tree = Bitree::build(lattice.grid())?;
+        let dev = max_closure(tree.hierarchy(), lattice.near_codes());
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), stats, &zooms);
         Ok(Prepared {
             lattice,
             tree,
             cap: Cap::default(),
+            dev,
+            dev_cap: Cap::default(),
             zooms,
             bound,
             rules,
@@ -208,12 +222,13 @@ impl<'l> Prepared<'l> {
             && hi(y, w[3]) <= st[3]
     }
 
-    /// The window bitree's code of the split point `m` (stored by a part).
-    pub(crate) fn code_at(&self, m: Pt) -> u16 {
+    /// The window bitree's code of the split point `m` (stored by a part),
+    /// and the code of its residuals' closure.
+    pub(crate) fn code_at(&self, m: Pt) -> (u16, u16) {
         let [x0, y0, _, _] = self.lattice.stored();
         let w = self.lattice.grid().width();
         let i = (u64::from(m[1]) - y0) as usize * w + (u64::from(m[0]) - x0) as usize;
-        self.tree.error_codes()[i]
+        (self.tree.error_codes()[i], self.dev[i])
     }
 
     /// The lattice.
@@ -317,7 +332,10 @@ impl<'l> Prepared<'l> {
         let size = t.a[0].abs_diff(t.b[0]).max(t.a[1].abs_diff(t.b[1]));
         let top = self.lattice.scheme().cells_at(self.lattice.align_zoom());
         if u64::from(size) > top {
-            return f64::from(self.cap.error(m)) > f64::from(rule.threshold);
+            return match less(rule, self.dev_cap.error(m)) {
+                None => true,
+                Some(rule) => f64::from(self.cap.error(m)) > f64::from(rule.threshold),
+            };
         }
         // Beyond the window every error is 0; a part holds the split points
         // its tiles read ([`Prepared::holds`]).
@@ -327,8 +345,11 @@ impl<'l> Prepared<'l> {
             return false;
         }
         let w = self.lattice.grid().width();
-        self.tree
-            .splits_index((y - y0) as usize * w + (x - x0) as usize, &rule)
+        let i = (y - y0) as usize * w + (x - x0) as usize;
+        match less(rule, decode(self.dev[i])) {
+            None => true,
+            Some(rule) => self.tree.splits_index(i, &rule),
+        }
     }
 
     /// The leaves as a mesh in tile coordinates, vertices in first-use order.
@@ -359,6 +380,18 @@ impl<'l> Prepared<'l> {
     fn water(&self, o: [u64; 2], cells: u64) -> WaterMask {
         water_of(o, cells, |_, x, y| self.lattice.height_at(x, y) <= 0.0)
     }
+}
+
+/// `rule` with its threshold lowered by `dev_m` (a split point's closure of
+/// the source's residuals) and rounded down to a code value; `None` when
+/// nothing is left (the point always splits).
+#[inline]
+pub(crate) fn less(rule: SplitRule, dev_m: f32) -> Option<SplitRule> {
+    if dev_m <= 0.0 {
+        return Some(rule);
+    }
+    let t = f64::from(rule.threshold) - f64::from(dev_m);
+    (t >= 0.0).then(|| SplitRule::at_code(SplitRule::new(t).floor))
 }
 
 /// The leaves under the square with north-west corner `o` and side `cells`,

@@ -275,20 +275,17 @@ fn finest_from_steps(levels: &LevelStats, [ex, ey]: [f64; 2], g: f64) -> LevelSt
 pub struct DrawnBound {
     inside_m: Vec<f64>,
     outside_m: Vec<f64>,
-    residual_m: f64,
 }
 
 impl DrawnBound {
     /// The bound for a lattice of `scheme` over `window`, whose heights lie
     /// in `lo_m..=hi_m` with steps of at most `max_step_m` (`G` of
-    /// [`super::plan`]), with per-level `levels` and the fitted lattice's
-    /// largest residual `residual_m` at the source's samples.
+    /// [`super::plan`]), with per-level `levels`.
     pub fn new(
         scheme: &GeographicScheme,
         window: [u64; 4],
         [lo_m, hi_m, max_step_m]: [f64; 3],
         levels: &LevelStats,
-        residual_m: f64,
     ) -> DrawnBound {
         let kappa = scheme.cell_deg().to_radians();
         let r_in = A_M * A_M / B_M + hi_m.max(0.0);
@@ -332,18 +329,17 @@ impl DrawnBound {
         DrawnBound {
             inside_m,
             outside_m,
-            residual_m: residual_m.max(0.0),
         }
     }
 
     /// What a split point of level `k` must leave below its zoom's threshold
-    /// for the drawn triangle and the source: `c(k)` plus the fitted
-    /// lattice's residual inside the window, `c(k)` of the ellipsoid alone
-    /// beyond it.
+    /// for the drawn triangle: `c(k)` inside the window, `c(k)` of the
+    /// ellipsoid alone beyond it. (The source's own residuals are left per
+    /// split point, see [`super::fit`].)
     pub fn slack_m(&self, k: usize, inside: bool) -> f64 {
         let k = k.min(LEVELS - 1);
         if inside {
-            self.inside_m[k] + self.residual_m
+            self.inside_m[k]
         } else {
             self.outside_m[k]
         }
@@ -508,7 +504,7 @@ mod test {
                 let t = super::super::cap::square_tris(x0 / s, y0 / s, s).1[0];
                 let stats = level_stats(&scheme, region, [s, s], &h);
                 let lo_hi = [-2000.0, 4000.0, 2.0 * g];
-                let b = DrawnBound::new(&scheme, region, lo_hi, &stats, 0.0);
+                let b = DrawnBound::new(&scheme, region, lo_hi, &stats);
                 let c = b.slack_m(level_key(&t), true);
                 let g = [t.a, t.b, t.c].map(|q| {
                     let (x, y) = (u64::from(q[0]), u64::from(q[1]));
@@ -551,7 +547,6 @@ mod test {
             [0, 0, 10, 10],
             [0.0, 0.0, 0.0],
             &LevelStats::default(),
-            0.0,
         );
         // A root tile's halves (k = 37) sag by thousands of kilometres.
         assert!(b.slack_m(37, false) > 1e6);

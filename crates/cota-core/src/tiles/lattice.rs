@@ -30,7 +30,8 @@
 use rayon::prelude::*;
 
 use super::error::TilesError;
-use super::scheme::GeographicScheme;
+use super::fit::{fit, Placement, FIT_MARGIN};
+use super::scheme::{ErrorSchedule, GeographicScheme};
 use crate::grid::{Crs, GeoRef, HeightGrid, PixelIs, MAX_SAMPLES};
 
 /// The alignment zoom is the coarsest whose window is at most this many
@@ -47,6 +48,10 @@ pub struct LatticeOptions {
     /// Lattice cells across a tile at the maximum zoom, a power of two from 2
     /// to 4096. Default: 64 (the 65 samples of cesium-terrain-builder's tiles).
     pub tile_cells: u32,
+    /// The error schedule of the pyramid: the lattice is fitted to the
+    /// source's samples down to half its bound at the maximum zoom
+    /// ([`super::fit`]). Default: [`ErrorSchedule::DEFAULT`].
+    pub error: ErrorSchedule,
 }
 
 impl LatticeOptions {
@@ -54,7 +59,14 @@ impl LatticeOptions {
     pub const DEFAULT: LatticeOptions = LatticeOptions {
         max_zoom: None,
         tile_cells: 64,
+        error: ErrorSchedule::DEFAULT,
     };
+
+    /// Sets [`LatticeOptions::error`].
+    pub const fn with_error(mut self, e: ErrorSchedule) -> Self {
+        self.error = e;
+        self
+    }
 
     /// Sets [`LatticeOptions::max_zoom`].
     pub const fn with_max_zoom(mut self, z: Option<u8>) -> Self {
@@ -84,6 +96,9 @@ pub struct Lattice {
     grid: HeightGrid,
     origin: [u64; 2],
     residual_m: f64,
+    /// Per stored point, the code of the largest residual of the source's
+    /// samples in the four cells around it ([`super::fit`]).
+    near_codes: Vec<u16>,
 }
 
 /// The window of a footprint at one alignment zoom: `[x0, y0, x1, y1]`
@@ -109,6 +124,9 @@ pub struct LatticeFrame {
     pub source_georef: GeoRef,
     /// The whole source's size in samples, `[width, height]`.
     pub source_size: [usize; 2],
+    /// The residual the fit aims for at the source's samples, metres
+    /// ([`super::fit`]).
+    pub fit_m: f64,
 }
 
 impl LatticeFrame {
@@ -150,6 +168,7 @@ impl LatticeFrame {
         let scheme = scheme_for(g, opts)?;
         let footprint = footprint(g, size, &scheme)?;
         let (align_zoom, window) = choose_window(&scheme, footprint);
+        let fit_m = opts.error.max_error_m(scheme.max_zoom, scheme.max_zoom) / 2.0;
         Ok(LatticeFrame {
             scheme,
             footprint,
@@ -157,13 +176,26 @@ impl LatticeFrame {
             align_zoom,
             source_georef: g.clone(),
             source_size: size,
+            fit_m,
         })
     }
 
-    /// The whole source's columns and rows that resampling `region` reads:
-    /// `[c0, r0, c1, r1]` inclusive, `None` when it reads none (all 0 m).
+    /// `region` grown by what its fit reads ([`FIT_MARGIN`]), in the window.
+    fn fit_region(&self, region: [u64; 4]) -> [u64; 4] {
+        let w = self.window;
+        [
+            region[0].saturating_sub(FIT_MARGIN).max(w[0]),
+            region[1].saturating_sub(FIT_MARGIN).max(w[1]),
+            (region[2] + FIT_MARGIN).min(w[2]),
+            (region[3] + FIT_MARGIN).min(w[3]),
+        ]
+    }
+
+    /// The whole source's columns and rows that resampling `region` reads
+    /// (with the fit's margin): `[c0, r0, c1, r1]` inclusive, `None` when it
+    /// reads none (all 0 m).
     pub fn source_span(&self, region: [u64; 4]) -> Option<[usize; 4]> {
-        let (cols, rows) = axes(self, region);
+        let (cols, rows) = axes(self, self.fit_region(region));
         let (c0, c1) = read_span(&cols)?;
         let (r0, r1) = read_span(&rows)?;
         Some([c0, r0, c1, r1])
@@ -245,7 +277,7 @@ impl Lattice {
                 height: h,
             });
         }
-        let heights = fill(frame, source, region)?;
+        let (heights, near, residual_m) = fitted(frame, source, region)?;
         let d = frame.scheme.cell_deg();
         let georef = GeoRef {
             crs: Crs::WGS84,
@@ -262,7 +294,8 @@ impl Lattice {
             frame: frame.clone(),
             grid,
             origin: [region[0], region[1]],
-            residual_m: 0.0,
+            residual_m,
+            near_codes: crate::bitree::closure::codes_of(&near),
         })
     }
 
@@ -270,6 +303,12 @@ impl Lattice {
     /// metres: what the lattice's own surface leaves of the source.
     pub fn residual_m(&self) -> f64 {
         self.residual_m
+    }
+
+    /// Per stored point (row-major), the error code of the largest residual
+    /// of the source's samples in the four cells around it.
+    pub(crate) fn near_codes(&self) -> &[u16] {
+        &self.near_codes
     }
 
     /// The frame (scheme, footprint, window, source mapping).
@@ -561,6 +600,74 @@ fn read_span(axis: &[Axis]) -> Option<(usize, usize)> {
     let lo = read.clone().map(|a| a.i0).min()?;
     let hi = read.map(|a| a.i0 + 1).max()?;
     Some((lo, hi))
+}
+
+/// The heights of `region`, bilinear then fitted to the source's samples
+/// over the region grown by the fit's margin ([`super::fit`]), and the
+/// largest residual left at the samples in `region`.
+fn fitted(
+    frame: &LatticeFrame,
+    source: SourcePart<'_>,
+    region: Window,
+) -> Result<(Vec<f32>, Vec<f32>, f64), TilesError> {
+    let grown = frame.fit_region(region);
+    let mut heights = fill(frame, source, grown)?;
+    let (w, h) = (
+        (grown[2] - grown[0] + 1) as usize,
+        (grown[3] - grown[1] + 1) as usize,
+    );
+    let at = placement(frame, source, grown);
+    let f = fit(&mut heights, [w, h], &at, source, frame.fit_m, region);
+    let [ox, oy] = [
+        (region[0] - grown[0]) as usize,
+        (region[1] - grown[1]) as usize,
+    ];
+    let rw = (region[2] - region[0] + 1) as usize;
+    let crop = |v: &[f32]| -> Vec<f32> {
+        (0..=(region[3] - region[1]) as usize)
+            .flat_map(|r| {
+                let start = (oy + r) * w + ox;
+                v[start..start + rw].iter().copied()
+            })
+            .collect()
+    };
+    Ok((crop(&heights), crop(&f.near_m), f.residual_m))
+}
+
+/// Where the samples of `source` fall in the cells of `region`: the
+/// columns and rows (of the part) whose positions lie inside it.
+fn placement(frame: &LatticeFrame, source: SourcePart<'_>, region: Window) -> Placement {
+    let (g, d) = (&frame.source_georef, frame.scheme.cell_deg());
+    let [ox, oy] = source.offset;
+    let (w, h) = (
+        (region[2] - region[0]) as f64,
+        (region[3] - region[1]) as f64,
+    );
+    let cols = (0..source.grid.width())
+        .map(|c| {
+            let (lon, _) = g.sample_xy((ox + c) as f64, 0.0);
+            (c, (lon + 180.0) / d - region[0] as f64)
+        })
+        .filter(|p| (0.0..=w).contains(&p.1))
+        .collect::<Vec<_>>();
+    let rows = (0..source.grid.height())
+        .map(|r| {
+            let (_, lat) = g.sample_xy(0.0, (oy + r) as f64);
+            (r, (90.0 - lat) / d - region[1] as f64)
+        })
+        .filter(|p| (0.0..=h).contains(&p.1))
+        .collect::<Vec<_>>();
+    // In increasing position (grids whose rows run south, or columns west).
+    let by_position = |mut v: Vec<(usize, f64)>| {
+        v.sort_by(|a, b| a.1.total_cmp(&b.1));
+        v
+    };
+    let (cols, rows) = (by_position(cols), by_position(rows));
+    Placement {
+        cols,
+        rows,
+        origin: [region[0], region[1]],
+    }
 }
 
 /// The heights of `region`: bilinear inside the footprint, the edge value

@@ -26,7 +26,7 @@ use std::sync::Mutex;
 
 use super::cap::{own_rows, square_tris, t_heights, Cap};
 use super::cut::rules_of;
-use super::cut::{in_window, mesh_of_leaves, walk_leaves, water_of, TileMesh, WaterMask, UP};
+use super::cut::{in_window, less, mesh_of_leaves, walk_leaves, water_of, TileMesh, WaterMask, UP};
 use super::drawn::{LevelRule, ZoomRules};
 use super::error::TilesError;
 use super::lattice::LatticeFrame;
@@ -50,9 +50,11 @@ pub struct CoarseHierarchy {
     fine: HashMap<u64, (u32, f32)>,
     /// The band squares' centres and the window bitree's levels above:
     /// their 16-bit codes (the rules' thresholds are code values, so a code
-    /// decides exactly, see [`super::drawn::DrawnBound::rules`]).
-    coded: HashMap<u64, u16>,
+    /// decides exactly, see [`super::drawn::DrawnBound::rules`]) and their
+    /// closures' of the source's residuals.
+    coded: HashMap<u64, (u16, u16)>,
     cap: Cap,
+    dev_cap: Cap,
     normals: HashMap<(u64, u8), [f32; 3]>,
     water: HashMap<TileId, Vec<u8>>,
 }
@@ -100,12 +102,14 @@ impl CoarseHierarchy {
             fine: HashMap::default(),
             coded: HashMap::default(),
             cap: Cap::default(),
+            dev_cap: Cap::default(),
             normals: HashMap::default(),
             water: HashMap::default(),
         };
         let own = h.absorb(partials);
         h.bitree_levels(&own)?;
-        h.cap = h.cap_levels(&own)?;
+        h.cap = h.cap_levels(&own, false)?;
+        h.dev_cap = h.cap_levels(&own, true)?;
         Ok(h)
     }
 
@@ -117,8 +121,8 @@ impl CoarseHierarchy {
             for f in p.fine {
                 let centre = f.at.map(u64::from).map(|v| v % t == t / 2);
                 if centre == [true, true] {
-                    let slot = self.coded.entry(key(f.at)).or_insert(0);
-                    *slot = (*slot).max(f.code);
+                    let slot = self.coded.entry(key(f.at)).or_insert((0, 0));
+                    *slot = (slot.0.max(f.code), slot.1.max(f.dev));
                 }
                 let slot = self.fine.entry(key(f.at)).or_insert((0, f.height_m));
                 slot.0 |= f.splits;
@@ -177,29 +181,34 @@ impl CoarseHierarchy {
     /// Adds triangle `tri`'s own error and its children's to its split point.
     fn join(&mut self, own: &HashMap<u64, f32>, tri: &Tri) -> Result<(), TilesError> {
         let e = own.get(&key(tri.mid())).copied().unwrap_or(0.0);
-        let mut code = encode_up(e);
+        let (mut code, mut dev) = (encode_up(e), 0u16);
         let (c0, c1) = tri.children();
         for c in [c0.mid(), c1.mid()] {
-            let cc = self
+            let (cc, cd) = self
                 .coded
                 .get(&key(c))
                 .copied()
                 .ok_or_else(|| incomplete(format!("the split point {c:?}")))?;
             code = code.max(cc);
+            dev = dev.max(cd);
         }
-        let slot = self.coded.entry(key(tri.mid())).or_insert(0);
-        *slot = (*slot).max(code);
+        let slot = self.coded.entry(key(tri.mid())).or_insert((0, 0));
+        *slot = (slot.0.max(code), slot.1.max(dev));
         Ok(())
     }
 
-    /// The coarse levels above the window bitree's: the cap.
-    fn cap_levels(&self, own: &HashMap<u64, f32>) -> Result<Cap, TilesError> {
+    /// The coarse levels above the window bitree's: the cap of the errors,
+    /// or with `dev` the closure of the residuals.
+    fn cap_levels(&self, own: &HashMap<u64, f32>, dev: bool) -> Result<Cap, TilesError> {
         let s = self.frame.scheme;
         let top = s.cells_at(self.frame.align_zoom);
         let window = self.frame.window;
         let missing: Mutex<Option<Pt>> = Mutex::new(None);
         let corners = &self.corners;
         let own_of = |tri: &Tri| {
+            if dev {
+                return 0.0;
+            }
             let inside = own.get(&key(tri.mid())).copied().unwrap_or(0.0);
             let z = t_heights(tri, |x, y| corners.height(x, y).unwrap_or(0.0));
             inside.max(round_up_f32(own_rows(window, tri, z, true, None)))
@@ -210,7 +219,7 @@ impl CoarseHierarchy {
                 return 0.0;
             }
             match self.coded.get(&key(m)) {
-                Some(&code) => decode(code),
+                Some(&(code, d)) => decode(if dev { d } else { code }),
                 None => {
                     if let Ok(mut g) = missing.lock() {
                         *g = Some(m);
@@ -251,7 +260,10 @@ impl CoarseHierarchy {
         let size = tri.a[0].abs_diff(tri.b[0]).max(tri.a[1].abs_diff(tri.b[1]));
         let s = self.frame.scheme;
         if u64::from(size) > s.cells_at(self.frame.align_zoom) {
-            return f64::from(self.cap.error(m)) > f64::from(rule.threshold);
+            return match less(rule, self.dev_cap.error(m)) {
+                None => true,
+                Some(rule) => f64::from(self.cap.error(m)) > f64::from(rule.threshold),
+            };
         }
         let [x0, y0, x1, y1] = self.frame.window;
         let (x, y) = (u64::from(m[0]), u64::from(m[1]));
@@ -259,7 +271,10 @@ impl CoarseHierarchy {
             return false;
         }
         if u64::from(size) > s.cells_at(self.band) {
-            self.coded.get(&key(m)).is_some_and(|&c| c > rule.floor)
+            let Some(&(code, dev)) = self.coded.get(&key(m)) else {
+                return false;
+            };
+            less(rule, decode(dev)).is_none_or(|r| code > r.floor)
         } else {
             self.fine.get(&key(m)).is_some_and(|f| f.0 & (1 << i) != 0)
         }

@@ -32,6 +32,7 @@ pub mod cap;
 pub mod cut;
 pub mod drawn;
 mod error;
+pub mod fit;
 pub mod lattice;
 pub mod merge;
 pub mod partial;

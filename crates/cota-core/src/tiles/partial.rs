@@ -124,6 +124,9 @@ pub struct FinePoint {
     pub splits: u32,
     /// Its 16-bit error code (band squares' centres; 0 for the others).
     pub code: u16,
+    /// The code of its closure of the source's residuals (band squares'
+    /// centres; 0 for the others).
+    pub dev: u16,
     /// The lattice's height there, metres.
     pub height_m: f32,
 }
@@ -267,10 +270,12 @@ fn fine_points(
             let sq = [[x0, y0], [x0 + s, y0], [x0, y0 + s], [x0 + s, y0 + s]];
             let halves = square_halves(sq, (x / t + y / t).is_multiple_of(2));
             let centre = halves[0].mid();
+            let (code, dev) = prep.code_at(centre);
             let mut out = vec![FinePoint {
                 at: centre,
                 splits: mask(&halves[0]),
-                code: prep.code_at(centre),
+                code,
+                dev,
                 height_m: lat.height_at(u64::from(centre[0]), u64::from(centre[1])),
             }];
             let mut stack: Vec<Tri> = halves.to_vec();
@@ -286,6 +291,7 @@ fn fine_points(
                         at: m,
                         splits: mask(&tri),
                         code: 0,
+                        dev: 0,
                         height_m: lat.height_at(u64::from(m[0]), u64::from(m[1])),
                     });
                 }

@@ -242,6 +242,7 @@ fn encode_partial(h: &PartialHeader, p: &CoarsePartial) -> Vec<u8> {
         b.extend(f.at[1].to_le_bytes());
         b.extend(f.splits.to_le_bytes());
         b.extend(f.code.to_le_bytes());
+        b.extend(f.dev.to_le_bytes());
         b.extend(f.height_m.to_le_bytes());
     }
     b.extend((p.own.len() as u64).to_le_bytes());
@@ -296,13 +297,14 @@ fn decode_partial(r: &mut Reader<'_>) -> Result<(PartialHeader, CoarsePartial), 
         });
     }
     let mut p = CoarsePartial::default();
-    for _ in 0..r.count(18)? {
+    for _ in 0..r.count(20)? {
         let at = [r.u32()?, r.u32()?];
-        let (splits, code, height_m) = (r.u32()?, r.u16()?, r.f32()?);
+        let (splits, code, dev, height_m) = (r.u32()?, r.u16()?, r.u16()?, r.f32()?);
         p.fine.push(FinePoint {
             at,
             splits,
             code,
+            dev,
             height_m,
         });
     }
@@ -482,7 +484,7 @@ pub fn write_reduced_coarse(
                 0
             } else {
                 let tile = hier.cut(t, opts.extensions.normals, opts.extensions.watermask)?;
-                let made = finish_tile(tile, &opts, None)?;
+                let made = finish_tile(tile, &opts, None, None)?;
                 write_file_atomically(&path, &made.bytes, force)?;
                 1
             };

@@ -424,6 +424,92 @@ pub enum Reference {
     Skip,
 }
 
+impl SourceGrid<'_> {
+    /// The source's bilinear surface at WGS 84 `(lon, lat)`: `None` outside
+    /// its sample-centre rectangle or next to a void.
+    pub fn bilinear(&self, lon: f64, lat: f64) -> Option<f64> {
+        let [x, y] = self.transform.from_lonlat(lon, lat)?;
+        let g = self.grid.georef();
+        let (x0, y0) = g.sample_xy(0.0, 0.0);
+        let (c, r) = ((x - x0) / g.pixel_x, (y - y0) / g.pixel_y);
+        let (w, h) = (
+            self.grid.width() as f64 - 1.0,
+            self.grid.height() as f64 - 1.0,
+        );
+        if !(0.0..=w).contains(&c) || !(0.0..=h).contains(&r) {
+            return None;
+        }
+        let (i, j) = (
+            (c as usize).min(self.grid.width() - 2),
+            (r as usize).min(self.grid.height() - 2),
+        );
+        let (fx, fy) = (c - i as f64, r - j as f64);
+        let z = |a: usize, b: usize| f64::from(self.grid.get(a, b));
+        let top = z(i, j) + (z(i + 1, j) - z(i, j)) * fx;
+        let bottom = z(i, j + 1) + (z(i + 1, j + 1) - z(i, j + 1)) * fx;
+        let v = top + (bottom - top) * fy;
+        (!v.is_nan()).then_some(v)
+    }
+}
+
+/// The reference of `sources` at WGS 84 `(lon, lat)`: the first source's
+/// bilinear surface that holds the point; the ellipsoid where the point is
+/// farther than `margin_deg` degrees from every rectangle of `footprints`
+/// (`[west, south, east, north]`); nothing to compare in between.
+pub fn reference_at(
+    sources: &[SourceGrid<'_>],
+    footprints: &[[f64; 4]],
+    margin_deg: f64,
+    lon: f64,
+    lat: f64,
+) -> Reference {
+    if let Some(z) = sources.iter().find_map(|s| s.bilinear(lon, lat)) {
+        return Reference::Data(z);
+    }
+    let near = footprints.iter().any(|f| {
+        lon >= f[0] - margin_deg
+            && lon <= f[2] + margin_deg
+            && lat >= f[1] - margin_deg
+            && lat <= f[3] + margin_deg
+    });
+    if near {
+        Reference::Skip
+    } else {
+        Reference::Ellipsoid
+    }
+}
+
+/// What tiles are checked against as drawn: the source's samples, and the
+/// reference surface (the source's bilinear surface in the data, the
+/// ellipsoid far from it).
+pub struct Against<'a> {
+    /// The source's samples.
+    pub samples: SourceSamples<'a>,
+    /// The reference at a longitude and latitude.
+    pub reference: Box<dyn Fn(f64, f64) -> Reference + Sync + 'a>,
+}
+
+impl<'a> Against<'a> {
+    /// Against `sources`, whose data lie in `footprints` (`[west, south,
+    /// east, north]` degrees): the ellipsoid is checked farther than
+    /// `margin_deg` from them.
+    pub fn new(sources: Vec<SourceGrid<'a>>, footprints: Vec<[f64; 4]>, margin_deg: f64) -> Self {
+        let samples = SourceSamples::new(&sources);
+        let reference = Box::new(move |lon: f64, lat: f64| {
+            reference_at(&sources, &footprints, margin_deg, lon, lat)
+        });
+        Against { samples, reference }
+    }
+}
+
+impl std::fmt::Debug for Against<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Against")
+            .field("samples", &self.samples)
+            .finish_non_exhaustive()
+    }
+}
+
 /// What [`check_random`] found.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct RandomCheck {

@@ -67,6 +67,7 @@ impl ShardFrame {
             "source": [bits(g.origin_x), bits(g.origin_y), bits(g.pixel_x), bits(g.pixel_y)],
             "source_area": matches!(g.pixel_is, PixelIs::Area),
             "source_size": f.source_size,
+            "fit_m": bits(f.fit_m),
             "stats": [bits(f64::from(self.stats.lo_m)), bits(f64::from(self.stats.hi_m)), bits(self.stats.max_step_m), bits(self.stats.residual_m)],
             "level_slopes": self.stats.levels.slope.iter().map(|v| bits(*v)).collect::<Vec<_>>(),
             "level_spans": self.stats.levels.span_m.iter().map(|v| bits(*v)).collect::<Vec<_>>(),
@@ -136,6 +137,7 @@ impl ShardFrame {
                     usize::try_from(size.first().copied()?).ok()?,
                     usize::try_from(size.get(1).copied()?).ok()?,
                 ],
+                fit_m: unbits(&v["fit_m"])?,
             },
             stats: LatticeStats {
                 lo_m: st[0] as f32,

@@ -30,6 +30,7 @@ use cota_core::tiles::{Prepared, TileId, TileMesh, TilesError};
 use rayon::prelude::*;
 
 use super::decode::{decode, DecodeError};
+use super::drawn::{check_random, check_samples, Against, DrawnTile};
 use super::layer::{layer_json, run_manifest};
 use super::quantized_mesh::{encode_tile, EncodeError, TileExtensions};
 use super::seams::edge_lists_match;
@@ -72,6 +73,21 @@ pub enum PyramidError {
         tile: TileId,
         /// The violations.
         source: CheckError,
+    },
+    /// A decoded tile, drawn as the client draws it, is farther from the
+    /// source than its bound: a bug, reported rather than written.
+    #[error("tile {tile} as drawn is {got_m} m from the source at longitude {lon}, latitude {lat}, beyond its bound of {bound_m} m")]
+    Drawn {
+        /// The tile.
+        tile: TileId,
+        /// The error found, metres.
+        got_m: f64,
+        /// The bound, metres.
+        bound_m: f64,
+        /// Where, degrees.
+        lon: f64,
+        /// Where, degrees.
+        lat: f64,
     },
     /// A shard's record is missing or does not match the others.
     #[error("{path}: {message}")]
@@ -156,31 +172,44 @@ pub struct MadeTile {
     pub vertices: usize,
     /// The bound it meets, metres.
     pub max_error_m: f64,
-    /// The largest error measured on the decoded tile, metres; NaN when
-    /// [`PyramidOptions::check`] is off.
+    /// The largest error measured on the decoded tile at its lattice's
+    /// samples, metres; NaN when [`PyramidOptions::check`] is off.
     pub measured_error_m: f64,
+    /// The largest error of the tile as drawn (flat ECEF triangles, along
+    /// the normal) at the source's samples and on the ellipsoid far from
+    /// the data, metres; NaN when not checked against a source.
+    pub drawn_error_m: f64,
+    /// The largest deviation as drawn from the source's bilinear surface
+    /// at random points inside the data (between samples: reported, not
+    /// bounded), metres; NaN when not checked against a source.
+    pub between_m: f64,
 }
 
 /// Cuts, encodes and (with [`PyramidOptions::check`]) verifies one tile: the
-/// entry point for making tiles on demand from a prepared hierarchy.
+/// entry point for making tiles on demand from a prepared hierarchy. With
+/// `source` the check also draws the tile as a client does and measures it
+/// against the source's samples ([`super::drawn`]).
 ///
 /// # Errors
 /// [`PyramidError::Tiles`] for a tile outside the pyramid, and
-/// [`PyramidError::Encode`], [`PyramidError::Decode`] or
-/// [`PyramidError::Check`] when the tile is wrong (a bug: never written).
+/// [`PyramidError::Encode`], [`PyramidError::Decode`],
+/// [`PyramidError::Check`] or [`PyramidError::Drawn`] when the tile is
+/// wrong (a bug: never written).
 pub fn make_tile(
     prep: &Prepared<'_>,
     t: TileId,
     opts: &PyramidOptions,
+    source: Option<&Against<'_>>,
 ) -> Result<MadeTile, PyramidError> {
     let ext = opts.extensions;
     let tile = prep.cut(t, ext.normals, ext.watermask)?;
-    finish_tile(tile, opts, Some(&prep.region(t)))
+    finish_tile(tile, opts, Some(&prep.region(t)), source)
 }
 
 /// Encodes a cut tile and (with [`PyramidOptions::check`]) verifies it:
-/// decoded independently, its edge lists, and with `region` the one
-/// checker at every lattice sample of its square.
+/// decoded independently, its edge lists, with `region` the one checker at
+/// every lattice sample of its square, and with `source` as drawn against
+/// the source's samples.
 ///
 /// # Errors
 /// As [`make_tile`].
@@ -188,6 +217,7 @@ pub fn finish_tile(
     tile: TileMesh,
     opts: &PyramidOptions,
     region: Option<&Region<'_>>,
+    source: Option<&Against<'_>>,
 ) -> Result<MadeTile, PyramidError> {
     let (t, ext) = (tile.tile, opts.extensions);
     let raw =
@@ -199,6 +229,8 @@ pub fn finish_tile(
         vertices: tile.mesh.vertices.len(),
         max_error_m: tile.max_error_m,
         measured_error_m: f64::NAN,
+        drawn_error_m: f64::NAN,
+        between_m: f64::NAN,
         bytes,
     };
     if !opts.check {
@@ -212,25 +244,66 @@ pub fn finish_tile(
             source: DecodeError::Invalid("the edge lists do not hold the edges' vertices".into()),
         });
     }
-    let Some(region) = region else {
-        return Ok(MadeTile {
-            triangles: decoded.triangles.len(),
-            vertices: decoded.u.len(),
-            ..unchecked
-        });
-    };
-    let report = check_placed_mesh(
-        region,
-        &decoded.to_placed(tile.cells),
-        Some(tile.max_error_m),
-    )
-    .map_err(|source| PyramidError::Check { tile: t, source })?;
-    Ok(MadeTile {
+    let mut made = MadeTile {
         triangles: decoded.triangles.len(),
         vertices: decoded.u.len(),
-        measured_error_m: report.metrics.max_error_m,
         ..unchecked
-    })
+    };
+    if let Some(region) = region {
+        let report = check_placed_mesh(
+            region,
+            &decoded.to_placed(tile.cells),
+            Some(tile.max_error_m),
+        )
+        .map_err(|source| PyramidError::Check { tile: t, source })?;
+        made.measured_error_m = report.metrics.max_error_m;
+    }
+    if let Some(against) = source {
+        let [drawn, between] = check_drawn(&decoded, &tile, against)?;
+        made.drawn_error_m = drawn;
+        made.between_m = between;
+    }
+    Ok(made)
+}
+
+/// The decoded tile drawn as a client draws it, against the source's
+/// samples and, at random points, the ellipsoid far from the data:
+/// `[largest error, largest deviation between samples]`.
+fn check_drawn(
+    decoded: &super::decode::DecodedTile,
+    tile: &TileMesh,
+    against: &Against<'_>,
+) -> Result<[f64; 2], PyramidError> {
+    let drawn = DrawnTile::new(decoded, tile.rect_deg);
+    let at_samples = check_samples(&drawn, &against.samples);
+    let seed =
+        (u64::from(tile.tile.z) << 48) ^ (u64::from(tile.tile.x) << 24) ^ u64::from(tile.tile.y);
+    let random = check_random(&drawn, 4, seed, &*against.reference);
+    let bound = tile.max_error_m;
+    // Rounding slack relative to the heights and the Earth's radius.
+    let slack = 1e-6 * bound.max(1.0) + 1e-6;
+    if at_samples.max_error_m > bound + slack {
+        return Err(PyramidError::Drawn {
+            tile: tile.tile,
+            got_m: at_samples.max_error_m,
+            bound_m: bound,
+            lon: at_samples.at[0],
+            lat: at_samples.at[1],
+        });
+    }
+    if random.ellipsoid_m > bound + slack {
+        return Err(PyramidError::Drawn {
+            tile: tile.tile,
+            got_m: random.ellipsoid_m,
+            bound_m: bound,
+            lon: f64::NAN,
+            lat: f64::NAN,
+        });
+    }
+    Ok([
+        at_samples.max_error_m.max(random.ellipsoid_m),
+        random.data_m,
+    ])
 }
 
 fn gzip(raw: &[u8]) -> Vec<u8> {
@@ -262,9 +335,16 @@ pub struct ZoomReport {
     pub max_error_m: f64,
     /// The margin left for quantization, metres.
     pub margin_m: f64,
-    /// The largest error measured over its written tiles, metres; NaN when
-    /// they were not checked ([`PyramidOptions::check`] off).
+    /// The largest error measured over its written tiles at their
+    /// lattice's samples, metres; NaN when they were not checked
+    /// ([`PyramidOptions::check`] off).
     pub measured_error_m: f64,
+    /// The largest error as drawn against the source's samples (and the
+    /// ellipsoid far from the data), metres; NaN when not measured.
+    pub drawn_error_m: f64,
+    /// The largest deviation as drawn from the source's bilinear surface
+    /// between its samples, metres; NaN when not measured.
+    pub between_m: f64,
 }
 
 /// What [`write_pyramid`] did.
@@ -374,6 +454,8 @@ pub(crate) struct Outcome {
     triangles: u64,
     vertices: u64,
     measured: f64,
+    drawn: f64,
+    between: f64,
 }
 
 /// Writes every tile of `prep` under `out`, then `layer.json`;
@@ -386,11 +468,12 @@ pub fn write_pyramid(
     prep: &Prepared<'_>,
     out: &Path,
     opts: &PyramidOptions,
+    source: Option<&Against<'_>>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<PyramidReport, PyramidError> {
     let t0 = Instant::now();
     let tiles: Vec<TileId> = prep.tiles().collect();
-    let outcomes = write_tiles(prep, out, opts, &tiles, progress)?;
+    let outcomes = write_tiles(prep, out, opts, source, &tiles, progress)?;
     write_file_atomically(
         &out.join("layer.json"),
         layer_text(prep, opts).as_bytes(),
@@ -414,6 +497,7 @@ pub(crate) fn write_tiles(
     prep: &Prepared<'_>,
     out: &Path,
     opts: &PyramidOptions,
+    source: Option<&Against<'_>>,
     tiles: &[TileId],
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<Outcome>, PyramidError> {
@@ -429,7 +513,7 @@ pub(crate) fn write_tiles(
                     ..Outcome::default()
                 }
             } else {
-                let m = make_tile(prep, t, opts)?;
+                let m = make_tile(prep, t, opts, source)?;
                 write_file_atomically(&path, &m.bytes, opts.force)?;
                 Outcome {
                     zoom: t.z,
@@ -438,12 +522,23 @@ pub(crate) fn write_tiles(
                     triangles: m.triangles as u64,
                     vertices: m.vertices as u64,
                     measured: m.measured_error_m,
+                    drawn: m.drawn_error_m,
+                    between: m.between_m,
                 }
             };
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
             Ok(o)
         })
         .collect()
+}
+
+/// The larger of two measures; NaN (not measured) when either is.
+fn nan_max(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
 }
 
 /// The per-zoom report of the tiles' outcomes.
@@ -464,11 +559,9 @@ pub(crate) fn fold(prep: &Prepared<'_>, outcomes: &[Outcome]) -> Vec<ZoomReport>
                     r.triangles += o.triangles;
                     r.vertices += o.vertices;
                     // NaN (not checked) stays NaN: `f64::max` would drop it.
-                    r.measured_error_m = if o.measured.is_nan() {
-                        f64::NAN
-                    } else {
-                        r.measured_error_m.max(o.measured)
-                    };
+                    r.measured_error_m = nan_max(r.measured_error_m, o.measured);
+                    r.drawn_error_m = nan_max(r.drawn_error_m, o.drawn);
+                    r.between_m = nan_max(r.between_m, o.between);
                 } else {
                     r.skipped += 1;
                 }

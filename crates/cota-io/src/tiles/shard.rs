@@ -83,7 +83,7 @@ pub fn write_shard(
 ) -> Result<PyramidReport, PyramidError> {
     let t0 = Instant::now();
     let tiles: Vec<_> = shard.tiles().collect();
-    let outcomes = write_tiles(prep, out, opts, &tiles, progress)?;
+    let outcomes = write_tiles(prep, out, opts, None, &tiles, progress)?;
     if let Some(f) = frame {
         write_shard_partial(prep, out, f, shard.index, opts)?;
     }

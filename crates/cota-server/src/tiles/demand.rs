@@ -104,7 +104,7 @@ impl DemandTileSource {
 
     /// Makes tile `t` (cut, encoded, gzipped as the options say).
     fn make(&self, t: cota_core::tiles::TileId) -> std::result::Result<Tile, String> {
-        let m = make_tile(self.prepared(), t, &self.options).map_err(|e| e.to_string())?;
+        let m = make_tile(self.prepared(), t, &self.options, None).map_err(|e| e.to_string())?;
         Ok(Tile {
             gzip: self.options.gzip,
             etag: etag_of(&m.bytes),

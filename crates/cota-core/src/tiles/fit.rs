@@ -1,0 +1,274 @@
+//! The lattice fitted to the source's samples, so that the tiles' bound
+//! holds at every sample the user gave, not only at the lattice's points.
+//!
+//! Papers `000_ebf7e3a88dffd361.txt` §3.2 (a triangle's error over the
+//! samples it covers) and `001_49f2c365e8c41172.txt` (one hierarchy over a
+//! mosaic): the tiles' hierarchy lives on the tiling's lattice, whose points
+//! are not the source's samples (3″ SRTM samples fall between the 2.47″
+//! lattice points of zoom 12). A bilinear lattice cuts every peak and pit
+//! that falls between its points, and a finer lattice does not help: the
+//! cut halves with the spacing, and so does the bound of the zoom that uses
+//! it.
+//!
+//! # The design
+//! The lattice's unit-triangle surface `L` (the surface of a tile at error
+//! 0) is made to pass near every source sample `s`: with `s` in the unit
+//! triangle of corners `c_i` and barycentric weights `w_i`, the residual is
+//! `r(s) = h(s) − Σ w_i L(c_i)`. While `|r(s)| > τ` for some samples, each
+//! such sample asks its three corners for the least-norm correction that
+//! would zero it, `r(s) · w_i / Σ w_j²`; a round adds `ω = 0.7` times the
+//! sum of the requests to each corner (a damped Cimmino step of the
+//! Kaczmarz family, which converges for these local, nearly independent
+//! equations: the lattice has about 1.5 points per SRTM sample), for at
+//! most [`ROUNDS`] rounds. Then a tile within `thr` of the lattice is within
+//! `thr + max |r|` of the source at every sample: the tile's plane minus `L`
+//! is linear on each unit triangle, so at `s` it is at most its value at the
+//! corners, which the lattice check bounds. What is left, per lattice point
+//! the largest residual of the samples in the four cells around it
+//! ([`Fitted::near_m`]), enters each split point's threshold through its
+//! monotone closure over the hierarchy (`bitree::closure`): a triangle of
+//! lattice error `e` whose closure holds residuals up to `ρ` is within
+//! `e + ρ` of every source sample it covers.
+//!
+//! The tolerance `τ` is half the bound at the maximum zoom: only the samples
+//! the finest tiles could not honour are fitted (peaks and pits between
+//! lattice points), and the lattice stays the smooth bilinear surface
+//! elsewhere, so coarser tiles need no more triangles than before.
+//!
+//! # Parts agree with the whole
+//! A round reads only samples within a cell of the corners it changes, so
+//! after `R` rounds a lattice point depends only on samples within `2R + 2`
+//! cells: a part ([`super::Lattice::resample_part`]) is fitted over its
+//! region grown by [`FIT_MARGIN`] cells and cropped, and the requests are
+//! summed in the samples' row-major order, so its heights are the whole's
+//! bit for bit.
+//!
+//! # Runtime
+//! One pass over the region's samples for the residuals, then per round
+//! only the samples beyond `τ` and those next to the corners they moved.
+
+use super::lattice::SourcePart;
+
+/// The rounds of the fit.
+pub const ROUNDS: usize = 12;
+/// The damping of each round.
+const OMEGA: f64 = 0.7;
+/// Cells a part grows by to be fitted as the whole is.
+pub const FIT_MARGIN: u64 = 2 * ROUNDS as u64 + 4;
+
+/// The source's samples as seen from a region of the lattice: their
+/// positions in the region's cells along each axis (separable: the source
+/// is geographic, its samples on an affine grid).
+pub(crate) struct Placement {
+    /// Per source column in range: the column (in the part) and its
+    /// position in region cells.
+    pub cols: Vec<(usize, f64)>,
+    /// Per source row in range: the row (in the part) and its position.
+    pub rows: Vec<(usize, f64)>,
+    /// Global lattice column and row of the region's sample (0, 0).
+    pub origin: [u64; 2],
+}
+
+/// What [`fit`] left.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub(crate) struct Fitted {
+    /// The largest |residual| over the samples of the inner region, metres.
+    pub residual_m: f64,
+    /// Per region point, the largest |residual| over the samples in the
+    /// four cells around it (rounded up to `f32`), metres.
+    pub near_m: Vec<f32>,
+}
+
+/// The unit triangle under region position `(x, y)` of a region of width
+/// `w` whose global parity (`(x0 + y0)` even) is `even0`: its corners as
+/// indices into the region's heights and their weights.
+#[inline]
+fn unit_triangle(x: f64, y: f64, w: usize, h: usize, even0: bool) -> ([usize; 3], [f64; 3]) {
+    let i = (x.floor() as usize).min(w - 2);
+    let j = (y.floor() as usize).min(h - 2);
+    let (fx, fy) = (x - i as f64, y - j as f64);
+    let nw = j * w + i;
+    let (ne, sw, se) = (nw + 1, nw + w, nw + w + 1);
+    let even = ((i + j) % 2 == 0) == even0;
+    if even {
+        if fx >= fy {
+            ([nw, ne, se], [1.0 - fx, fx - fy, fy])
+        } else {
+            ([nw, sw, se], [1.0 - fy, fy - fx, fx])
+        }
+    } else if fx + fy <= 1.0 {
+        ([nw, ne, sw], [1.0 - fx - fy, fx, fy])
+    } else {
+        ([se, sw, ne], [fx + fy - 1.0, 1.0 - fx, 1.0 - fy])
+    }
+}
+
+/// Fits `heights` (a `w × h` region whose sample (0, 0) is global lattice
+/// `origin`) to the samples of `src` placed by `at` (see the module docs),
+/// down to residuals of `tau_m`; the residual is reported over the samples
+/// inside `inner` (global `[x0, y0, x1, y1]`).
+pub(crate) fn fit(
+    heights: &mut [f32],
+    [w, h]: [usize; 2],
+    at: &Placement,
+    src: SourcePart<'_>,
+    tau_m: f64,
+    inner: [u64; 4],
+) -> Fitted {
+    if w < 2 || h < 2 || at.cols.is_empty() || at.rows.is_empty() {
+        return Fitted {
+            residual_m: 0.0,
+            near_m: vec![0.0; w * h],
+        };
+    }
+    let even0 = (at.origin[0] + at.origin[1]).is_multiple_of(2);
+    let (nc, nr) = (at.cols.len(), at.rows.len());
+    let g = src.grid;
+    let hv = |k: usize| {
+        let (c, r) = (at.cols[k % nc].0, at.rows[k / nc].0);
+        f64::from(g.heights()[r * g.width() + c])
+    };
+    let tri = |k: usize| unit_triangle(at.cols[k % nc].1, at.rows[k / nc].1, w, h, even0);
+    let residual = |heights: &[f32], k: usize| {
+        let (c, wt) = tri(k);
+        hv(k)
+            - (0..3)
+                .map(|i| wt[i] * f64::from(heights[c[i]]))
+                .sum::<f64>()
+    };
+    let mut r: Vec<f64> = (0..nc * nr).map(|k| residual(heights, k)).collect();
+    let mut corr = vec![0f64; w * h];
+    for _ in 0..ROUNDS {
+        let hot: Vec<usize> = (0..r.len()).filter(|&k| r[k].abs() > tau_m).collect();
+        if hot.is_empty() {
+            break;
+        }
+        let mut touched = Vec::with_capacity(3 * hot.len());
+        for &k in &hot {
+            let (c, wt) = tri(k);
+            let norm = wt.iter().map(|v| v * v).sum::<f64>();
+            let step = OMEGA * r[k] / norm;
+            for i in 0..3 {
+                if corr[c[i]] == 0.0 {
+                    touched.push(c[i]);
+                }
+                corr[c[i]] += step * wt[i];
+            }
+        }
+        for &c in &touched {
+            heights[c] = (f64::from(heights[c]) + corr[c]) as f32;
+            corr[c] = 0.0;
+        }
+        for k in neighbours(at, &touched, w) {
+            r[k] = residual(heights, k);
+        }
+    }
+    let residual_m = (0..r.len())
+        .filter(|&k| {
+            let (x, y) = (at.cols[k % nc].1, at.rows[k / nc].1);
+            let gx = at.origin[0] as f64 + x;
+            let gy = at.origin[1] as f64 + y;
+            gx >= inner[0] as f64
+                && gx <= inner[2] as f64
+                && gy >= inner[1] as f64
+                && gy <= inner[3] as f64
+        })
+        .map(|k| r[k].abs())
+        .fold(0.0, f64::max);
+    Fitted {
+        residual_m,
+        near_m: near(at, &r, [w, h]),
+    }
+}
+
+/// Per region point, the largest `|r|` of the samples in the four cells
+/// around it, rounded up to `f32`.
+fn near(at: &Placement, r: &[f64], [w, h]: [usize; 2]) -> Vec<f32> {
+    let nc = at.cols.len();
+    let mut out = vec![0f32; w * h];
+    for (k, v) in r.iter().enumerate() {
+        let (x, y) = (at.cols[k % nc].1, at.rows[k / nc].1);
+        let i = (x.floor() as usize).min(w - 2);
+        let j = (y.floor() as usize).min(h - 2);
+        let e = crate::bitree::round_up_f32(v.abs());
+        for c in [
+            j * w + i,
+            j * w + i + 1,
+            (j + 1) * w + i,
+            (j + 1) * w + i + 1,
+        ] {
+            out[c] = out[c].max(e);
+        }
+    }
+    out
+}
+
+/// The samples (indices into the placement's `cols × rows`) in the cells
+/// around the region points `touched` (a region of width `w`), each once.
+fn neighbours(at: &Placement, touched: &[usize], w: usize) -> Vec<usize> {
+    let nc = at.cols.len();
+    let range = |axis: &[(usize, f64)], lo: f64, hi: f64| {
+        let a = axis.partition_point(|p| p.1 < lo);
+        let b = axis.partition_point(|p| p.1 <= hi);
+        a..b
+    };
+    let mut out: Vec<usize> = Vec::new();
+    for &c in touched {
+        let (x, y) = ((c % w) as f64, (c / w) as f64);
+        let cols = range(&at.cols, x - 1.0, x + 1.0);
+        for rr in range(&at.rows, y - 1.0, y + 1.0) {
+            out.extend(cols.clone().map(|cc| rr * nc + cc));
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+    use crate::grid::{GeoRef, HeightGrid};
+
+    #[test]
+    fn unit_triangles_interpolate_their_corners() {
+        for even0 in [true, false] {
+            for (x, y) in [(0.2, 0.1), (0.1, 0.7), (0.9, 0.8), (1.5, 1.25)] {
+                let (c, w) = unit_triangle(x, y, 4, 4, even0);
+                assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+                assert!(w.iter().all(|&v| v >= -1e-12), "{w:?}");
+                // The corners are around the point.
+                for k in c {
+                    let (cx, cy) = ((k % 4) as f64, (k / 4) as f64);
+                    assert!((cx - x).abs() <= 1.0 && (cy - y).abs() <= 1.0);
+                }
+            }
+        }
+    }
+
+    /// A spike between lattice points: bilinear resampling cuts it, the fit
+    /// brings the surface to within the tolerance of it.
+    #[test]
+    fn a_spike_between_lattice_points_is_honoured() {
+        let n = 9;
+        let mut v = vec![100f32; n * n];
+        v[4 * n + 4] = 180.0;
+        let grid = HeightGrid::new(n, n, v, GeoRef::unreferenced(1.0)).unwrap();
+        // Source samples 1.3 cells apart, offset by 0.45 of a cell.
+        let pos = |k: usize| 0.45 + 1.3 * k as f64;
+        let at = Placement {
+            cols: (0..n).map(|k| (k, pos(k))).collect(),
+            rows: (0..n).map(|k| (k, pos(k))).collect(),
+            origin: [0, 0],
+        };
+        let (w, h) = (13, 13);
+        let mut heights = vec![100f32; w * h];
+        let part = SourcePart {
+            grid: &grid,
+            offset: [0, 0],
+        };
+        let f = fit(&mut heights, [w, h], &at, part, 0.5, [0, 0, 12, 12]);
+        assert!(f.residual_m <= 2.0, "{f:?}");
+        assert!(heights.iter().any(|&z| z > 150.0));
+    }
+}
