@@ -13,10 +13,13 @@
 //! * Mesh writers (OBJ, PLY, STL, GLB, and a textured GLB), each written
 //!   atomically.
 //! * Cesium quantized-mesh-1.0 terrain pyramids ([`tiles`]).
+//! * CRSs ([`crs`]): a grid's map to and from WGS 84 longitude/latitude
+//!   (proj4rs), `--src-crs`, footprints.
 //!
 //! Every error names the file and says what was expected and what was found.
 #![warn(missing_docs)]
 
+pub mod crs;
 pub mod dem;
 pub mod error;
 pub mod export;
