@@ -152,3 +152,38 @@ fn bad_crs_text_and_codes() {
     let e = transform_for(&Crs::Unknown).unwrap_err().to_string();
     assert!(e.contains("--src-crs EPSG:N"), "{e}");
 }
+
+/// The shared Olinda DEM (a GeoTIFF with a user-defined UTM 25S on GRS
+/// 1980): its corners in WGS 84 as PROJ 9.5.1 gives them for the same
+/// definition (pyproj), and its footprint.
+#[test]
+fn olinda_user_defined_utm_maps_like_proj() {
+    let Some(dir) = cota_fixtures::shared_data() else {
+        return;
+    };
+    let path = dir.join("texture/olinda_dem_utm25s.tif");
+    let dem = cota_io::read_dem(&path, &cota_io::ReadOptions::DEFAULT).unwrap();
+    let g = dem.grid.georef();
+    let (w, h) = (dem.grid.width(), dem.grid.height());
+    let t = cota_io::crs::transform_for_grid(g, w, h).unwrap();
+    assert!(!t.is_identity());
+    let proj = [
+        [-34.915_759_377_927_81, -7.950_230_784_066_048],
+        [-34.825_986_991_407_46, -7.950_635_138_706_903],
+        [-34.826_385_171_920_59, -8.040_134_466_083_028],
+        [-34.916_177_105_979_656, -8.039_725_502_061_65],
+    ];
+    for ([x, y], [lon, lat]) in cota_io::crs::sample_corners(g, w, h).into_iter().zip(proj) {
+        let [plon, plat] = t.to_lonlat(x, y).unwrap();
+        assert!(
+            (plon - lon).abs() < TOL_DEG && (plat - lat).abs() < TOL_DEG,
+            "{plon} {plat}"
+        );
+    }
+    let f = cota_io::crs::footprint(g, w, h, t.as_ref(), 32).unwrap();
+    // West, south, east, north: corners of the (slightly rotated) rectangle.
+    let want = [proj[3][0], proj[2][1], proj[1][0], proj[0][1]];
+    for (got, want) in f.iter().zip(want) {
+        assert!((got - want).abs() < TOL_DEG, "{f:?}");
+    }
+}
