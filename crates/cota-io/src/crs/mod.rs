@@ -28,7 +28,8 @@
 //! WGS 84 (see [`resolve`]).
 //!
 //! Parts:
-//! * [`transform_for`] ([`resolve`]): the map of a CRS; [`describe`] its name.
+//! * [`transform_for`] ([`resolve`]): the map of a CRS; [`describe`] its
+//!   name, [`definition`] its PROJ string.
 //! * [`ProjTransform`] ([`project`]): a PROJ string through proj4rs.
 //! * [`parse_crs`] ([`parse`]): `--src-crs` text.
 //! * [`src_crs_for`], [`assign_src_crs`] ([`assign`]): `--src-crs` against
@@ -54,6 +55,6 @@ pub use self::footprint::{
 pub use self::parse::parse_crs;
 pub use self::project::ProjTransform;
 pub use self::resolve::{
-    describe, transform_and_tolerance, transform_for, HELMERT_ROUND_TRIP_TOLERANCE_M,
+    definition, describe, transform_and_tolerance, transform_for, HELMERT_ROUND_TRIP_TOLERANCE_M,
     ROUND_TRIP_TOLERANCE_M,
 };

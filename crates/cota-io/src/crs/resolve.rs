@@ -132,6 +132,18 @@ pub fn describe(crs: &Crs) -> String {
     }
 }
 
+/// The PROJ string a CRS is mapped by: an EPSG code's definition, or a
+/// [`Crs::Proj`] without its title; `None` for other CRSs.
+pub fn definition(crs: &Crs) -> Option<String> {
+    match crs {
+        Crs::Epsg(code) => epsg::definition(*code).map(str::to_string),
+        Crs::Proj(def) => {
+            Some(ProjParams::parse(def).map_or_else(|| def.clone(), |p| p.without_title()))
+        }
+        _ => None,
+    }
+}
+
 /// Whether a PROJ definition's longitudes and latitudes are taken as WGS
 /// 84's, and if not why.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -369,5 +381,14 @@ mod tests {
             "UTM 25S (+proj=utm +zone=25 +south)"
         );
         assert_eq!(describe(&Crs::Unknown), "unknown");
+        assert_eq!(
+            definition(&Crs::Epsg(4326)).as_deref(),
+            Some("+proj=longlat +datum=WGS84 +no_defs")
+        );
+        assert_eq!(
+            definition(&Crs::Proj("+proj=merc +title=x".into())).as_deref(),
+            Some("+proj=merc")
+        );
+        assert_eq!(definition(&Crs::Projected("UTM".into())), None);
     }
 }
