@@ -187,3 +187,23 @@ fn olinda_user_defined_utm_maps_like_proj() {
         assert!((got - want).abs() < TOL_DEG, "{f:?}");
     }
 }
+
+/// Informative: the time of one point each way (the parsed proj4rs objects
+/// are reused; nothing is parsed per call).
+#[test]
+fn time_per_point() {
+    for code in [32633, 27700, 2154, 3857] {
+        let t = transform_for(&Crs::Epsg(code)).unwrap();
+        let n = 200_000;
+        let start = std::time::Instant::now();
+        let mut sum = 0.0;
+        for i in 0..n {
+            let f = f64::from(i) / f64::from(n);
+            let [x, y] = t.from_lonlat(-2.0 + 0.5 * f, 50.0 + f).unwrap();
+            let [lon, lat] = t.to_lonlat(x, y).unwrap();
+            sum += lon + lat;
+        }
+        let ns = start.elapsed().as_secs_f64() * 1e9 / f64::from(2 * n);
+        println!("EPSG:{code}: {ns:.0} ns per point and direction ({sum:.0})");
+    }
+}

@@ -1,4 +1,4 @@
-//! Coordinate reference systems: from a grid's [`Crs`] to its map to and
+//! Coordinate reference systems: from a grid's [`Crs`](cota_core::Crs) to its map to and
 //! from WGS 84 longitude/latitude ([`cota_core::GeoTransform`]).
 //!
 //! References:
@@ -34,7 +34,7 @@
 //! * [`parse_crs`] ([`parse`]): `--src-crs` text.
 //! * [`src_crs_for`], [`assign_src_crs`] ([`assign`]): `--src-crs` against
 //!   the files' own CRSs.
-//! * [`footprint`], [`check_round_trip`], [`transform_for_grid`]
+//! * [`footprint()`], [`check_round_trip`], [`transform_for_grid`]
 //!   ([`footprint`](mod@footprint)): where a grid lies, and whether its map inverts.
 //! * [`epsg`]: EPSG definitions and names; [`params`]: PROJ string tokens.
 
