@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use cota_core::quadtree::QuadOptions;
-use cota_core::{CriterionKind, Mode};
+use cota_core::{CriterionKind, Crs, Mode};
 
 /// cota: terrain level of detail with guaranteed error, from real DEMs.
 #[derive(Debug, Parser)]
@@ -122,6 +122,18 @@ pub struct InputArgs {
     /// bytes per sample, at most 2^30); a gzipped .hgt at most one 3601² tile.
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub max_samples: Option<u64>,
+    /// The CRS of inputs that declare none: EPSG:N (e.g. EPSG:32633) or a
+    /// PROJ string ('+proj=utm +zone=33 +datum=WGS84'). For ESRI grids
+    /// without a .prj, PNG/WebP/NumPy arrays, GeoTIFFs without GeoKeys, and
+    /// grids whose coordinates cota only guessed to be degrees. A file that
+    /// declares a different CRS is refused, naming both.
+    #[arg(long, value_name = "CRS", value_parser = parse_src_crs)]
+    pub src_crs: Option<Crs>,
+}
+
+/// `--src-crs`: EPSG:N or a PROJ string, checked (`cota_io::crs::parse_crs`).
+fn parse_src_crs(text: &str) -> Result<Crs, String> {
+    cota_io::crs::parse_crs(text).map_err(|e| e.to_string())
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use cota_core::{GeoRef, PixelIs};
+use cota_io::crs::{describe, FOOTPRINT_STEPS_PER_SIDE};
 use cota_io::read::pmtiles::{self, is_pmtiles_file};
 use serde_json::{json, Value};
 
@@ -104,9 +105,40 @@ fn pixel_is(p: PixelIs) -> &'static str {
     }
 }
 
+/// The WGS 84 bounds (west, south, east, north, degrees) of the rectangle
+/// through the outer samples' centres, its boundary densified and mapped
+/// through the CRS; or why there are none (no georeference, no known CRS).
+fn footprint(g: &GeoRef, width: usize, height: usize) -> Result<[f64; 4], String> {
+    if !g.known {
+        return Err("no georeference".to_string());
+    }
+    let t = cota_io::crs::transform_for(&g.crs).map_err(|e| e.to_string())?;
+    cota_io::crs::footprint(g, width, height, t.as_ref(), FOOTPRINT_STEPS_PER_SIDE)
+        .map_err(|e| e.to_string())
+}
+
+/// The CRS and footprint fields of a JSON report.
+fn crs_json(v: &mut Value, g: &GeoRef, width: usize, height: usize) {
+    let f = footprint(g, width, height);
+    v["crs_name"] = json!(describe(&g.crs));
+    v["crs_definition"] = json!(cota_io::crs::definition(&g.crs));
+    v["footprint_deg"] = json!(f.as_ref().ok());
+    v["footprint_note"] = json!(f.err());
+}
+
+/// The footprint line of the text report.
+fn footprint_line(g: &GeoRef, width: usize, height: usize) -> String {
+    match footprint(g, width, height) {
+        Ok([w, s, e, n]) => {
+            format!("  footprint   {w:.6},{s:.6},{e:.6},{n:.6} (W,S,E,N degrees, WGS 84)")
+        }
+        Err(why) => format!("  footprint   none: {why}"),
+    }
+}
+
 fn file_json(f: &FileInfo) -> Value {
     let g = &f.georef;
-    json!({
+    let mut v = json!({
         "path": f.path.display().to_string(),
         "format": f.format.to_string(),
         "data_type": f.data_type.to_string(),
@@ -123,7 +155,9 @@ fn file_json(f: &FileInfo) -> Value {
         "cell_size": [g.pixel_x.abs(), g.pixel_y.abs()],
         "cell_size_units": units(g),
         "cell_size_m": f.cell_size_m,
-    })
+    });
+    crs_json(&mut v, g, f.width, f.height);
+    v
 }
 
 fn to_json(input: &Input) -> Value {
@@ -148,6 +182,7 @@ fn to_json(input: &Input) -> Value {
         "cell_size_m": g.cell_size_m(),
         "files": input.files.iter().map(file_json).collect::<Vec<_>>(),
     });
+    crs_json(&mut v, geo, g.width(), g.height());
     if input.seams.is_some() {
         v["seams"] = crate::input::seams_json(input);
         v["hole_samples"] = json!(input.hole_samples);
@@ -161,7 +196,8 @@ fn print_text(input: &Input) {
         println!("{}", f.path.display());
         println!("  format      {} ({})", f.format, f.data_type);
         println!("  size        {} x {}", f.width, f.height);
-        println!("  crs         {}", g.crs);
+        println!("  crs         {}", describe(&g.crs));
+        println!("{}", footprint_line(g, f.width, f.height));
         println!(
             "  cell size   {} x {} {}  =  {:.3} x {:.3} m",
             g.pixel_x.abs(),
@@ -189,6 +225,7 @@ fn print_text(input: &Input) {
         let g = &input.grid;
         println!("mosaic");
         println!("  size        {} x {}", g.width(), g.height());
+        println!("{}", footprint_line(g.georef(), g.width(), g.height()));
         println!(
             "  voids       {} ({} in coverage holes)",
             g.void_count(),

@@ -8,10 +8,10 @@ use std::time::Instant;
 use anyhow::Context;
 use cota_core::grid::mosaic::{MosaicOptions, SeamPolicy, SeamReport};
 use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
-use cota_core::HeightGrid;
+use cota_core::{Crs, HeightGrid};
 use cota_io::{
-    read_dem_bytes, read_dem_from, read_region_in_turn, read_region_with_progress, ArrayName,
-    PngEncoding, ReadOptions, Region, RegionOptions, TileRequest,
+    read_dem, read_dem_bytes, read_dem_from, read_dems_with_progress, ArrayName, Dem, PngEncoding,
+    ReadOptions, Region, RegionOptions, TileRequest,
 };
 
 use crate::args::{Encoding, InputArgs, Seam, Voids};
@@ -288,16 +288,29 @@ pub fn is_dash(p: &Path) -> bool {
 }
 
 /// Reads the files (`-`: standard input, which must then be the only one;
-/// none: the bundled sample) into one region.
+/// none: the bundled sample), gives them `--src-crs` (see
+/// [`cota_io::crs::assign_src_crs`]) and joins them into one region.
 fn read_inputs(
     files: &[PathBuf],
     opts: &ReadOptions,
     region_opts: &RegionOptions,
     in_turn: bool,
+    src_crs: Option<&Crs>,
 ) -> anyhow::Result<Region> {
-    let one = |dem| -> anyhow::Result<Region> { Ok(cota_io::read::join(vec![dem], region_opts)?) };
+    let mut dems = read_files(files, opts, in_turn)?;
+    if let Some(crs) = src_crs {
+        for dem in &mut dems {
+            cota_io::crs::assign_src_crs(dem, crs)?;
+        }
+    }
+    Ok(cota_io::read::join(dems, region_opts)?)
+}
+
+/// Reads the files as [`read_inputs`] says, each on its own: in parallel,
+/// or (`in_turn`) one after the other on this thread.
+fn read_files(files: &[PathBuf], opts: &ReadOptions, in_turn: bool) -> anyhow::Result<Vec<Dem>> {
     match files {
-        [] => one(read_dem_bytes(SAMPLE, Path::new(SAMPLE_NAME), opts)?),
+        [] => Ok(vec![read_dem_bytes(SAMPLE, Path::new(SAMPLE_NAME), opts)?]),
         [f] if is_dash(f) => {
             let stdin = std::io::stdin();
             if stdin.is_terminal() {
@@ -306,20 +319,26 @@ fn read_inputs(
                 );
             }
             let _spinner = progress::spinner("reading");
-            one(read_dem_from(stdin.lock(), Path::new(STDIN_NAME), opts)?)
+            Ok(vec![read_dem_from(
+                stdin.lock(),
+                Path::new(STDIN_NAME),
+                opts,
+            )?])
         }
         _ if files.iter().any(|f| is_dash(f)) => anyhow::bail!(
             "-: standard input must be the only FILE (it holds one DEM), found {} files",
             files.len()
         ),
-        _ if in_turn => Ok(read_region_in_turn(files, region_opts)?),
+        _ if in_turn => Ok(files
+            .iter()
+            .map(|f| read_dem(f, opts))
+            .collect::<Result<Vec<_>, _>>()?),
         _ => {
             let pb = progress::bar(files.len() as u64, "reading");
-            let r = read_region_with_progress(files, region_opts, &|done, _| {
-                pb.set_position(done as u64)
-            })?;
+            let dems =
+                read_dems_with_progress(files, opts, &|done, _| pb.set_position(done as u64))?;
             pb.finish_and_clear();
-            Ok(r)
+            Ok(dems)
         }
     }
 }
@@ -338,7 +357,13 @@ pub fn mosaic_options(a: &InputArgs) -> MosaicOptions {
 pub fn summaries(a: &InputArgs) -> anyhow::Result<Vec<FileInfo>> {
     check_options(a)?;
     let opts = read_options(a)?;
-    Ok(cota_io::tiles::summarize_files(&a.files, &opts)?)
+    let mut files = cota_io::tiles::summarize_files(&a.files, &opts)?;
+    if let Some(flag) = &a.src_crs {
+        for f in &mut files {
+            f.georef.crs = cota_io::crs::src_crs_for(&f.path, &f.georef, f.width, f.height, flag)?;
+        }
+    }
+    Ok(files)
 }
 
 /// Reads every input (or the bundled sample) and mosaics them, then keeps
@@ -358,7 +383,7 @@ pub fn load_with(a: &InputArgs, in_turn: bool) -> anyhow::Result<Input> {
         .with_read(opts)
         .with_mosaic(mosaic_options(a))
         .with_fill(None);
-    let region = read_inputs(&a.files, &opts, &region_opts, in_turn)?;
+    let region = read_inputs(&a.files, &opts, &region_opts, in_turn, a.src_crs.as_ref())?;
     warn_unpositioned(&region.files);
     check_seams(a, region.seams.as_ref(), &region.files)?;
     check_cell_size(&region.grid, &region.files)?;

@@ -2,7 +2,8 @@
 //!
 //! The data cota's tests and benchmarks run on, as **plain data**: row-major
 //! `f32` heights (north row first, voids NaN) with what the file said about
-//! its place ([`Samples`]). It depends on no cota crate (only `zip`, `flate2` and `image-webp`), so
+//! its place ([`Samples`]). It depends on no cota crate (only `zip`, `flate2`,
+//! `image-webp`, `tiff` and `proj4rs`), so
 //! `cota-core`'s own tests can use it without a dependency cycle; each crate
 //! turns [`Samples`] into its grid type in its `tests/common`.
 //!
@@ -20,6 +21,11 @@
 //! * [`bombs`]: a gzip bomb and a PNG dimension bomb, written streaming.
 //! * [`formats`]: writers of Terrarium WebP tiles, PMTiles archives, NumPy
 //!   `.npy`/`.npz` and USGS ASCII DEMs, made from real heights in a test's set-up.
+//! * [`geotiff`]: a float32 GeoTIFF writer (and reader of the same shape).
+//! * [`derived`]: **derived test inputs**, projected GeoTIFFs resampled at
+//!   test time from real geographic DEMs (NAD83 / UTM 16N at 1 m from the
+//!   shared `dem-hills.tiff`; WGS 84 / UTM 19S at 30 m from the bundled
+//!   SRTM tile).
 //!
 //! The readers here are deliberately small (the formats of the bundled and
 //! shared SRTM and ASCII files, no more); `cota-io` is the real reader, and
@@ -28,7 +34,9 @@
 
 mod ascii;
 pub mod bombs;
+pub mod derived;
 pub mod formats;
+pub mod geotiff;
 mod srtm;
 
 use std::fmt;

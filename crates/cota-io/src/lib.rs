@@ -13,10 +13,13 @@
 //! * Mesh writers (OBJ, PLY, STL, GLB, and a textured GLB), each written
 //!   atomically.
 //! * Cesium quantized-mesh-1.0 terrain pyramids ([`tiles`]).
+//! * CRSs ([`crs`]): a grid's map to and from WGS 84 longitude/latitude
+//!   (proj4rs), `--src-crs`, footprints.
 //!
 //! Every error names the file and says what was expected and what was found.
 #![warn(missing_docs)]
 
+pub mod crs;
 pub mod dem;
 pub mod error;
 pub mod export;
@@ -31,6 +34,6 @@ pub use dem::{
 };
 pub use error::{ReadError, ReadErrorKind, RegionError};
 pub use read::{
-    read_dem, read_dem_bytes, read_dem_from, read_region, read_region_in_turn,
-    read_region_with_progress, Region, RegionOptions,
+    read_dem, read_dem_bytes, read_dem_from, read_dems_with_progress, read_region,
+    read_region_in_turn, read_region_with_progress, Region, RegionOptions,
 };

@@ -19,8 +19,10 @@
 //!            u32 number of steps in the file
 //!            u8  georef known (0/1)     u8  pixel is (0 area, 1 point)
 //!            f64 origin_x  f64 origin_y  f64 pixel_x  f64 pixel_y
-//!            u8  crs kind (0 unknown, 1 EPSG, 2 geographic, 3 projected)
-//!            EPSG: u32 code; geographic/projected: u16 length + UTF-8 name
+//!            u8  crs kind (0 unknown, 1 EPSG, 2 geographic, 3 projected,
+//!                4 PROJ definition)
+//!            EPSG: u32 code; geographic/projected: u16 length + UTF-8 name;
+//!            PROJ: u16 length + UTF-8 PROJ string
 //! head_crc   u32      CRC-32 (IEEE) of `head`
 //! then per step, coarse to fine:
 //! len        u32      bytes of the payload
@@ -192,6 +194,7 @@ fn head_bytes(header: &StreamHeader, steps: usize, georef: &GeoRef) -> Vec<u8> {
         }
         Crs::Geographic(s) => name(&mut v, 2, s),
         Crs::Projected(s) => name(&mut v, 3, s),
+        Crs::Proj(s) => name(&mut v, 4, s),
         _ => v.push(0),
     }
     v
@@ -246,38 +249,7 @@ fn parse_head(b: &[u8]) -> Result<(StreamHeader, u32, GeoRef), StreamFileError> 
         });
     }
     let k = fixed - 1;
-    let rest = &b[k + 1..];
-    let crs = match b[k] {
-        0 => Crs::Unknown,
-        1 => {
-            let [a, b1, c, d] = *rest else {
-                return Err(short(fixed + 4));
-            };
-            Crs::Epsg(u32::from_le_bytes([a, b1, c, d]))
-        }
-        kind @ (2 | 3) => {
-            let [l0, l1, ref s @ ..] = *rest else {
-                return Err(short(fixed + 2));
-            };
-            let n = u16::from_le_bytes([l0, l1]) as usize;
-            if s.len() != n {
-                return Err(short(fixed + 2 + n));
-            }
-            let name = String::from_utf8_lossy(s).into_owned();
-            if kind == 2 {
-                Crs::Geographic(name)
-            } else {
-                Crs::Projected(name)
-            }
-        }
-        other => {
-            return Err(StreamFileError::Malformed {
-                what: "CRS".into(),
-                expected: "kind 0, 1, 2 or 3".into(),
-                found: format!("kind {other}"),
-            })
-        }
-    };
+    let crs = parse_crs(b[k], &b[k + 1..], fixed)?;
     Ok((
         header,
         steps,
@@ -291,6 +263,47 @@ fn parse_head(b: &[u8]) -> Result<(StreamHeader, u32, GeoRef), StreamFileError> 
             known,
         },
     ))
+}
+
+/// The CRS after its kind byte (`rest`, the end of a head of `fixed` bytes
+/// before it).
+fn parse_crs(kind: u8, rest: &[u8], fixed: usize) -> Result<Crs, StreamFileError> {
+    let short = |need: usize| StreamFileError::Malformed {
+        what: "head".into(),
+        expected: format!("at least {need} bytes"),
+        found: format!("{} bytes", fixed + rest.len()),
+    };
+    Ok(match kind {
+        0 => Crs::Unknown,
+        1 => {
+            let [a, b1, c, d] = *rest else {
+                return Err(short(fixed + 4));
+            };
+            Crs::Epsg(u32::from_le_bytes([a, b1, c, d]))
+        }
+        2..=4 => {
+            let [l0, l1, ref s @ ..] = *rest else {
+                return Err(short(fixed + 2));
+            };
+            let n = u16::from_le_bytes([l0, l1]) as usize;
+            if s.len() != n {
+                return Err(short(fixed + 2 + n));
+            }
+            let name = String::from_utf8_lossy(s).into_owned();
+            match kind {
+                2 => Crs::Geographic(name),
+                3 => Crs::Projected(name),
+                _ => Crs::Proj(name),
+            }
+        }
+        other => {
+            return Err(StreamFileError::Malformed {
+                what: "CRS".into(),
+                expected: "kind 0, 1, 2, 3 or 4".into(),
+                found: format!("kind {other}"),
+            })
+        }
+    })
 }
 
 /// The bytes of a `.cstream` file holding `stream` with `georef`.

@@ -218,10 +218,14 @@ fn olinda_float32_user_defined_utm_25s() {
         return;
     };
     let g = dem.grid.georef();
+    // The user-defined projection's keys (ProjectionGeoKey 16125 = UTM zone
+    // 25S, the GRS 1980 axes, a zero TOWGS84) give its PROJ definition; the
+    // citation follows as its title.
     let name = "UTM Zone 25, Southern Hemisphere; GCS Name = GRS 1980(IUGG, 1980); \
                 Datum = unknown; Ellipsoid = GRS80; Primem = Greenwich";
-    assert_eq!(g.crs, Crs::Projected(name.into()));
-    assert_eq!(g.crs.to_string(), name);
+    let def = "+proj=utm +zone=25 +south +ellps=GRS80 +towgs84=0,0,0 +units=m +no_defs";
+    assert_eq!(g.crs, Crs::Proj(format!("{def} +title=\"{name}\"")));
+    assert_eq!(cota_io::crs::describe(&g.crs), format!("{name} ({def})"));
     assert!(close(g.origin_x, 288_776.250_000_803_15, 1e-6));
     assert!(close(g.pixel_x, 89.994_067_349_451_16, 1e-9));
     assert_eq!(dem.grid.cell_size_m(), [g.pixel_x, -g.pixel_y]);

@@ -476,3 +476,45 @@ fn a_head_over_the_sample_limit_is_refused_and_readers_agree_with_bytes() {
     assert!(e.to_string().starts_with("<test>: too large"), "{e}");
     assert_eq!(whole.steps.len(), ends.len());
 }
+
+/// Every kind of CRS survives the stream's head: unknown, EPSG, geographic
+/// and projected descriptions, and PROJ definitions (kind 4, titles with
+/// blanks and quotes included); an unknown kind byte is malformed.
+#[test]
+fn every_crs_kind_round_trips_through_the_head() {
+    let mut grid = small(9, 9);
+    let s = encode(&grid, &StreamOptions::default()).unwrap();
+    let crss = [
+        cota_core::Crs::Unknown,
+        cota_core::Crs::Epsg(32633),
+        cota_core::Crs::Geographic("GCS Name = GRS 1980".into()),
+        cota_core::Crs::Projected("UTM Zone 25, Southern Hemisphere".into()),
+        cota_core::Crs::Proj(
+            "+proj=utm +zone=25 +south +ellps=GRS80 +units=m +no_defs +title=\"UTM 25S; GRS 1980\""
+                .into(),
+        ),
+    ];
+    for crs in crss {
+        let mut g = grid.georef().clone();
+        g.crs = crs.clone();
+        grid.set_georef(g);
+        let bytes = stream_bytes(&s, grid.georef());
+        let d = decode_stream_bytes(&bytes, &StreamLimit::ALL).unwrap();
+        assert_eq!(d.georef.crs, crs);
+    }
+    // The kind byte is the head's last before the name; 9 is no kind.
+    let mut g = grid.georef().clone();
+    g.crs = cota_core::Crs::Proj("+proj=merc".into());
+    let mut bytes = stream_bytes(&s, &g);
+    let at = bytes
+        .windows(12)
+        .position(|w| w == b"\x04\x0a\x00+proj=mer")
+        .unwrap();
+    bytes[at] = 9;
+    // Re-sign the head (magic 8, version 2, head length 4, head, CRC).
+    let len = u32::from_le_bytes(bytes[10..14].try_into().unwrap()) as usize;
+    let crc = crc32(&bytes[14..14 + len]);
+    bytes[14 + len..18 + len].copy_from_slice(&crc.to_le_bytes());
+    let e = decode_stream_bytes(&bytes, &StreamLimit::ALL).unwrap_err();
+    assert!(e.to_string().contains("kind 0, 1, 2, 3 or 4"), "{e}");
+}

@@ -19,6 +19,10 @@ pub trait GeoTransform: Send + Sync + fmt::Debug {
     fn to_lonlat(&self, x: f64, y: f64) -> Option<[f64; 2]>;
 
     /// The CRS position `[x, y]` of WGS 84 `(lon, lat)`, degrees.
+    #[allow(
+        clippy::wrong_self_convention,
+        reason = "the pair to_lonlat/from_lonlat names the two directions of the map"
+    )]
     fn from_lonlat(&self, lon: f64, lat: f64) -> Option<[f64; 2]>;
 
     /// True when CRS coordinates are longitude/latitude on WGS 84 already (the

@@ -19,6 +19,12 @@
 //! 3. or the image carries no CRS (a PNG or JPEG with a world file, or
 //!    stretched over the DEM's extent): it is taken to be in the DEM's.
 //!
+//! A CRS given by PROJ parameters ([`Crs::Proj`], e.g. a GeoTIFF's
+//! user-defined projection) is read the same way: `+proj=utm +zone=N
+//! [+south]` or longitude/latitude; `+datum=WGS84` (or the WGS 84 ellipsoid)
+//! and the GRS 1980 ellipsoid with no datum and a zero or no `+towgs84`
+//! (the "unstated" datum above).
+//!
 //! Anything else is refused with both CRSs named; `assume_same` (the CLI's
 //! `--assume-same-crs`) overrides the refusal for CRSs the rule cannot
 //! recognise as equal.
@@ -29,6 +35,8 @@
 //! 28.5 m pixels. Same zone, datums within 1 m ≤ 2.85 m: the same CRS.
 
 use cota_core::Crs;
+
+use crate::crs::params::ProjParams;
 
 /// The largest difference between the datums rule 2 accepts, metres.
 pub const DATUM_AGREEMENT_M: f64 = 1.0;
@@ -124,8 +132,35 @@ fn parts(crs: &Crs) -> (Projection, Datum) {
         Crs::Epsg(code) => epsg_parts(*code),
         Crs::Geographic(s) => (Projection::Geographic, text_parts(s).1),
         Crs::Projected(s) => text_parts(s),
+        Crs::Proj(def) => proj_parts(def),
         _ => (Projection::Other, Datum::Other),
     }
+}
+
+/// The projection and datum of a PROJ definition (module docs).
+fn proj_parts(def: &str) -> (Projection, Datum) {
+    let Some(p) = ProjParams::parse(def) else {
+        return (Projection::Other, Datum::Other);
+    };
+    let zone = p.get("zone").and_then(|z| z.parse::<u32>().ok());
+    let projection = match (p.proj(), zone) {
+        (Some("utm"), Some(zone)) if (1..=60).contains(&zone) => Projection::Utm {
+            zone,
+            south: p.has("south"),
+        },
+        _ if p.is_geographic() => Projection::Geographic,
+        _ => Projection::Other,
+    };
+    let no_shift = p.towgs84().is_none_or(|t| t.iter().all(|v| *v == 0.0)) && !p.has("nadgrids");
+    let ellps = p.get("ellps");
+    let datum = match p.get("datum") {
+        Some(d) if d.eq_ignore_ascii_case("wgs84") => Datum::Wgs84,
+        Some(_) => Datum::Other,
+        None if no_shift && ellps == Some("WGS84") => Datum::Wgs84,
+        None if no_shift && ellps == Some("GRS80") => Datum::Grs80Unstated,
+        None => Datum::Other,
+    };
+    (projection, datum)
 }
 
 /// Whether an image in `image` may be draped on a DEM in `dem` (module
@@ -246,6 +281,25 @@ mod tests {
                 zone: 17,
                 south: true
             }
+        );
+        let own = Crs::Proj(
+            "+proj=utm +zone=25 +south +ellps=GRS80 +towgs84=0,0,0 +units=m +no_defs +title=\"UTM 25S\"".into(),
+        );
+        assert!(same_crs(&own, &Crs::Epsg(31985), 28.5, false).is_ok());
+        assert!(same_crs(&own, &Crs::Epsg(32724), 28.5, false).is_err());
+        assert_eq!(
+            proj_parts("+proj=utm +zone=33 +datum=WGS84"),
+            (
+                Projection::Utm {
+                    zone: 33,
+                    south: false
+                },
+                Datum::Wgs84
+            )
+        );
+        assert_eq!(
+            proj_parts("+proj=longlat +ellps=intl +towgs84=-87,-98,-121").1,
+            Datum::Other
         );
         assert!(same_crs(&Crs::Unknown, &Crs::Unknown, 30.0, false).is_ok());
         assert!(same_crs(&Crs::Epsg(4326), &Crs::Unknown, 30.0, false).is_ok());

@@ -279,17 +279,32 @@ pub fn read_region_with_progress<P: AsRef<Path> + Sync>(
     if paths.is_empty() {
         return Err(RegionError::NoFiles);
     }
+    let dems = read_dems_with_progress(paths, &opts.read, progress)?;
+    join(dems, opts)
+}
+
+/// Reads each file on rayon's pool (one file per task), calling
+/// `progress(files_read, files)` as each is read: the files
+/// [`read_region_with_progress`] joins, for a caller that looks at each
+/// (sets its CRS, say: [`crate::crs::assign_src_crs`]) before [`join`].
+///
+/// # Errors
+/// The [`ReadError`] of the first file (in input order) that cannot be read.
+pub fn read_dems_with_progress<P: AsRef<Path> + Sync>(
+    paths: &[P],
+    opts: &ReadOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Vec<Dem>, ReadError> {
     let done = std::sync::atomic::AtomicUsize::new(0);
     let read: Vec<Result<Dem, ReadError>> = paths
         .par_iter()
         .with_max_len(1)
         .map(|p| {
-            let dem = read_dem(p.as_ref(), &opts.read);
+            let dem = read_dem(p.as_ref(), opts);
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress(n, paths.len());
             dem
         })
         .collect();
-    let dems = read.into_iter().collect::<Result<Vec<Dem>, ReadError>>()?;
-    join(dems, opts)
+    read.into_iter().collect()
 }

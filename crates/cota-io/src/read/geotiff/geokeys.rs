@@ -16,10 +16,17 @@
 //!   ProjectedCSTypeGeoKey 3072, PCSCitationGeoKey 3073, VerticalUnitsGeoKey
 //!   4099. Codes 1..=32766 are EPSG codes; 32767 means user-defined, described
 //!   by the citation.
+//! * A user-defined projected CRS whose keys define it (ProjectionGeoKey
+//!   3074 or ProjCoordTransGeoKey 3075 with its parameters, the datum's and
+//!   ellipsoid's keys 2050–2062; doubles in GeoDoubleParamsTag 34736) becomes
+//!   [`Crs::Proj`], its PROJ string followed by the description as
+//!   `+title="…"` (see [`super::projection`]); without them it stays
+//!   [`Crs::Projected`], the description alone.
 
 use cota_core::{Crs, GeoRef, PixelIs};
 use tiff::decoder::ifd::Value;
 
+use super::projection::{is_projection_key, ProjKeys};
 use crate::error::{malformed, ReadErrorKind};
 
 /// GeoKey ids used here.
@@ -36,6 +43,8 @@ mod key {
 
 /// Tag number of GeoAsciiParamsTag, as a key location.
 const ASCII_PARAMS: u16 = 34737;
+/// Tag number of GeoDoubleParamsTag, as a key location.
+const DOUBLE_PARAMS: u16 = 34736;
 /// GeoKey value meaning "user-defined".
 const USER_DEFINED: u16 = 32767;
 
@@ -50,6 +59,8 @@ pub(super) struct GeoKeys {
     geog_citation: Option<String>,
     pcs_citation: Option<String>,
     vertical_units: Option<u16>,
+    /// The keys of a user-defined projection and datum.
+    proj: ProjKeys,
 }
 
 /// The raw georeferencing tags of the image.
@@ -65,6 +76,8 @@ pub(super) struct GeoTags {
     pub key_directory: Option<Vec<u16>>,
     /// GeoAsciiParamsTag 34737.
     pub ascii_params: Option<String>,
+    /// GeoDoubleParamsTag 34736.
+    pub double_params: Option<Vec<f64>>,
 }
 
 /// What the georeferencing tags give: the grid's georeference and the factor
@@ -118,11 +131,16 @@ pub(super) fn shorts(v: Value) -> Option<Vec<u16>> {
         .collect()
 }
 
-/// Parses GeoKeyDirectoryTag 34735 with the GeoAsciiParamsTag 34737 text.
+/// Parses GeoKeyDirectoryTag 34735 with the GeoAsciiParamsTag 34737 text
+/// and the GeoDoubleParamsTag 34736 values.
 ///
 /// # Errors
 /// [`ReadErrorKind::Malformed`] when the directory is shorter than its header says.
-pub(super) fn parse_key_directory(dir: &[u16], ascii: &str) -> Result<GeoKeys, ReadErrorKind> {
+pub(super) fn parse_key_directory(
+    dir: &[u16],
+    ascii: &str,
+    doubles: &[f64],
+) -> Result<GeoKeys, ReadErrorKind> {
     let [_version, _revision, _minor, count, ref entries @ ..] = *dir else {
         return Err(malformed(
             "a GeoKeyDirectoryTag 34735 header of 4 SHORTs",
@@ -143,6 +161,9 @@ pub(super) fn parse_key_directory(dir: &[u16], ascii: &str) -> Result<GeoKeys, R
     for entry in entries.chunks_exact(4).take(count) {
         if let [id, location, n, value] = *entry {
             keys.set(id, location, n, value, ascii);
+            if is_projection_key(id) {
+                keys.set_projection(id, location, n, value, doubles);
+            }
         }
     }
     Ok(keys)
@@ -166,6 +187,23 @@ impl GeoKeys {
         }
     }
 
+    /// Records a key of a user-defined projection: a SHORT in the entry, or
+    /// `count` doubles at `offset` of GeoDoubleParamsTag (dropped when out of range).
+    fn set_projection(&mut self, id: u16, location: u16, count: u16, value: u16, doubles: &[f64]) {
+        match location {
+            0 => {
+                self.proj.shorts.insert(id, value);
+            }
+            DOUBLE_PARAMS => {
+                let start = usize::from(value);
+                if let Some(v) = doubles.get(start..start + usize::from(count)) {
+                    self.proj.doubles.insert(id, v.to_vec());
+                }
+            }
+            _ => {}
+        }
+    }
+
     /// The coordinate reference system the keys describe.
     pub(super) fn crs(&self) -> Crs {
         match self.model_type {
@@ -184,19 +222,24 @@ impl GeoKeys {
     /// 1980(IUGG, 1980); Datum = unknown; …"), which the imagery reader's CRS
     /// rule reads.
     fn projected_crs(&self) -> Crs {
-        match epsg(self.projected_type) {
-            Some(code) => Crs::Epsg(code),
-            None => {
-                let name = self
-                    .pcs_citation
-                    .clone()
-                    .or_else(|| self.gt_citation.clone())
-                    .unwrap_or_else(|| user_defined("projected", self.projected_type));
-                Crs::Projected(match &self.geog_citation {
-                    Some(g) if !name.contains(g.as_str()) => format!("{name}; {g}"),
-                    _ => name,
-                })
-            }
+        if let Some(code) = epsg(self.projected_type) {
+            return Crs::Epsg(code);
+        }
+        let name = self
+            .pcs_citation
+            .clone()
+            .or_else(|| self.gt_citation.clone())
+            .unwrap_or_else(|| user_defined("projected", self.projected_type));
+        let description = match &self.geog_citation {
+            Some(g) if !name.contains(g.as_str()) => format!("{name}; {g}"),
+            _ => name,
+        };
+        match self.proj.definition(self.geographic_type) {
+            Some(def) => Crs::Proj(format!(
+                "{def} +title=\"{}\"",
+                description.replace('"', "'")
+            )),
+            None => Crs::Projected(description),
         }
     }
 
@@ -347,6 +390,7 @@ pub(super) fn geo_info(tags: &GeoTags) -> Result<GeoInfo, ReadErrorKind> {
         Some(dir) => Some(parse_key_directory(
             dir,
             tags.ascii_params.as_deref().unwrap_or(""),
+            tags.double_params.as_deref().unwrap_or(&[]),
         )?),
         None => None,
     };
@@ -398,11 +442,11 @@ mod tests {
     #[test]
     fn epsg_keys() {
         let d = directory(&[[1024, 0, 1, 2], [1025, 0, 1, 1], [2048, 0, 1, 4326]]);
-        let k = parse_key_directory(&d, "").unwrap();
+        let k = parse_key_directory(&d, "", &[]).unwrap();
         assert_eq!(k.crs(), Crs::Epsg(4326));
         assert_eq!(k.pixel_is(), PixelIs::Area);
         let d = directory(&[[1024, 0, 1, 1], [1025, 0, 1, 2], [3072, 0, 1, 3857]]);
-        let k = parse_key_directory(&d, "").unwrap();
+        let k = parse_key_directory(&d, "", &[]).unwrap();
         assert_eq!(k.crs(), Crs::Epsg(3857));
         assert_eq!(k.pixel_is(), PixelIs::Point);
     }
@@ -417,7 +461,7 @@ mod tests {
             [2049, ASCII_PARAMS, 36, 33],
             [3072, 0, 1, 32767],
         ]);
-        let k = parse_key_directory(&d, ascii).unwrap();
+        let k = parse_key_directory(&d, ascii, &[]).unwrap();
         assert_eq!(
             k.crs(),
             Crs::Projected(
@@ -429,7 +473,7 @@ mod tests {
             [2048, 0, 1, 32767],
             [2049, ASCII_PARAMS, 38, 33], // count past the end: cut short
         ]);
-        let k = parse_key_directory(&d, ascii).unwrap();
+        let k = parse_key_directory(&d, ascii, &[]).unwrap();
         assert_eq!(
             k.crs(),
             Crs::Geographic("GCS Name = GRS 1980; Datum = unknown".into())
@@ -440,13 +484,13 @@ mod tests {
             [2048, 0, 1, 32767],
             [2049, ASCII_PARAMS, 9, 500],
         ]);
-        let k = parse_key_directory(&d, ascii).unwrap();
+        let k = parse_key_directory(&d, ascii, &[]).unwrap();
         assert_eq!(
             k.crs(),
             Crs::Geographic("user-defined geographic CRS".into())
         );
         let d = directory(&[[3072, 0, 1, 40000]]);
-        let k = parse_key_directory(&d, "").unwrap();
+        let k = parse_key_directory(&d, "", &[]).unwrap();
         assert_eq!(
             k.crs(),
             Crs::Projected("projected CRS with private code 40000".into())
@@ -454,12 +498,50 @@ mod tests {
     }
 
     #[test]
+    fn user_defined_projection_becomes_a_definition() {
+        // The keys of texture/olinda_dem_utm25s.tif (GDAL's user-defined UTM 25S).
+        let ascii = "UTM Zone 25, Southern Hemisphere|GCS Name = GRS 1980(IUGG, 1980)|Datum = unknown|Ellipsoid = GRS80|Primem = Greenwich||";
+        let d = directory(&[
+            [1024, 0, 1, 1],
+            [1026, ASCII_PARAMS, 33, 0],
+            [2048, 0, 1, 32767],
+            [2049, ASCII_PARAMS, 86, 33],
+            [2050, 0, 1, 32767],
+            [2054, 0, 1, 9102],
+            [2056, 0, 1, 32767],
+            [2057, DOUBLE_PARAMS, 1, 0],
+            [2059, DOUBLE_PARAMS, 1, 1],
+            [2061, DOUBLE_PARAMS, 1, 2],
+            [2062, DOUBLE_PARAMS, 3, 3],
+            [3072, 0, 1, 32767],
+            [3074, 0, 1, 16125],
+            [3076, 0, 1, 9001],
+        ]);
+        let doubles = [6_378_137.0, 298.257_222_101, 0.0, 0.0, 0.0, 0.0];
+        let k = parse_key_directory(&d, ascii, &doubles).unwrap();
+        assert_eq!(
+            k.crs(),
+            Crs::Proj(
+                "+proj=utm +zone=25 +south +ellps=GRS80 +towgs84=0,0,0 +units=m +no_defs \
+                 +title=\"UTM Zone 25, Southern Hemisphere; GCS Name = GRS 1980(IUGG, 1980); \
+                 Datum = unknown; Ellipsoid = GRS80; Primem = Greenwich\""
+                    .into()
+            )
+        );
+        // Doubles out of range: no ellipsoid, so the description alone.
+        let k = parse_key_directory(&d, ascii, &doubles[..2]).unwrap();
+        assert!(matches!(k.crs(), Crs::Proj(_)), "2057 and 2059 are enough");
+        let k = parse_key_directory(&d, ascii, &[]).unwrap();
+        assert!(matches!(k.crs(), Crs::Projected(_)), "{:?}", k.crs());
+    }
+
+    #[test]
     fn short_directory_is_malformed() {
         let mut d = directory(&[[1024, 0, 1, 2], [2048, 0, 1, 4326]]);
         d.truncate(9);
-        let e = parse_key_directory(&d, "").unwrap_err().to_string();
+        let e = parse_key_directory(&d, "", &[]).unwrap_err().to_string();
         assert!(e.contains("12 SHORTs") && e.contains("found 9"), "{e}");
-        assert!(parse_key_directory(&[1, 1], "").is_err());
+        assert!(parse_key_directory(&[1, 1], "", &[]).is_err());
     }
 
     #[test]
@@ -527,7 +609,7 @@ mod tests {
     #[test]
     fn vertical_units() {
         let d = directory(&[[4099, 0, 1, 9002]]);
-        let k = parse_key_directory(&d, "").unwrap();
+        let k = parse_key_directory(&d, "", &[]).unwrap();
         assert_eq!(k.vertical_to_m(), 0.3048);
         assert_eq!(GeoKeys::default().vertical_to_m(), 1.0);
     }

@@ -27,6 +27,7 @@
 
 mod geokeys;
 mod nodata;
+mod projection;
 
 use std::io::{self, Cursor};
 use std::path::Path;
@@ -575,6 +576,12 @@ fn read_geo_tags(dec: &mut Dec<'_>) -> Result<GeoTags, ReadErrorKind> {
         Ok(Some(Value::Ascii(s))) => Some(s),
         _ => None,
     };
+    // Like the ASCII params, optional: unreadable doubles only leave a
+    // user-defined CRS as its description.
+    let double_params = match dec.find_tag(Tag::GeoDoubleParamsTag) {
+        Ok(Some(v)) => geokeys::numbers(v),
+        _ => None,
+    };
     Ok(GeoTags {
         scale: find_numbers(dec, Tag::ModelPixelScaleTag, "ModelPixelScaleTag (33550)")?,
         tiepoints: find_numbers(dec, Tag::ModelTiepointTag, "ModelTiepointTag (33922)")?,
@@ -585,6 +592,7 @@ fn read_geo_tags(dec: &mut Dec<'_>) -> Result<GeoTags, ReadErrorKind> {
         )?,
         key_directory,
         ascii_params,
+        double_params,
     })
 }
 
