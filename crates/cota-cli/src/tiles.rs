@@ -7,8 +7,8 @@ use std::time::Instant;
 use anyhow::Context;
 use cota_core::tiles::plan::{plan, plan_with};
 use cota_core::tiles::{
-    resampling_deviation, shard_plan, BandCorners, Deviation, ErrorSchedule, Lattice, Prepared,
-    Shard, TilerOptions, ZoomPlan,
+    resampling_deviation, shard_plan, BandCorners, Deviation, Lattice, Prepared, Shard, SourcePart,
+    TilerOptions, ZoomPlan,
 };
 use cota_core::{HeightGrid, LonLat};
 use cota_io::tiles::drawn::{Against, SourceGrid};
@@ -70,12 +70,13 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         drop(inp.grid);
         return plan_step(a, &lattice, &opts, files);
     }
-    // With --check, the source stays to check every tile against it as drawn.
-    let source = a.check.then_some(inp.grid);
     let t_prep = Instant::now();
     let spinner = progress::spinner("preparing");
-    let prepared = Prepared::new(&lattice, &opts).with_context(|| format!("tiling {name}"))?;
+    let prepared =
+        Prepared::new(&lattice, &inp.grid, &opts).with_context(|| format!("tiling {name}"))?;
     drop(spinner);
+    // With --check, the source stays to check every tile against it as drawn.
+    let source = a.check.then_some(inp.grid);
     let prep_s = t_prep.elapsed().as_secs_f64();
     let against = source.as_ref().map(|g| against(g, &lattice));
     let report = write(a, &prepared, None, against.as_ref())?;
@@ -106,15 +107,9 @@ fn against<'a>(source: &'a HeightGrid, lattice: &Lattice) -> Against<'a> {
 
 /// The error schedule and zooms of the arguments.
 fn tiler_options(a: &TilesArgs) -> TilerOptions {
-    let error = match (a.error_factor, a.max_error_m_at_max_zoom) {
-        (_, Some(e)) => ErrorSchedule::AtMaxZoom { max_error_m: e },
-        (q, None) => ErrorSchedule::Cesium {
-            factor: q.unwrap_or(1.0),
-        },
-    };
     TilerOptions::DEFAULT
         .with_min_zoom(a.min_zoom)
-        .with_error(error)
+        .with_error(tiles_part::error_schedule(a))
 }
 
 /// Prints the report (`part`: what a shard over a part read, or null).
@@ -152,10 +147,11 @@ fn run_part(
     let part = tiles_part::load_part(a, f, opts, index)?;
     let name = part.files_read.join(" + ");
     let t_prep = Instant::now();
-    let prepared = Prepared::new_part(&part.lattice, part.zooms.clone(), &part.stats)
+    let source = part.source_part();
+    let prepared = Prepared::new_part(&part.lattice, source, part.zooms.clone(), &part.stats)
         .with_context(|| format!("tiling {name}"))?;
     let prep_s = t_prep.elapsed().as_secs_f64();
-    let report = write(a, &prepared, Some((part.shard.clone(), f)), None)?;
+    let report = write(a, &prepared, Some((part.shard.clone(), f, source)), None)?;
     let times = [prep_s, t0.elapsed().as_secs_f64()];
     let info = json!({
         "band_zoom": f.band_zoom,
@@ -303,13 +299,13 @@ fn pyramid_options(a: &TilesArgs) -> PyramidOptions {
 fn write(
     a: &TilesArgs,
     prepared: &Prepared<'_>,
-    part: Option<(Shard, &ShardFrame)>,
+    part: Option<(Shard, &ShardFrame, SourcePart<'_>)>,
     against: Option<&Against<'_>>,
 ) -> anyhow::Result<PyramidReport> {
     let pyramid = pyramid_options(a);
-    let frame = part.as_ref().map(|p| p.1);
+    let frame = part.as_ref().map(|p| (p.1, p.2));
     let shard = match (part.as_ref(), a.shard) {
-        (Some((s, _)), _) => Some(s.clone()),
+        (Some((s, _, _)), _) => Some(s.clone()),
         (None, Some((i, n))) => Some(shard_plan(prepared.zooms(), n)?.swap_remove(i as usize)),
         (None, None) => None,
     };

@@ -4,7 +4,9 @@
 
 use std::path::PathBuf;
 
-use cota_core::tiles::{BandCorners, Lattice, LatticeOptions, TilerOptions, ZoomPlan};
+use cota_core::tiles::{
+    BandCorners, ErrorSchedule, Lattice, LatticeOptions, TilerOptions, ZoomPlan,
+};
 use cota_core::HeightGrid;
 use cota_io::tiles::{
     finish_plan, plan_layout, plan_layout_or, run_plan_part, Part, PlanPartReport, ShardFrame,
@@ -56,6 +58,17 @@ pub fn lattice_options(a: &TilesArgs) -> LatticeOptions {
     LatticeOptions::DEFAULT
         .with_max_zoom(a.max_zoom)
         .with_tile_cells(a.tile_cells)
+        .with_error(error_schedule(a))
+}
+
+/// The error schedule of the arguments.
+pub fn error_schedule(a: &TilesArgs) -> ErrorSchedule {
+    match (a.error_factor, a.max_error_m_at_max_zoom) {
+        (_, Some(e)) => ErrorSchedule::AtMaxZoom { max_error_m: e },
+        (q, None) => ErrorSchedule::Cesium {
+            factor: q.unwrap_or(1.0),
+        },
+    }
 }
 
 /// A reader of the input files a part needs (`None`: every input), as
@@ -195,7 +208,7 @@ mod tests {
         assert_eq!(corners.missing(), 0);
         let inp = input::load(&a.input).unwrap();
         let lat = Lattice::resample(&inp.grid, &lattice_options(&a)).unwrap();
-        let prep = Prepared::new(&lat, &opts).unwrap();
+        let prep = Prepared::new(&lat, &inp.grid, &opts).unwrap();
         let whole = frame_of(&a, &lat, prep.zooms(), file_extents(&a, &inp, 0));
         assert_eq!(format!("{streamed:?}"), format!("{whole:?}"));
         assert_eq!(streamed.stats.hi_m.to_bits(), whole.stats.hi_m.to_bits());

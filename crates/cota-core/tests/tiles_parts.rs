@@ -53,7 +53,7 @@ fn parts_cut_the_tiles_of_the_whole_hierarchy() {
     let src = source();
     let whole = Lattice::resample(&src, &LatticeOptions::DEFAULT).unwrap();
     let opts = TilerOptions::DEFAULT.with_min_zoom(3);
-    let prep = Prepared::new(&whole, &opts).unwrap();
+    let prep = Prepared::new(&whole, &src, &opts).unwrap();
     let zooms = plan(&whole, &opts).unwrap();
     let stats = LatticeStats::of(&whole);
     let frame = whole.frame().clone();
@@ -92,7 +92,7 @@ fn parts_cut_the_tiles_of_the_whole_hierarchy() {
             }
             let zs = cota_core::tiles::plan::plan_with(&frame, &stats, &opts).unwrap();
             assert_eq!(zs, zooms);
-            let part_prep = Prepared::new_part(&lat, zs, &stats).unwrap();
+            let part_prep = Prepared::new_part(&lat, part, zs, &stats).unwrap();
             for t in shard.tiles() {
                 assert!(part_prep.holds(t), "{t} n={n}");
                 let (a, b) = (
@@ -183,22 +183,24 @@ fn a_part_refuses_a_source_crop_that_misses_what_it_reads() {
     assert!(err.to_string().contains("covering"), "{err}");
 }
 
-/// Shard `shard`'s part of the lattice of `src` (band zoom `band`).
+/// Shard `shard`'s part of the lattice of `src` (band zoom `band`), with
+/// the source samples it was resampled from and their offset.
 fn part_of(
     src: &HeightGrid,
     frame: &LatticeFrame,
     shard: &Shard,
     band: u8,
     normals: bool,
-) -> Option<Lattice> {
+) -> Option<(Lattice, HeightGrid, [usize; 2])> {
     let region = part_region(shard, &frame.scheme, frame.window, band, normals)?;
     let span = frame.source_span(region).unwrap();
     let sub = crop(src, span);
-    let part = SourcePart {
-        grid: &sub,
-        offset: [span[0], span[1]],
-    };
-    Some(Lattice::resample_part(frame, part, region).unwrap())
+    let offset = [span[0], span[1]];
+    let part = SourcePart { grid: &sub, offset };
+    let lat = Lattice::resample_part(frame, part, region).unwrap();
+    Some((lat, sub, offset))
+}
+
 }
 
 /// The shards' partial maxima, merged, cut every tile coarser than the band
@@ -214,7 +216,7 @@ fn merged_partial_maxima_cut_the_coarse_tiles_of_the_whole_hierarchy() {
     let lopts = LatticeOptions::DEFAULT.with_tile_cells(16);
     let whole = Lattice::resample(&src, &lopts).unwrap();
     let opts = TilerOptions::DEFAULT;
-    let prep = Prepared::new(&whole, &opts).unwrap();
+    let prep = Prepared::new(&whole, &src, &opts).unwrap();
     let zooms = plan(&whole, &opts).unwrap();
     let stats = LatticeStats::of(&whole);
     let frame = whole.frame().clone();
@@ -226,19 +228,23 @@ fn merged_partial_maxima_cut_the_coarse_tiles_of_the_whole_hierarchy() {
         let mut partials = Vec::new();
         for shard in shard_plan(&zooms, n).unwrap() {
             let shard = shard.from_zoom(band);
-            let Some(lat) = part_of(&src, &frame, &shard, band, true) else {
+            let Some((lat, sub, offset)) = part_of(&src, &frame, &shard, band, true) else {
                 continue;
             };
             corners.fill_from(&lat);
             let owned = owned_region(&shard, &frame.scheme, band).unwrap();
-            partials.push((lat, owned));
+            partials.push((lat, sub, offset, owned));
         }
         let mut got = Vec::new();
-        for (lat, owned) in &partials {
-            let part_prep = Prepared::new_part(lat, zooms.clone(), &stats).unwrap();
+        for (lat, sub, offset, owned) in &partials {
+            let source = SourcePart {
+                grid: sub,
+                offset: *offset,
+            };
+            let part_prep = Prepared::new_part(lat, source, zooms.clone(), &stats).unwrap();
             got.push(
                 part_prep
-                    .coarse_partial(*owned, band, &corners, true, true)
+                    .coarse_partial(*owned, band, &corners, source, true, true)
                     .unwrap(),
             );
         }
@@ -280,11 +286,12 @@ fn a_missing_partial_is_refused() {
     let mut partials = Vec::new();
     for shard in shards.iter().skip(1) {
         let shard = shard.from_zoom(band);
-        let lat = part_of(&src, &frame, &shard, band, false).unwrap();
+        let (lat, sub, offset) = part_of(&src, &frame, &shard, band, false).unwrap();
         let owned = owned_region(&shard, &frame.scheme, band).unwrap();
-        let p = Prepared::new_part(&lat, zooms.clone(), &stats).unwrap();
+        let source = SourcePart { grid: &sub, offset };
+        let p = Prepared::new_part(&lat, source, zooms.clone(), &stats).unwrap();
         partials.push(
-            p.coarse_partial(owned, band, &corners, false, false)
+            p.coarse_partial(owned, band, &corners, source, false, false)
                 .unwrap(),
         );
     }

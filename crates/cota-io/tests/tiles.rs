@@ -70,7 +70,7 @@ fn fixture_pyramid_decodes_within_bounds_without_seams() {
     let g = load(&[common::fixture("S29W072.hgt.zip")]);
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT).unwrap();
     assert_eq!(lat.scheme().max_zoom, 12);
-    let prep = Prepared::new(&lat, &TilerOptions::DEFAULT).unwrap();
+    let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
     let out = tempfile::tempdir().unwrap();
     let ext = TileExtensions::with(true, true, true);
     let opts = PyramidOptions::DEFAULT.with_extensions(ext).with_gzip(true);
@@ -112,7 +112,7 @@ fn two_tile_mosaic_small_bounds_and_seams() {
     let opts = TilerOptions::DEFAULT
         .with_min_zoom(8)
         .with_error(ErrorSchedule::AtMaxZoom { max_error_m: 2.0 });
-    let prep = Prepared::new(&lat, &opts).unwrap();
+    let prep = Prepared::new(&lat, &g, &opts).unwrap();
     let out = tempfile::tempdir().unwrap();
     write_pyramid(&prep, out.path(), &PyramidOptions::DEFAULT, None, &|_| {}).unwrap();
     let tiles = decode_all(&prep, out.path());
@@ -124,7 +124,7 @@ fn two_tile_mosaic_small_bounds_and_seams() {
 fn unchecked_tiles_are_the_checked_tiles() {
     let g = load(&[common::fixture("S29W072.hgt.zip")]);
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(7))).unwrap();
-    let prep = Prepared::new(&lat, &TilerOptions::DEFAULT).unwrap();
+    let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
     let opts = PyramidOptions::DEFAULT.with_gzip(true);
     for t in prep.tiles() {
         let checked = make_tile(&prep, t, &opts, None).unwrap();
@@ -143,7 +143,7 @@ fn unchecked_tiles_are_the_checked_tiles() {
 fn resume_skips_force_redoes_and_changed_settings_are_refused() {
     let g = load(&[common::fixture("S29W072.hgt.zip")]);
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(8))).unwrap();
-    let prep = Prepared::new(&lat, &TilerOptions::DEFAULT).unwrap();
+    let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
     let out = tempfile::tempdir().unwrap();
     let first = write_pyramid(&prep, out.path(), &PyramidOptions::DEFAULT, None, &|_| {}).unwrap();
     let victim = tile_path(out.path(), prep.tiles().last().unwrap());
@@ -187,7 +187,7 @@ fn walk(dir: &Path) -> Vec<String> {
 fn unwritable_output_names_the_path() {
     let g = load(&[common::fixture("S29W072.hgt.zip")]);
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(6))).unwrap();
-    let prep = Prepared::new(&lat, &TilerOptions::DEFAULT).unwrap();
+    let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let file = common::write_file(dir.path(), "not-a-dir", b"x");
     let err = write_pyramid(&prep, &file, &PyramidOptions::DEFAULT, None, &|_| {}).unwrap_err();
@@ -282,7 +282,7 @@ fn truncated_and_corrupt_tiles_give_errors() {
 fn header_spheres_hold_the_vertices() {
     let g = load(&[common::fixture("S29W072.hgt.zip")]);
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(9))).unwrap();
-    let prep = Prepared::new(&lat, &TilerOptions::DEFAULT).unwrap();
+    let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
     for t in prep.tiles() {
         let tile = prep.cut(t, false, false).unwrap();
         let bytes = cota_io::tiles::encode_tile(&tile, &TileExtensions::NONE).unwrap();

@@ -8,9 +8,10 @@ use std::path::{Path, PathBuf};
 
 use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
-    shard_plan, BandCorners, ErrorSchedule, Lattice, LatticeOptions, Prepared, TilerOptions,
+    shard_plan, BandCorners, ErrorSchedule, Lattice, LatticeOptions, Prepared, SourcePart,
+    TilerOptions,
 };
-use cota_core::FillOptions;
+use cota_core::{FillOptions, HeightGrid};
 use cota_io::tiles::{
     file_extents, finish_plan, frame_of, load_part, mosaic_frame, plan_layout, plan_layout_or,
     read_part_files, read_part_files_in_turn, read_shard_frame, reduce_shards, run_plan_part,
@@ -61,6 +62,7 @@ fn lattice_options(s: &Settings) -> LatticeOptions {
     LatticeOptions::DEFAULT
         .with_max_zoom(s.max_zoom)
         .with_tile_cells(s.tile_cells)
+        .with_error(s.error)
 }
 
 /// The plan step's layout under `out` (the frame before the statistics,
@@ -93,7 +95,10 @@ fn part_error(e: PartError) -> PyErr {
 
 /// Reads, fills the voids and resamples; with where each file lies in the
 /// mosaic (empty when a shard must read every file: one file, voids, holes).
-fn lattice_and_files(paths: &[PathBuf], s: &Settings) -> PyResult<(Lattice, FileExtents)> {
+fn lattice_and_files(
+    paths: &[PathBuf],
+    s: &Settings,
+) -> PyResult<(HeightGrid, Lattice, FileExtents)> {
     let region = read_region(paths, &region_options()).map_err(errors::read)?;
     let lat = Lattice::resample(&region.grid, &lattice_options(s)).map_err(errors::mesh)?;
     let files = if region.voids > 0 || region.hole_samples > 0 {
@@ -101,12 +106,12 @@ fn lattice_and_files(paths: &[PathBuf], s: &Settings) -> PyResult<(Lattice, File
     } else {
         file_extents(&region.files, region.grid.georef())
     };
-    Ok((lat, files))
+    Ok((region.grid, lat, files))
 }
 
-/// Reads, fills the voids and resamples.
-fn lattice(paths: &[PathBuf], s: &Settings) -> PyResult<Lattice> {
-    lattice_and_files(paths, s).map(|(lat, _)| lat)
+/// Reads, fills the voids and resamples: the source and its lattice.
+fn lattice(paths: &[PathBuf], s: &Settings) -> PyResult<(HeightGrid, Lattice)> {
+    lattice_and_files(paths, s).map(|(grid, lat, _)| (grid, lat))
 }
 
 /// What decides the lattice and the plan: a shard refuses a plan step's
@@ -131,10 +136,16 @@ fn write_part(
     let normals = opts.extensions.normals;
     let part =
         load_part(out, f, &frame_key(paths, s), &tiler(s), i, normals, read).map_err(part_error)?;
-    let prep =
-        Prepared::new_part(&part.lattice, part.zooms.clone(), &part.stats).map_err(errors::mesh)?;
+    let prep = Prepared::new_part(
+        &part.lattice,
+        part.source_part(),
+        part.zooms.clone(),
+        &part.stats,
+    )
+    .map_err(errors::mesh)?;
+    let frame = Some((f, part.source_part()));
     let report =
-        write_shard(&prep, out, opts, &part.shard, Some(f), &|_| {}).map_err(errors::write)?;
+        write_shard(&prep, out, opts, &part.shard, frame, &|_| {}).map_err(errors::write)?;
     Ok((part.shard.tile_count(), report, part.files_read))
 }
 
@@ -199,8 +210,8 @@ pub(crate) fn tiles<'py>(
                 return Ok((t, r, Some(files)));
             }
         }
-        let lat = lattice(&paths, &s)?;
-        let prep = Prepared::new(&lat, &tiler(&s)).map_err(errors::mesh)?;
+        let (grid, lat) = lattice(&paths, &s)?;
+        let prep = Prepared::new(&lat, &grid, &tiler(&s)).map_err(errors::mesh)?;
         let report = match shard {
             Some((i, n)) => {
                 let part = shard_plan(prep.zooms(), n)
@@ -274,7 +285,7 @@ pub(crate) fn tiles_plan_step<'py>(
             let coarse = frame.coarse_tiles;
             return Ok((frame, coarse));
         }
-        let (lat, files) = lattice_and_files(&paths, &s)?;
+        let (_, lat, files) = lattice_and_files(&paths, &s)?;
         let zooms = plan(&lat, &tiler(&s)).map_err(errors::mesh)?;
         let frame = frame_of(frame_key(&paths, &s), shards, &lat, &zooms, files);
         let mut corners = BandCorners::new(lat.window(), lat.scheme().cells_at(frame.band_zoom));
@@ -437,7 +448,7 @@ pub(crate) fn tiles_plan<'py>(
         max_error_m_at_max_zoom,
     );
     let parts = py.detach(|| -> PyResult<_> {
-        let lat = lattice(&paths, &s)?;
+        let (_, lat) = lattice(&paths, &s)?;
         let zooms = plan(&lat, &tiler(&s)).map_err(errors::mesh)?;
         shard_plan(&zooms, shards).map_err(errors::value)
     })?;

@@ -26,12 +26,14 @@ use super::cap::{square_halves, Cap};
 use super::drawn::{DrawnBound, LevelRule, ZoomRules};
 use super::error::TilesError;
 use super::lattice::Lattice;
+use super::lattice::SourcePart;
 use super::plan::{children_in, plan_with, LatticeStats, TileRange, TilerOptions, ZoomPlan};
 use super::scheme::{GeographicScheme, TileId};
-use crate::bitree::closure::max_closure;
-use crate::bitree::error_code::{decode, SplitRule};
+use super::source_error::{own_errors, Samples, BY_SAMPLE_BELOW};
+use crate::bitree::closure::{max_closure, source_closure};
 use crate::bitree::Bitree;
 use crate::grid::metres_per_degree;
+use crate::grid::HeightGrid;
 use crate::hierarchy::{orient_up, Pt, Tri};
 use crate::mesh::check::Region;
 use crate::mesh::{Mesh, MeshVertex};
@@ -90,10 +92,13 @@ pub struct Prepared<'l> {
     lattice: &'l Lattice,
     tree: Bitree<'l>,
     cap: Cap,
-    /// Per stored point, the code of the closure of the source's residuals
-    /// ([`super::fit`], `bitree::closure`).
+    /// Per stored point, the code of the bound of its error against the
+    /// source's own samples (`bitree::closure::source_closure`).
+    src: Vec<u16>,
+    /// Per stored point, the code of the closure of the fitted lattice's
+    /// residuals ([`super::fit`]).
     dev: Vec<u16>,
-    /// The same closure above the window's bitree.
+    /// That closure above the window's bitree.
     dev_cap: Cap,
     zooms: Vec<ZoomPlan>,
     bound: DrawnBound,
@@ -129,7 +134,11 @@ impl<'l> Prepared<'l> {
     /// # Runtime
     /// The window's [`Bitree::build`] (`O(n log n)`) plus `O(n)` per coarse
     /// level, for `n` window samples.
-    pub fn new(lattice: &'l Lattice, opts: &TilerOptions) -> Result<Self, TilesError> {
+    pub fn new(
+        lattice: &'l Lattice,
+        source: &HeightGrid,
+        opts: &TilerOptions,
+    ) -> Result<Self, TilesError> {
         if lattice.is_part() {
             return Err(TilesError::BadOptions(
                 "expected a lattice over its whole window, found a part (use Prepared::new_part)"
@@ -140,13 +149,18 @@ impl<'l> Prepared<'l> {
         let zooms = plan_with(lattice.frame(), &stats, opts)?;
         let tree = Bitree::build(lattice.grid())?;
         let cap = Cap::build(lattice, &tree);
-        let dev = max_closure(tree.hierarchy(), lattice.near_codes());
+        let whole = SourcePart {
+            grid: source,
+            offset: [0, 0],
+        };
+        let (src, dev) = source_codes(lattice, &tree, whole);
         let dev_cap = Cap::build_closure(lattice, &dev);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), &stats, &zooms);
         Ok(Prepared {
             lattice,
             tree,
             cap,
+            src,
             dev,
             dev_cap,
             zooms,
@@ -172,16 +186,18 @@ impl<'l> Prepared<'l> {
     /// The part's [`Bitree::build`].
     pub fn new_part(
         lattice: &'l Lattice,
+        source: SourcePart<'_>,
         zooms: Vec<ZoomPlan>,
         stats: &LatticeStats,
     ) -> Result<Self, TilesError> {
         let tree = Bitree::build(lattice.grid())?;
-        let dev = max_closure(tree.hierarchy(), lattice.near_codes());
+        let (src, dev) = source_codes(lattice, &tree, source);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), stats, &zooms);
         Ok(Prepared {
             lattice,
             tree,
             cap: Cap::default(),
+            src,
             dev,
             dev_cap: Cap::default(),
             zooms,
@@ -222,13 +238,14 @@ impl<'l> Prepared<'l> {
             && hi(y, w[3]) <= st[3]
     }
 
-    /// The window bitree's code of the split point `m` (stored by a part),
-    /// and the code of its residuals' closure.
-    pub(crate) fn code_at(&self, m: Pt) -> (u16, u16) {
+    /// The window bitree's codes of the split point `m` (stored by a part):
+    /// its lattice error, its bound against the source, its residuals'
+    /// closure.
+    pub(crate) fn code_at(&self, m: Pt) -> [u16; 3] {
         let [x0, y0, _, _] = self.lattice.stored();
         let w = self.lattice.grid().width();
         let i = (u64::from(m[1]) - y0) as usize * w + (u64::from(m[0]) - x0) as usize;
-        (self.tree.error_codes()[i], self.dev[i])
+        [self.tree.error_codes()[i], self.src[i], self.dev[i]]
     }
 
     /// The lattice.
@@ -332,10 +349,8 @@ impl<'l> Prepared<'l> {
         let size = t.a[0].abs_diff(t.b[0]).max(t.a[1].abs_diff(t.b[1]));
         let top = self.lattice.scheme().cells_at(self.lattice.align_zoom());
         if u64::from(size) > top {
-            return match less(rule, self.dev_cap.error(m)) {
-                None => true,
-                Some(rule) => f64::from(self.cap.error(m)) > f64::from(rule.threshold),
-            };
+            let e = f64::from(self.cap.error(m)) + f64::from(self.dev_cap.error(m));
+            return e > f64::from(rule.threshold);
         }
         // Beyond the window every error is 0; a part holds the split points
         // its tiles read ([`Prepared::holds`]).
@@ -346,10 +361,7 @@ impl<'l> Prepared<'l> {
         }
         let w = self.lattice.grid().width();
         let i = (y - y0) as usize * w + (x - x0) as usize;
-        match less(rule, decode(self.dev[i])) {
-            None => true,
-            Some(rule) => self.tree.splits_index(i, &rule),
-        }
+        self.src[i] > rule.floor || self.tree.splits_index(i, &rule)
     }
 
     /// The leaves as a mesh in tile coordinates, vertices in first-use order.
@@ -382,16 +394,40 @@ impl<'l> Prepared<'l> {
     }
 }
 
-/// `rule` with its threshold lowered by `dev_m` (a split point's closure of
-/// the source's residuals) and rounded down to a code value; `None` when
-/// nothing is left (the point always splits).
-#[inline]
-pub(crate) fn less(rule: SplitRule, dev_m: f32) -> Option<SplitRule> {
-    if dev_m <= 0.0 {
-        return Some(rule);
+/// Squares of this side and larger have their error against the source's
+/// samples measured ([`super::source_error`]); below, it is bounded by the
+/// lattice error plus the residuals' closure.
+pub const SOURCE_FROM_CELLS: u64 = 2;
+
+/// Per stored point of `lattice` (whose bitree is `tree`): the bound of its
+/// error against the source's samples in `source`
+/// (`bitree::closure::source_closure`) and the closure of the residuals.
+fn source_codes(
+    lattice: &Lattice,
+    tree: &Bitree<'_>,
+    source: SourcePart<'_>,
+) -> (Vec<u16>, Vec<u16>) {
+    let g = lattice.grid();
+    let samples = Samples::new(lattice.frame(), source, lattice.stored());
+    let top = lattice.scheme().cells_at(lattice.align_zoom());
+    let height = |x: u64, y: u64| lattice.height_at(x, y);
+    let t0 = std::time::Instant::now();
+    let own = own_errors(
+        &samples,
+        lattice.origin(),
+        [g.width(), g.height()],
+        [SOURCE_FROM_CELLS, top],
+        BY_SAMPLE_BELOW.min(u64::from(lattice.scheme().tile_cells)),
+        &height,
+    );
+    let t1 = std::time::Instant::now();
+    let dev = max_closure(tree.hierarchy(), lattice.near_codes());
+    let codes = [tree.error_codes(), dev.as_slice(), own.as_slice()];
+    let src = source_closure(tree.hierarchy(), codes, SOURCE_FROM_CELLS as u32);
+    if std::env::var("COTA_TIMING").is_ok() {
+        eprintln!("own {:?} closures {:?}", t1 - t0, t1.elapsed());
     }
-    let t = f64::from(rule.threshold) - f64::from(dev_m);
-    (t >= 0.0).then(|| SplitRule::at_code(SplitRule::new(t).floor))
+    (src, dev)
 }
 
 /// The leaves under the square with north-west corner `o` and side `cells`,

@@ -26,7 +26,9 @@ use std::sync::Mutex;
 
 use super::cap::{own_rows, square_tris, t_heights, Cap};
 use super::cut::rules_of;
-use super::cut::{in_window, less, mesh_of_leaves, walk_leaves, water_of, TileMesh, WaterMask, UP};
+use super::cut::{
+    in_window, mesh_of_leaves, walk_leaves, water_of, TileMesh, WaterMask, SOURCE_FROM_CELLS, UP,
+};
 use super::drawn::{LevelRule, ZoomRules};
 use super::error::TilesError;
 use super::lattice::LatticeFrame;
@@ -50,9 +52,9 @@ pub struct CoarseHierarchy {
     fine: HashMap<u64, (u32, f32)>,
     /// The band squares' centres and the window bitree's levels above:
     /// their 16-bit codes (the rules' thresholds are code values, so a code
-    /// decides exactly, see [`super::drawn::DrawnBound::rules`]) and their
-    /// closures' of the source's residuals.
-    coded: HashMap<u64, (u16, u16)>,
+    /// decides exactly, see [`super::drawn::DrawnBound::rules`]): the
+    /// lattice error, the bound against the source, the residuals' closure.
+    coded: HashMap<u64, [u16; 3]>,
     cap: Cap,
     dev_cap: Cap,
     normals: HashMap<(u64, u8), [f32; 3]>,
@@ -108,27 +110,34 @@ impl CoarseHierarchy {
         };
         let own = h.absorb(partials);
         h.bitree_levels(&own)?;
+        let own = own.0;
         h.cap = h.cap_levels(&own, false)?;
         h.dev_cap = h.cap_levels(&own, true)?;
         Ok(h)
     }
 
-    /// Takes the shards' data in; returns the merged own errors.
-    fn absorb(&mut self, partials: Vec<CoarsePartial>) -> HashMap<u64, f32> {
+    /// Takes the shards' data in; returns the merged own errors (against
+    /// the lattice, against the source).
+    fn absorb(&mut self, partials: Vec<CoarsePartial>) -> (HashMap<u64, f32>, HashMap<u64, f32>) {
         let mut own: HashMap<u64, f32> = HashMap::default();
+        let mut own_src: HashMap<u64, f32> = HashMap::default();
         let t = self.frame.scheme.cells_at(self.band);
         for p in partials {
             for f in p.fine {
                 let centre = f.at.map(u64::from).map(|v| v % t == t / 2);
                 if centre == [true, true] {
-                    let slot = self.coded.entry(key(f.at)).or_insert((0, 0));
-                    *slot = (slot.0.max(f.code), slot.1.max(f.dev));
+                    let slot = self.coded.entry(key(f.at)).or_insert([0; 3]);
+                    *slot = [slot[0].max(f.code), slot[1].max(f.src), slot[2].max(f.dev)];
                 }
                 let slot = self.fine.entry(key(f.at)).or_insert((0, f.height_m));
                 slot.0 |= f.splits;
             }
             for (m, e) in p.own {
                 let slot = own.entry(key(m)).or_insert(0.0);
+                *slot = slot.max(e);
+            }
+            for (m, e) in p.own_src {
+                let slot = own_src.entry(key(m)).or_insert(0.0);
                 *slot = slot.max(e);
             }
             for (m, z, n) in p.normals {
@@ -149,11 +158,14 @@ impl CoarseHierarchy {
                 }
             }
         }
-        own
+        (own, own_src)
     }
 
-    /// The window bitree's levels above the band squares: codes and bits.
-    fn bitree_levels(&mut self, own: &HashMap<u64, f32>) -> Result<(), TilesError> {
+    /// The window bitree's levels above the band squares: their codes.
+    fn bitree_levels(
+        &mut self,
+        own: &(HashMap<u64, f32>, HashMap<u64, f32>),
+    ) -> Result<(), TilesError> {
         let s = self.frame.scheme;
         let t = s.cells_at(self.band);
         let top = s.cells_at(self.frame.align_zoom);
@@ -165,12 +177,12 @@ impl CoarseHierarchy {
                 .collect();
             for &[i, j] in &squares {
                 for tri in square_tris(i, j, size).0 {
-                    self.join(own, &tri)?;
+                    self.join(own, &tri, size)?;
                 }
             }
             for &[i, j] in &squares {
                 for tri in square_tris(i, j, size).1 {
-                    self.join(own, &tri)?;
+                    self.join(own, &tri, size)?;
                 }
             }
             size *= 2;
@@ -178,22 +190,34 @@ impl CoarseHierarchy {
         Ok(())
     }
 
-    /// Adds triangle `tri`'s own error and its children's to its split point.
-    fn join(&mut self, own: &HashMap<u64, f32>, tri: &Tri) -> Result<(), TilesError> {
-        let e = own.get(&key(tri.mid())).copied().unwrap_or(0.0);
-        let (mut code, mut dev) = (encode_up(e), 0u16);
+    /// Adds triangle `tri`'s own errors and its children's to its split
+    /// point (of a square of side `size`), as the bitree and
+    /// `bitree::closure::source_closure` build them.
+    fn join(
+        &mut self,
+        (own, own_src): &(HashMap<u64, f32>, HashMap<u64, f32>),
+        tri: &Tri,
+        size: u64,
+    ) -> Result<(), TilesError> {
+        let m = key(tri.mid());
+        let e = own.get(&m).copied().unwrap_or(0.0);
+        let e_src = own_src.get(&m).copied().unwrap_or(0.0);
+        let mut c = [encode_up(e), encode_up(e_src), 0u16];
         let (c0, c1) = tri.children();
-        for c in [c0.mid(), c1.mid()] {
-            let (cc, cd) = self
+        for q in [c0.mid(), c1.mid()] {
+            let cc = self
                 .coded
-                .get(&key(c))
+                .get(&key(q))
                 .copied()
-                .ok_or_else(|| incomplete(format!("the split point {c:?}")))?;
-            code = code.max(cc);
-            dev = dev.max(cd);
+                .ok_or_else(|| incomplete(format!("the split point {q:?}")))?;
+            c = [c[0].max(cc[0]), c[1].max(cc[1]), c[2].max(cc[2])];
         }
-        let slot = self.coded.entry(key(tri.mid())).or_insert((0, 0));
-        *slot = (slot.0.max(code), slot.1.max(dev));
+        let slot = self.coded.entry(m).or_insert([0; 3]);
+        *slot = [slot[0].max(c[0]), slot[1].max(c[1]), slot[2].max(c[2])];
+        if size < SOURCE_FROM_CELLS {
+            let sum = f64::from(decode(slot[0])) + f64::from(decode(slot[2]));
+            slot[1] = encode_up(round_up_f32(sum));
+        }
         Ok(())
     }
 
@@ -219,7 +243,7 @@ impl CoarseHierarchy {
                 return 0.0;
             }
             match self.coded.get(&key(m)) {
-                Some(&(code, d)) => decode(if dev { d } else { code }),
+                Some(&c) => decode(if dev { c[2] } else { c[0] }),
                 None => {
                     if let Ok(mut g) = missing.lock() {
                         *g = Some(m);
@@ -260,10 +284,8 @@ impl CoarseHierarchy {
         let size = tri.a[0].abs_diff(tri.b[0]).max(tri.a[1].abs_diff(tri.b[1]));
         let s = self.frame.scheme;
         if u64::from(size) > s.cells_at(self.frame.align_zoom) {
-            return match less(rule, self.dev_cap.error(m)) {
-                None => true,
-                Some(rule) => f64::from(self.cap.error(m)) > f64::from(rule.threshold),
-            };
+            let e = f64::from(self.cap.error(m)) + f64::from(self.dev_cap.error(m));
+            return e > f64::from(rule.threshold);
         }
         let [x0, y0, x1, y1] = self.frame.window;
         let (x, y) = (u64::from(m[0]), u64::from(m[1]));
@@ -271,10 +293,9 @@ impl CoarseHierarchy {
             return false;
         }
         if u64::from(size) > s.cells_at(self.band) {
-            let Some(&(code, dev)) = self.coded.get(&key(m)) else {
-                return false;
-            };
-            less(rule, decode(dev)).is_none_or(|r| code > r.floor)
+            self.coded
+                .get(&key(m))
+                .is_some_and(|c| c[0] > rule.floor || c[1] > rule.floor)
         } else {
             self.fine.get(&key(m)).is_some_and(|f| f.0 & (1 << i) != 0)
         }

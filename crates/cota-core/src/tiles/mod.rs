@@ -39,6 +39,7 @@ pub mod partial;
 pub mod plan;
 pub mod scheme;
 pub mod shard;
+pub mod source_error;
 
 pub use cut::{Prepared, TileMesh, WaterMask, NORMAL_REACH_CELLS};
 pub use drawn::{DrawnBound, LevelStats};

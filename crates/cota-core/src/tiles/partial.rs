@@ -33,9 +33,10 @@ use super::cap::{own_rows, square_halves, square_tris, t_heights};
 use super::cut::{normal_at, water_sample, Prepared};
 use super::drawn::{DrawnBound, ZoomRules};
 use super::error::TilesError;
-use super::lattice::Lattice;
+use super::lattice::{Lattice, SourcePart};
 use super::plan::ZoomPlan;
 use super::scheme::TileId;
+use super::source_error::{triangle_error, Samples};
 use crate::bitree::{clipped_span_error, round_up_f32};
 use crate::hierarchy::{Pt, Tri};
 
@@ -124,8 +125,11 @@ pub struct FinePoint {
     pub splits: u32,
     /// Its 16-bit error code (band squares' centres; 0 for the others).
     pub code: u16,
-    /// The code of its closure of the source's residuals (band squares'
+    /// The code of its bound against the source's samples (band squares'
     /// centres; 0 for the others).
+    pub src: u16,
+    /// The code of its closure of the fitted lattice's residuals (band
+    /// squares' centres; 0 for the others).
     pub dev: u16,
     /// The lattice's height there, metres.
     pub height_m: f32,
@@ -139,6 +143,9 @@ pub struct CoarsePartial {
     /// Coarse split points' own errors over the shard's samples, rounded up
     /// to `f32` (absent: 0).
     pub own: Vec<([u32; 2], f32)>,
+    /// The window bitree's coarse split points' own errors against the
+    /// source's samples the shard owns, rounded up to `f32` (absent: 0).
+    pub own_src: Vec<([u32; 2], f32)>,
     /// Vertex normals: position, zoom, unit (east, north, up).
     pub normals: Vec<([u32; 2], u8, [f32; 3])>,
     /// Water-mask samples of coarse tiles: 255 water, 0 land,
@@ -190,6 +197,7 @@ impl Prepared<'_> {
         owned: [u64; 4],
         band: u8,
         corners: &BandCorners,
+        source: SourcePart<'_>,
         normals: bool,
         water: bool,
     ) -> Result<CoarsePartial, TilesError> {
@@ -207,6 +215,7 @@ impl Prepared<'_> {
         }
         let fine = fine_points(self, owned, t, &rules);
         let own = own_partials(self, owned, t, corners)?;
+        let own_src = source_partials(self, owned, t, corners, source)?;
         let normals = if normals {
             vertex_normals(self, owned, t, &fine, &rules)
         } else {
@@ -220,6 +229,7 @@ impl Prepared<'_> {
         Ok(CoarsePartial {
             fine,
             own,
+            own_src,
             normals,
             water,
         })
@@ -270,11 +280,12 @@ fn fine_points(
             let sq = [[x0, y0], [x0 + s, y0], [x0, y0 + s], [x0 + s, y0 + s]];
             let halves = square_halves(sq, (x / t + y / t).is_multiple_of(2));
             let centre = halves[0].mid();
-            let (code, dev) = prep.code_at(centre);
+            let [code, src, dev] = prep.code_at(centre);
             let mut out = vec![FinePoint {
                 at: centre,
                 splits: mask(&halves[0]),
                 code,
+                src,
                 dev,
                 height_m: lat.height_at(u64::from(centre[0]), u64::from(centre[1])),
             }];
@@ -291,6 +302,7 @@ fn fine_points(
                         at: m,
                         splits: mask(&tri),
                         code: 0,
+                        src: 0,
                         dev: 0,
                         height_m: lat.height_at(u64::from(m[0]), u64::from(m[1])),
                     });
@@ -367,6 +379,69 @@ fn own_partials(
         size *= 2;
     }
     Ok(own.into_iter().map(|(k, e)| (unkey(k), e)).collect())
+}
+
+/// The own errors against the source's samples in `owned` of the window
+/// bitree's split points above squares of side `t` (up to the alignment
+/// zoom's squares), planes from the band `corners`.
+fn source_partials(
+    prep: &Prepared<'_>,
+    owned: [u64; 4],
+    t: u64,
+    corners: &BandCorners,
+    source: SourcePart<'_>,
+) -> Result<Vec<([u32; 2], f32)>, TilesError> {
+    let lat = prep.lattice();
+    let s = lat.scheme();
+    let top = s.cells_at(lat.align_zoom());
+    let [x0, y0, x1, y1] = lat.window();
+    let samples = Samples::new(lat.frame(), source, owned);
+    let mut own: HashMap<u64, f32> = HashMap::default();
+    let mut size = 2 * t;
+    while size <= top {
+        let range = [x0 / size, y0 / size, x1 / size - 1, y1 / size - 1];
+        let found: Vec<(Pt, f32)> = squares_meeting(owned, size, range)
+            .par_iter()
+            .map(|&[i, j]| {
+                let (sides, halves) = square_tris(i, j, size);
+                sides
+                    .into_iter()
+                    .chain(halves)
+                    .map(|tri| {
+                        let z = corner_heights(&tri, corners)?;
+                        Ok((tri.mid(), triangle_error(&tri, z, &samples, owned)))
+                    })
+                    .collect::<Result<Vec<_>, TilesError>>()
+            })
+            .collect::<Result<Vec<_>, TilesError>>()?
+            .into_iter()
+            .flatten()
+            .filter(|(_, e)| *e > 0.0)
+            .collect();
+        for (m, e) in found {
+            let slot = own.entry(key(m)).or_insert(0.0);
+            *slot = slot.max(e);
+        }
+        size *= 2;
+    }
+    Ok(own.into_iter().map(|(k, e)| (unkey(k), e)).collect())
+}
+
+/// The heights of `tri`'s corners from the band corners.
+fn corner_heights(tri: &Tri, corners: &BandCorners) -> Result<[f64; 3], TilesError> {
+    let missing = std::cell::Cell::new(None);
+    let z = t_heights(tri, |x, y| {
+        corners.height(x, y).unwrap_or_else(|| {
+            missing.set(Some([x, y]));
+            0.0
+        })
+    });
+    match missing.get() {
+        Some([x, y]) => Err(TilesError::BadOptions(format!(
+            "expected the band corners to hold the height at lattice ({x}, {y}), found none"
+        ))),
+        None => Ok(z),
+    }
 }
 
 /// The own error of the coarse triangle `tri` over the samples of `owned`

@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use cota_core::tiles::{
     owned_region, shard_plan, BandCorners, CoarseHierarchy, CoarsePartial, FinePoint, Prepared,
-    TileId, TileRange, ZoomPlan,
+    SourcePart, TileId, TileRange, ZoomPlan,
 };
 use rayon::prelude::*;
 
@@ -242,14 +242,17 @@ fn encode_partial(h: &PartialHeader, p: &CoarsePartial) -> Vec<u8> {
         b.extend(f.at[1].to_le_bytes());
         b.extend(f.splits.to_le_bytes());
         b.extend(f.code.to_le_bytes());
+        b.extend(f.src.to_le_bytes());
         b.extend(f.dev.to_le_bytes());
         b.extend(f.height_m.to_le_bytes());
     }
-    b.extend((p.own.len() as u64).to_le_bytes());
-    for (m, e) in &p.own {
-        b.extend(m[0].to_le_bytes());
-        b.extend(m[1].to_le_bytes());
-        b.extend(e.to_le_bytes());
+    for own in [&p.own, &p.own_src] {
+        b.extend((own.len() as u64).to_le_bytes());
+        for (m, e) in own {
+            b.extend(m[0].to_le_bytes());
+            b.extend(m[1].to_le_bytes());
+            b.extend(e.to_le_bytes());
+        }
     }
     b.extend((p.normals.len() as u64).to_le_bytes());
     for (m, z, n) in &p.normals {
@@ -297,19 +300,24 @@ fn decode_partial(r: &mut Reader<'_>) -> Result<(PartialHeader, CoarsePartial), 
         });
     }
     let mut p = CoarsePartial::default();
-    for _ in 0..r.count(20)? {
+    for _ in 0..r.count(22)? {
         let at = [r.u32()?, r.u32()?];
-        let (splits, code, dev, height_m) = (r.u32()?, r.u16()?, r.u16()?, r.f32()?);
+        let (splits, code) = (r.u32()?, r.u16()?);
+        let (src, dev, height_m) = (r.u16()?, r.u16()?, r.f32()?);
         p.fine.push(FinePoint {
             at,
             splits,
             code,
+            src,
             dev,
             height_m,
         });
     }
     for _ in 0..r.count(12)? {
         p.own.push(([r.u32()?, r.u32()?], r.f32()?));
+    }
+    for _ in 0..r.count(12)? {
+        p.own_src.push(([r.u32()?, r.u32()?], r.f32()?));
     }
     for _ in 0..r.count(21)? {
         let (m, z) = ([r.u32()?, r.u32()?], r.u8()?);
@@ -403,6 +411,7 @@ pub fn read_partial(path: &Path) -> Result<(PartialHeader, CoarsePartial), Pyram
 /// [`PyramidError::Io`].
 pub fn write_shard_partial(
     prep: &Prepared<'_>,
+    source: SourcePart<'_>,
     out: &Path,
     frame: &ShardFrame,
     index: u32,
@@ -417,7 +426,7 @@ pub fn write_shard_partial(
     let owned = shard.and_then(|s| owned_region(&s, &frame.frame.scheme, band));
     let ext = opts.extensions;
     let partial = match owned {
-        Some(o) => prep.coarse_partial(o, band, &corners, ext.normals, ext.watermask)?,
+        Some(o) => prep.coarse_partial(o, band, &corners, source, ext.normals, ext.watermask)?,
         None => CoarsePartial::default(),
     };
     let header = PartialHeader {

@@ -105,12 +105,26 @@ pub struct Part {
     pub zooms: Vec<ZoomPlan>,
     /// The whole lattice's statistics (the plan's and the drawn bound's).
     pub stats: LatticeStats,
+    /// The source samples the part was resampled from.
+    pub source: HeightGrid,
+    /// Where they sit in the whole source, `[column, row]`.
+    pub source_offset: [usize; 2],
     /// The shard's tiles of the band zoom and finer.
     pub shard: Shard,
     /// The resampling's deviation over the source samples in the part.
     pub deviation: Deviation,
     /// The input files read.
     pub files_read: Vec<String>,
+}
+
+impl Part {
+    /// The source samples of the part, as the tiler takes them.
+    pub fn source_part(&self) -> SourcePart<'_> {
+        SourcePart {
+            grid: &self.source,
+            offset: self.source_offset,
+        }
+    }
 }
 
 /// Reads the files shard `index` of the frame `f` (found under `out`) needs
@@ -169,6 +183,8 @@ pub fn load_part<E: From<PyramidError>>(
         lattice,
         zooms,
         stats: f.stats.clone(),
+        source: grid,
+        source_offset: offset,
         shard,
         deviation,
         files_read,
@@ -282,7 +298,7 @@ mod tests {
         let lo = LatticeOptions::DEFAULT.with_max_zoom(Some(10));
         let lat = Lattice::resample(&region.grid, &lo).unwrap();
         let opts = TilerOptions::DEFAULT;
-        let prep = Prepared::new(&lat, &opts).unwrap();
+        let prep = Prepared::new(&lat, &region.grid, &opts).unwrap();
         let frame = frame_of("k".into(), 4, &lat, prep.zooms(), files);
         let out = tempfile::tempdir().unwrap();
         write_shard_frame(out.path(), &frame).unwrap();

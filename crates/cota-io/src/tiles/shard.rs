@@ -31,7 +31,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use cota_core::tiles::{BandCorners, Prepared, Shard};
+use cota_core::tiles::{BandCorners, Prepared, Shard, SourcePart};
 use serde_json::{json, Value};
 
 use super::coarse::{
@@ -78,14 +78,14 @@ pub fn write_shard(
     out: &Path,
     opts: &PyramidOptions,
     shard: &Shard,
-    frame: Option<&ShardFrame>,
+    frame: Option<(&ShardFrame, SourcePart<'_>)>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<PyramidReport, PyramidError> {
     let t0 = Instant::now();
     let tiles: Vec<_> = shard.tiles().collect();
     let outcomes = write_tiles(prep, out, opts, None, &tiles, progress)?;
-    if let Some(f) = frame {
-        write_shard_partial(prep, out, f, shard.index, opts)?;
+    if let Some((f, source)) = frame {
+        write_shard_partial(prep, source, out, f, shard.index, opts)?;
     }
     let record = json!({
         "shard": shard.index,

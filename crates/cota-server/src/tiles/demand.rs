@@ -66,7 +66,7 @@ impl DemandTileSource {
         options: PyramidOptions,
     ) -> Result<Self> {
         let lattice = Lattice::resample(grid, lattice)?;
-        let pyramid = Pyramid::try_new(lattice, |l| Prepared::new(l, tiler))?;
+        let pyramid = Pyramid::try_new(lattice, |l| Prepared::new(l, grid, tiler))?;
         let layer = layer_json(pyramid.borrow_dependent(), &options.extensions);
         Ok(DemandTileSource {
             layer: Bytes::from(format!("{layer:#}\n")),

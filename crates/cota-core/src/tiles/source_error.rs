@@ -1,0 +1,444 @@
+//! The error of a hierarchy triangle against the **source's own samples**
+//! that fall in it: the quantity a tile's bound is stated against.
+//!
+//! Paper `000_ebf7e3a88dffd361.txt` §3.2: a triangle's error is the largest
+//! |plane − h| over the samples it covers. The bitree ([`crate::Bitree`])
+//! measures it over the lattice's points; here the same is measured over
+//! the source's samples, which the lattice does not hold (they fall between
+//! its points), so a tile's triangle is judged against what the user gave.
+//!
+//! A triangle's samples are found row by row: the source is geographic on
+//! an affine grid, so each source row has one latitude (one lattice row
+//! position `y`) and its columns increasing longitudes; the triangle's
+//! edges are axis-aligned or diagonal, so at each `y` it spans one interval
+//! of `x`, and the columns inside it are one run, found by bisection.
+//!
+//! How it enters the decisions (with the lattice's own error and the fitted
+//! lattice's residuals, [`super::fit`]): see [`super::cut`].
+//!
+//! # Runtime
+//! Per level, every source sample in the region is read once (twice on a
+//! shared edge), in parallel over the level's split points.
+
+use rayon::prelude::*;
+
+use super::lattice::{LatticeFrame, SourcePart};
+use crate::bitree::error_code::encode_up;
+use crate::bitree::round_up_f32;
+use crate::hierarchy::{Pt, Tri};
+use crate::mesh::raster::Plane;
+
+/// The source's samples placed on the global lattice: per column and per row
+/// (of the part) its position, in increasing order.
+#[derive(Debug, Clone)]
+pub struct Samples<'a> {
+    /// The part of the source.
+    pub part: SourcePart<'a>,
+    /// Per column in range: `(column of the part, global lattice x)`.
+    pub cols: Vec<(usize, f64)>,
+    /// Per row in range: `(row of the part, global lattice y)`.
+    pub rows: Vec<(usize, f64)>,
+}
+
+impl<'a> Samples<'a> {
+    /// The samples of `part` (a part of `frame`'s source) whose positions lie
+    /// in `region` (global `[x0, y0, x1, y1]`, inclusive).
+    pub fn new(frame: &LatticeFrame, part: SourcePart<'a>, region: [u64; 4]) -> Samples<'a> {
+        let (g, d) = (&frame.source_georef, frame.scheme.cell_deg());
+        let [ox, oy] = part.offset;
+        let inside = |v: f64, lo: u64, hi: u64| v >= lo as f64 && v <= hi as f64;
+        let mut cols: Vec<(usize, f64)> = (0..part.grid.width())
+            .map(|c| (c, (g.sample_xy((ox + c) as f64, 0.0).0 + 180.0) / d))
+            .filter(|p| inside(p.1, region[0], region[2]))
+            .collect();
+        let mut rows: Vec<(usize, f64)> = (0..part.grid.height())
+            .map(|r| (r, (90.0 - g.sample_xy(0.0, (oy + r) as f64).1) / d))
+            .filter(|p| inside(p.1, region[1], region[3]))
+            .collect();
+        cols.sort_by(|a, b| a.1.total_cmp(&b.1));
+        rows.sort_by(|a, b| a.1.total_cmp(&b.1));
+        Samples { part, cols, rows }
+    }
+
+    /// The height of the sample at placement column `i`, row `j`.
+    #[inline]
+    fn height(&self, i: usize, j: usize) -> f64 {
+        let g = self.part.grid;
+        f64::from(g.heights()[self.rows[j].0 * g.width() + self.cols[i].0])
+    }
+}
+
+/// The largest |plane − h| over the samples of `s` inside triangle `t`
+/// (corner heights `z`) and inside `clip` (global, inclusive), rounded up
+/// to `f32`; 0 when none.
+pub fn triangle_error(t: &Tri, z: [f64; 3], s: &Samples<'_>, clip: [u64; 4]) -> f32 {
+    let p = [t.a, t.b, t.c];
+    let Some(plane) = Plane::new(p, z) else {
+        return 0.0;
+    };
+    let ys = p.map(|q| f64::from(q[1]));
+    let (ymin, ymax) = (ys[0].min(ys[1]).min(ys[2]), ys[0].max(ys[1]).max(ys[2]));
+    let (ylo, yhi) = (ymin.max(clip[1] as f64), ymax.min(clip[3] as f64));
+    let j0 = s.rows.partition_point(|r| r.1 < ylo);
+    let j1 = s.rows.partition_point(|r| r.1 <= yhi);
+    let mut e = 0f64;
+    for j in j0..j1 {
+        let y = s.rows[j].1;
+        let Some((xl, xr)) = span_at(&p, y) else {
+            continue;
+        };
+        let (xl, xr) = (xl.max(clip[0] as f64), xr.min(clip[2] as f64));
+        let i0 = s.cols.partition_point(|c| c.1 < xl);
+        let i1 = s.cols.partition_point(|c| c.1 <= xr);
+        for i in i0..i1 {
+            e = e.max((plane.at(s.cols[i].1, y) - s.height(i, j)).abs());
+        }
+    }
+    round_up_f32(e)
+}
+
+/// The interval of `x` that the triangle `p` covers at height `y` (closed),
+/// with a relative slack of `1e-12` so samples on an edge count in both
+/// triangles that share it.
+fn span_at(p: &[Pt; 3], y: f64) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for k in 0..3 {
+        let (a, b) = (p[k], p[(k + 1) % 3]);
+        let (ax, ay, bx, by) = (
+            f64::from(a[0]),
+            f64::from(a[1]),
+            f64::from(b[0]),
+            f64::from(b[1]),
+        );
+        let eps = 1e-12 * (ay.abs() + by.abs() + 1.0);
+        if y < ay.min(by) - eps || y > ay.max(by) + eps {
+            continue;
+        }
+        if ay == by {
+            lo = lo.min(ax.min(bx));
+            hi = hi.max(ax.max(bx));
+        } else {
+            let x = ax + (bx - ax) * (y - ay) / (by - ay);
+            lo = lo.min(x);
+            hi = hi.max(x);
+        }
+    }
+    let eps = 1e-12 * (lo.abs() + 1.0);
+    (lo <= hi).then_some((lo - eps, hi + eps))
+}
+
+/// Per stored point of a region (`origin`, `w × h`, row-major), the code of
+/// the own error against `s` of the split points of squares of side
+/// `sizes[0]` to `sizes[1]` whose triangles lie inside the region: the
+/// largest of its diamond's triangles' [`triangle_error`]s. Heights from
+/// `height` (global position). Other points: 0.
+///
+/// Squares smaller than `by_sample_below` cells are done sample by sample
+/// (each finds its triangles at each level in closed form: they are many
+/// and each holds a few samples); larger ones triangle by triangle, row
+/// spans of samples ([`triangle_error`], as the reduce of a sharded run
+/// computes them: `by_sample_below` must not exceed its band squares).
+pub fn own_errors(
+    s: &Samples<'_>,
+    origin: [u64; 2],
+    [w, h]: [usize; 2],
+    sizes: [u64; 2],
+    by_sample_below: u64,
+    height: &(impl Fn(u64, u64) -> f32 + Sync),
+) -> Vec<u16> {
+    let region = [
+        origin[0],
+        origin[1],
+        origin[0] + w as u64 - 1,
+        origin[1] + h as u64 - 1,
+    ];
+    let at =
+        |m: Pt| (u64::from(m[1]) - origin[1]) as usize * w + (u64::from(m[0]) - origin[0]) as usize;
+    let first = sizes[0].max(2).next_power_of_two();
+    let last = sizes[1].min(w.max(h) as u64);
+    let split = by_sample_below.clamp(first, last.max(first));
+    let small: Vec<u64> = pow2(first, split / 2).collect();
+    let t0 = std::time::Instant::now();
+    let mut out = by_sample(s, region, &small, height, &at, w * h);
+    if std::env::var("COTA_TIMING").is_ok() {
+        eprintln!("by_sample {:?}", t0.elapsed());
+    }
+    for size in pow2(split, last) {
+        for (m, code) in level_errors(s, region, size, height) {
+            let i = at(m);
+            out[i] = out[i].max(code);
+        }
+    }
+    out
+}
+
+/// Squares smaller than this many cells (and than a maximum-zoom tile):
+/// [`own_errors`] sample by sample.
+pub const BY_SAMPLE_BELOW: u64 = 32;
+
+/// The powers of two from `a` to `b` inclusive.
+fn pow2(a: u64, b: u64) -> impl Iterator<Item = u64> {
+    std::iter::successors(Some(a), |&v| Some(v * 2)).take_while(move |&v| v <= b)
+}
+
+/// [`own_errors`] for the squares of the sides `sizes`, sample by sample:
+/// each sample in the region, at each size, finds the half (`A`) and the
+/// side triangle (`B`) of its square that hold it, and raises their split
+/// points' codes (a sample on an edge counts once: both triangles' planes
+/// agree there). The sizes' split points are distinct points, so each size
+/// is one task with its own array, merged at the end.
+fn by_sample(
+    s: &Samples<'_>,
+    region: [u64; 4],
+    sizes: &[u64],
+    height: &(impl Fn(u64, u64) -> f32 + Sync),
+    at: &(impl Fn(Pt) -> usize + Sync),
+    n: usize,
+) -> Vec<u16> {
+    let per_size: Vec<(u64, SizeCodes)> = sizes
+        .par_iter()
+        .map(|&size| (size, size_codes(s, region, size, height)))
+        .collect();
+    let mut codes = vec![0u16; n];
+    for (size, c) in per_size {
+        c.for_each(size, |m, code| {
+            let i = at(m);
+            codes[i] = codes[i].max(code);
+        });
+    }
+    codes
+}
+
+/// One size's codes, per square of the region's grid of `size`-squares
+/// (one more row and column for the last squares' east and south sides):
+/// the centre (`A`), the north side's and the west side's midpoints (`B`).
+struct SizeCodes {
+    first: [u64; 2],
+    dims: [usize; 2],
+    codes: [Vec<u16>; 3],
+}
+
+impl SizeCodes {
+    /// Calls `f` with every split point that got a code, and the code.
+    fn for_each(&self, size: u64, mut f: impl FnMut(Pt, u16)) {
+        let h = size / 2;
+        for j in 0..self.dims[1] {
+            for i in 0..self.dims[0] {
+                let k = j * self.dims[0] + i;
+                let (x, y) = (
+                    (self.first[0] + i as u64) * size,
+                    (self.first[1] + j as u64) * size,
+                );
+                let pts = [[x + h, y + h], [x + h, y], [x, y + h]];
+                for (c, p) in self.codes.iter().zip(pts) {
+                    if c[k] > 0 {
+                        f([p[0] as u32, p[1] as u32], c[k]);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The codes of one size (see [`SizeCodes`]), the samples in turn, each
+/// against the closed-form planes of the half and the side triangle of its
+/// square that hold it.
+fn size_codes(
+    s: &Samples<'_>,
+    region: [u64; 4],
+    size: u64,
+    height: &(impl Fn(u64, u64) -> f32 + Sync),
+) -> SizeCodes {
+    let first = [region[0].div_ceil(size), region[1].div_ceil(size)];
+    let dims = [
+        ((region[2] / size + 2).saturating_sub(first[0])) as usize,
+        ((region[3] / size + 2).saturating_sub(first[1])) as usize,
+    ];
+    let mut codes = [0, 1, 2].map(|_| vec![0u16; dims[0] * dims[1]]);
+    let sz = size as f64;
+    let h = |x: u64, y: u64| f64::from(height(x, y));
+    for (j, &(_, y)) in s.rows.iter().enumerate() {
+        let sj = (y / sz).floor();
+        if sj < 0.0 {
+            continue;
+        }
+        let (sj, fy) = (sj as u64, y / sz - sj);
+        let y0 = sj * size;
+        if y0 < region[1] || y0 + size > region[3] {
+            continue;
+        }
+        for (i, &(_, x)) in s.cols.iter().enumerate() {
+            let si = (x / sz).floor();
+            if si < 0.0 {
+                continue;
+            }
+            let (si, fx) = (si as u64, x / sz - si);
+            let x0 = si * size;
+            if x0 < region[0] || x0 + size > region[2] {
+                continue;
+            }
+            let corners = [
+                h(x0, y0),
+                h(x0 + size, y0),
+                h(x0, y0 + size),
+                h(x0 + size, y0 + size),
+                h(x0 + size / 2, y0 + size / 2),
+            ];
+            let (a, b) = square_planes(corners, (si + sj).is_multiple_of(2), fx, fy);
+            let hs = s.height(i, j);
+            let k = (sj - first[1]) as usize * dims[0] + (si - first[0]) as usize;
+            let code = |z: f64| encode_up(round_up_f32((z - hs).abs()));
+            codes[0][k] = codes[0][k].max(code(a));
+            // The side triangle's split point: north (this square's), west
+            // (this square's), south (the next row's north), east (the next
+            // column's west).
+            let (arr, kk) = match b.1 {
+                Side::North => (1, k),
+                Side::West => (2, k),
+                Side::South => (1, k + dims[0]),
+                Side::East => (2, k + 1),
+            };
+            codes[arr][kk] = codes[arr][kk].max(code(b.0));
+        }
+    }
+    SizeCodes { first, dims, codes }
+}
+
+/// A side of a square.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Side {
+    North,
+    East,
+    South,
+    West,
+}
+
+/// At `(fx, fy)` in a square (fractions east and south of its north-west
+/// corner) whose corner heights are `[nw, ne, sw, se, centre]` and whose
+/// diagonal runs `\` when `even`: the plane of the half (`A`) that holds
+/// the point, and the plane of the side triangle (`B`, apex at the centre)
+/// that holds it, with its side. The planes of [`super::cap::square_tris`]
+/// in closed form.
+#[inline]
+fn square_planes(
+    [nw, ne, sw, se, c]: [f64; 5],
+    even: bool,
+    fx: f64,
+    fy: f64,
+) -> (f64, (f64, Side)) {
+    let half = match (even, fx >= fy, fx + fy <= 1.0) {
+        (true, true, _) => nw + (ne - nw) * fx + (se - ne) * fy,
+        (true, false, _) => nw + (sw - nw) * fy + (se - sw) * fx,
+        (false, _, true) => nw + (ne - nw) * fx + (sw - nw) * fy,
+        (false, _, false) => se + (sw - se) * (1.0 - fx) + (ne - se) * (1.0 - fy),
+    };
+    let side = if fy <= fx && fy <= 1.0 - fx {
+        (nw + (ne - nw) * fx + (2.0 * c - nw - ne) * fy, Side::North)
+    } else if fx >= fy && fx >= 1.0 - fy {
+        (
+            ne + (se - ne) * fy + (2.0 * c - ne - se) * (1.0 - fx),
+            Side::East,
+        )
+    } else if fy >= fx && fy >= 1.0 - fx {
+        (
+            sw + (se - sw) * fx + (2.0 * c - sw - se) * (1.0 - fy),
+            Side::South,
+        )
+    } else {
+        (nw + (sw - nw) * fy + (2.0 * c - nw - sw) * fx, Side::West)
+    };
+    (half, side)
+}
+
+/// The codes of the triangles of the squares of side `size` inside
+/// `region` (its sides as `B(size)` and halves as `A(size)`), each at its
+/// split point.
+fn level_errors(
+    s: &Samples<'_>,
+    region: [u64; 4],
+    size: u64,
+    height: &(impl Fn(u64, u64) -> f32 + Sync),
+) -> Vec<(Pt, u16)> {
+    let (i0, i1) = (region[0].div_ceil(size), (region[2] + 1) / size);
+    let (j0, j1) = (region[1].div_ceil(size), (region[3] + 1) / size);
+    if i0 >= i1 || j0 >= j1 {
+        return Vec::new();
+    }
+    (j0..j1)
+        .into_par_iter()
+        .flat_map_iter(|j| {
+            (i0..i1).flat_map(move |i| {
+                let (sides, halves) = super::cap::square_tris(i, j, size);
+                sides.into_iter().chain(halves).map(move |t| {
+                    let z = [t.a, t.b, t.c]
+                        .map(|q| f64::from(height(u64::from(q[0]), u64::from(q[1]))));
+                    (t.mid(), encode_up(triangle_error(&t, z, s, region)))
+                })
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+    use crate::grid::{Crs, GeoRef, HeightGrid, PixelIs};
+    use crate::tiles::{LatticeOptions, TileId};
+
+    #[test]
+    fn spans_hold_edges_and_nothing_else() {
+        let p = [[0, 0], [4, 4], [4, 0]];
+        assert_eq!(
+            span_at(&p, 2.0).map(|(a, b)| (a.round(), b.round())),
+            Some((2.0, 4.0))
+        );
+        assert!(span_at(&p, 4.5).is_none());
+        let (a, b) = span_at(&p, 0.0).unwrap();
+        assert!(a <= 0.0 && b >= 4.0);
+    }
+
+    /// A single peak between lattice points: the triangle over it sees it.
+    #[test]
+    fn a_peak_between_points_is_seen() {
+        let n = 11;
+        let mut v = vec![10f32; n * n];
+        v[5 * n + 5] = 60.0;
+        let g = GeoRef {
+            crs: Crs::WGS84,
+            origin_x: 10.0,
+            origin_y: 1.0,
+            pixel_x: 0.01,
+            pixel_y: -0.01,
+            pixel_is: PixelIs::Point,
+            known: true,
+        };
+        let grid = HeightGrid::new(n, n, v, g).unwrap();
+        let frame = LatticeFrame::of(&grid, &LatticeOptions::DEFAULT).unwrap();
+        let part = SourcePart {
+            grid: &grid,
+            offset: [0, 0],
+        };
+        let s = Samples::new(&frame, part, frame.window);
+        assert_eq!((s.cols.len(), s.rows.len()), (n, n));
+        let (x, y) = (s.cols[5].1, s.rows[5].1);
+        let (x0, y0) = ((x as u32) - 3, (y as u32) - 3);
+        let t = Tri {
+            a: [x0, y0],
+            b: [x0 + 8, y0 + 8],
+            c: [x0 + 8, y0],
+        };
+        let t2 = Tri {
+            a: t.b,
+            b: t.a,
+            c: [x0, y0 + 8],
+        };
+        let e = triangle_error(&t, [10.0; 3], &s, frame.window).max(triangle_error(
+            &t2,
+            [10.0; 3],
+            &s,
+            frame.window,
+        ));
+        assert!((e - 50.0).abs() < 1e-3, "{e}");
+        let _ = TileId { z: 0, x: 0, y: 0 };
+    }
+}
