@@ -201,8 +201,6 @@ fn part_of(
     Some((lat, sub, offset))
 }
 
-}
-
 /// The shards' partial maxima, merged, cut every tile coarser than the band
 /// zoom exactly as the whole hierarchy does: meshes, normals and water
 /// masks, for 1 to 11 shards (band zooms at and below the alignment zoom),
