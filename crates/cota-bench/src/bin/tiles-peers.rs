@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use cota_core::mesh::check::check_placed_mesh;
-use cota_core::tiles::{Lattice, LatticeOptions, Prepared, SourcePart, TileId, TilerOptions};
+use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
 use cota_core::{fill_voids, mosaic, FillOptions, HeightGrid, MosaicOptions};
 use cota_io::tiles::{compare_border, decode, tile_path, DecodedTile, Neighbour};
 use serde_json::json;
