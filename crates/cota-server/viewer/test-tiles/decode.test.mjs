@@ -109,14 +109,18 @@ const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a
  * barycentric coordinate of the meeting point (≥ 0 when inside).
  */
 function meet(T, o, n) {
-  const den = dot(T.nrm, n);
+  const [N0, N1, N2] = T.nrm;
+  const den = N0 * n[0] + N1 * n[1] + N2 * n[2];
   if (!(Math.abs(den) > 1e-12 * Math.sqrt(T.nn))) return { t: NaN, inside: -Infinity };
-  const w = [o[0] - T.p0[0], o[1] - T.p0[1], o[2] - T.p0[2]];
-  const t = -dot(T.nrm, w) / den;
-  const x = [w[0] + t * n[0], w[1] + t * n[1], w[2] + t * n[2]];
-  // x = b1·e1 + b2·e2 in the plane.
-  const b1 = dot(cross(x, T.e2), T.nrm) / T.nn;
-  const b2 = dot(cross(T.e1, x), T.nrm) / T.nn;
+  const [w0, w1, w2] = [o[0] - T.p0[0], o[1] - T.p0[1], o[2] - T.p0[2]];
+  const t = -(N0 * w0 + N1 * w1 + N2 * w2) / den;
+  // The meeting point relative to the first vertex, x = b1·e1 + b2·e2 in the plane:
+  // b1 = (x × e2)·N / |N|², b2 = (e1 × x)·N / |N|².
+  const [x0, x1, x2] = [w0 + t * n[0], w1 + t * n[1], w2 + t * n[2]];
+  const [e0, e1, e2] = T.e2;
+  const [f0, f1, f2] = T.e1;
+  const b1 = ((x1 * e2 - x2 * e1) * N0 + (x2 * e0 - x0 * e2) * N1 + (x0 * e1 - x1 * e0) * N2) / T.nn;
+  const b2 = ((f1 * x2 - f2 * x1) * N0 + (f2 * x0 - f0 * x2) * N1 + (f0 * x1 - f1 * x0) * N2) / T.nn;
   return { t, inside: Math.min(b1, b2, 1 - b1 - b2) };
 }
 
@@ -146,7 +150,9 @@ function locator(t, d) {
   /** The triangle whose longitude/latitude footprint holds the point, with the point's barycentric weights. */
   return (lon, lat) => {
     for (const k of cells[gi(lon, w, e) + G * gi(lat, s, n)]) {
-      const [a, b, c] = [d.verts[tri[3 * k]], d.verts[tri[3 * k + 1]], d.verts[tri[3 * k + 2]]];
+      const a = d.verts[tri[3 * k]];
+      const b = d.verts[tri[3 * k + 1]];
+      const c = d.verts[tri[3 * k + 2]];
       const det = (b.lon - a.lon) * (c.lat - a.lat) - (c.lon - a.lon) * (b.lat - a.lat);
       const l1 = ((b.lon - lon) * (c.lat - lat) - (c.lon - lon) * (b.lat - lat)) / det;
       const l2 = ((c.lon - lon) * (a.lat - lat) - (a.lon - lon) * (c.lat - lat)) / det;
@@ -157,10 +163,17 @@ function locator(t, d) {
   };
 }
 
-/** Calls f(lon, lat, height, ecefFoot, normal) for every DEM sample inside the tile's rectangle (voids skipped). */
+/**
+ * Calls f(lon, lat, height, foot, normal) for every DEM sample inside the
+ * tile's rectangle (voids skipped): `foot` the sample's position on the
+ * ellipsoid (ECEF), `normal` the unit normal there (both reused: read them
+ * before returning).
+ */
 function demSamples(t, f) {
   const [w, s, e, n] = rect(t);
   const e2 = 1 - (WGS84_B * WGS84_B) / (WGS84_A * WGS84_A);
+  const foot = new Float64Array(3);
+  const nrm = new Float64Array(3);
   for (const p of D.parts) {
     const k = p.n - 1;
     const c0 = Math.max(0, Math.ceil((w - p.lon) * k));
@@ -183,8 +196,9 @@ function demSamples(t, f) {
         const h = p.h[r * p.n + c];
         if (h === -32768) continue;
         const [clo, slo] = cl[c - c0];
-        const nrm = [cp * clo, cp * slo, sp];
-        f(p.lon + c / k, lat, h, [N * nrm[0], N * nrm[1], N * (1 - e2) * sp], nrm);
+        [nrm[0], nrm[1], nrm[2]] = [cp * clo, cp * slo, sp];
+        [foot[0], foot[1], foot[2]] = [N * nrm[0], N * nrm[1], N * (1 - e2) * sp];
+        f(p.lon + c / k, lat, h, foot, nrm);
       }
     }
   }
@@ -219,7 +233,7 @@ test('every DEM sample is within its zoom bound e_z as drawn (along the normal) 
     for (let k = 0; k < tri.length; k++) around[tri[k]].push(Math.floor(k / 3));
     demSamples(t, (lon, lat, h, o, n) => {
       const under = find(lon, lat);
-      assert.ok(under, `${key(t)}: DEM sample ${lon},${lat} under no triangle`);
+      if (!under) assert.fail(`${key(t)}: DEM sample ${lon},${lat} under no triangle`);
       // As drawn: the normal line against the flat triangle over the sample, else its neighbours,
       // else every triangle of the tile and of its same-zoom neighbours.
       let m = meet(tris[under.k], o, n);
@@ -234,7 +248,7 @@ test('every DEM sample is within its zoom bound e_z as drawn (along the normal) 
           if (c.inside > m.inside) m = c;
         }
       }
-      assert.ok(m.inside >= -1e-9, `${key(t)}: no drawn triangle over the DEM sample ${lon},${lat} (best ${m.inside})`);
+      if (!(m.inside >= -1e-9)) assert.fail(`${key(t)}: no drawn triangle over the DEM sample ${lon},${lat} (best ${m.inside})`);
       const drawn = Math.abs(m.t - h);
       if (!(drawn <= maxError + 1e-6)) {
         assert.fail(`${key(t)}: DEM ${h} at ${lon},${lat}: drawn ${m.t} m along the normal, |Δ| ${drawn} > e_${t.z} ${maxError}`);
@@ -274,18 +288,18 @@ test('random points of every drawn triangle: the ellipsoid within e_z away from 
     const visit = (x, y, z) => {
       const g = toGeodetic(x, y, z);
       const out = outside(FP, g.lon, g.lat);
-      const where = `${key(t)} ${g.lon.toFixed(5)},${g.lat.toFixed(5)} h ${g.h.toFixed(2)}`;
+      const where = () => `${key(t)} ${g.lon.toFixed(5)},${g.lat.toFixed(5)} h ${g.h.toFixed(2)}`;
       if (out > far) {
         const dev = Math.abs(g.h);
-        if (!(dev <= maxError + 1e-6)) assert.fail(`${where}: ${fmt(out)}° from the data, ${dev} m off the ellipsoid > e_${t.z} ${maxError}`);
-        if (dev >= zs.away) [zs.away, zs.awayAt] = [dev, where];
+        if (!(dev <= maxError + 1e-6)) assert.fail(`${where()}: ${fmt(out)}° from the data, ${dev} m off the ellipsoid > e_${t.z} ${maxError}`);
+        if (dev >= zs.away) [zs.away, zs.awayAt] = [dev, where()];
         zs.awayN++;
       } else if (out === 0) {
         const ref = D.at(g.lon, g.lat);
         if (ref === undefined) return;
         const dev = Math.abs(g.h - ref);
-        assert.ok(dev <= 3 * maxError, `${where}: DEM ${ref}, |Δ| ${dev} > 3 e_${t.z} (sanity)`);
-        if (dev >= zs.inside) [zs.inside, zs.insideAt] = [dev, `${where} DEM ${ref.toFixed(2)}`];
+        if (!(dev <= 3 * maxError)) assert.fail(`${where()}: DEM ${ref}, |Δ| ${dev} > 3 e_${t.z} (sanity)`);
+        if (dev >= zs.inside) [zs.inside, zs.insideAt] = [dev, `${where()} DEM ${ref.toFixed(2)}`];
         zs.insideN++;
       } else {
         zs.between++;
