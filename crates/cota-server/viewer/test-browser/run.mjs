@@ -10,8 +10,8 @@
 //  2. the CesiumJS page over real quantized-mesh tiles of the same input, twice:
 //     a `cota tiles` output served with --tiles DIR, and tiles made on demand
 //     by `cota serve` itself: tiles load, no tile or console error, and
-//     sampleTerrainMostDetailed agrees with the DEM within the finest zoom's
-//     bound plus the lattice's own deviation.
+//     sampleTerrainMostDetailed agrees with the DEM at DEM samples within the
+//     finest zoom's bound.
 // Usage: node test-browser/run.mjs [--docs DIR] [--cesium-only] (COTA_BIN: the cota binary,
 // default target/release/cota; CHROMIUM: default /usr/bin/chromium).
 // Writes target/viewer-tests/results.json and screenshots beside it.
@@ -263,7 +263,7 @@ async function cesiumTest(browser, input, tiles, mode) {
       const out = await C.sampleTerrainMostDetailed(window.cotaCesium.terrainProvider, carto);
       return out.map((c) => c.height);
     }, pts);
-    const bound = layer.cota.errors.find((e) => e.zoom === layer.maxzoom).max_error_m + tiles.report.lattice.deviation_max_m;
+    const bound = layer.cota.errors.find((e) => e.zoom === layer.maxzoom).max_error_m;
     const worst = Math.max(...pts.map((q, k) => Math.abs(got[k] - q.h)));
     check(`CesiumJS heights agree with the DEM (${mode})`, pts.length > 300 && worst <= bound + 1e-3,
       `${pts.length} points at zoom ${layer.maxzoom}, largest |Cesium − DEM| ${worst.toFixed(3)} m, bound ${bound.toFixed(3)} m`);

@@ -5,7 +5,8 @@
 //   COTA_TILES         the pyramid directory (layer.json, {z}/{x}/{y}.terrain)
 //   COTA_TILES_DEM     the SRTM files it was made from, comma-separated
 //                      (.hgt or single-member .hgt.zip; position from the name)
-//   COTA_TILES_REPORT  `cota tiles --json` output (for the lattice's deviation)
+//   COTA_TILES_REPORT  `cota tiles --json` output (its per-zoom figures are
+//                      printed beside the tests' own; no bound uses it)
 import fs from 'node:fs';
 import path from 'node:path';
 import zlib from 'node:zlib';
@@ -23,7 +24,7 @@ export function requireEnv() {
 export const layer = () => JSON.parse(fs.readFileSync(path.join(tilesDir, 'layer.json'), 'utf8'));
 export const report = () => JSON.parse(fs.readFileSync(reportPath, 'utf8'));
 
-/** The bound of each zoom and its quantization margin, from layer.json. */
+/** The bound e_z of each zoom and its quantization margin, from layer.json. */
 export function bounds(l) {
   const out = new Map();
   for (const e of l.cota.errors) out.set(e.zoom, { maxError: e.max_error_m, margin: e.max_error_m - e.threshold_m });
@@ -115,3 +116,104 @@ export function readDem(files) {
 
 /** The DEM of COTA_TILES_DEM. */
 export const dem = () => readDem(demFiles);
+
+// ---- WGS 84, written here from the ellipsoid's definition (no code of cota's).
+
+/** WGS 84 semi-major and semi-minor axes, metres. */
+export const WGS84_A = 6378137.0;
+export const WGS84_B = 6356752.314245179;
+const E2 = 1 - (WGS84_B * WGS84_B) / (WGS84_A * WGS84_A);
+const RAD = Math.PI / 180;
+
+/** Earth-centred (ECEF) metres of a geodetic position: degrees, metres along the normal. */
+export function toEcef(lon, lat, h) {
+  const l = lon * RAD;
+  const p = lat * RAD;
+  const sp = Math.sin(p);
+  const cp = Math.cos(p);
+  const n = WGS84_A / Math.sqrt(1 - E2 * sp * sp); // prime vertical radius
+  return [(n + h) * cp * Math.cos(l), (n + h) * cp * Math.sin(l), (n * (1 - E2) + h) * sp];
+}
+
+/** The ellipsoid's outward unit normal at a geodetic longitude, latitude (degrees). */
+export function normalAt(lon, lat) {
+  const l = lon * RAD;
+  const p = lat * RAD;
+  return [Math.cos(p) * Math.cos(l), Math.cos(p) * Math.sin(l), Math.sin(p)];
+}
+
+/**
+ * Geodetic longitude, latitude (degrees) and height (metres along the
+ * normal) of an ECEF position: the latitude by fixed-point iteration of
+ * tan φ = z / (r (1 − e² N/(N + h))) until it moves less than 1e-14 rad
+ * (a few steps near the surface), then h from whichever of r and z is
+ * better conditioned at that latitude.
+ */
+export function toGeodetic(x, y, z) {
+  const r = Math.hypot(x, y);
+  const lon = Math.atan2(y, x);
+  let lat = Math.atan2(z, r * (1 - E2));
+  let h = 0;
+  for (let k = 0; k < 20; k++) {
+    const s = Math.sin(lat);
+    const c = Math.cos(lat);
+    const n = WGS84_A / Math.sqrt(1 - E2 * s * s);
+    h = Math.abs(c) > 0.5 ? r / c - n : z / s - n * (1 - E2);
+    const next = Math.atan2(z, r * (1 - (E2 * n) / (n + h)));
+    const done = Math.abs(next - lat) < 1e-14;
+    lat = next;
+    if (done) break;
+  }
+  const s = Math.sin(lat);
+  const c = Math.cos(lat);
+  const n = WGS84_A / Math.sqrt(1 - E2 * s * s);
+  h = Math.abs(c) > 0.5 ? r / c - n : z / s - n * (1 - E2);
+  return { lon: lon / RAD, lat: lat / RAD, h };
+}
+
+// ---- The DEM's footprint and the tiling.
+
+/** The footprint of the DEM: one [west, south, east, north] per SRTM tile (its samples' extent). */
+export const footprint = (d) => d.parts.map((p) => [p.lon, p.lat, p.lon + 1, p.lat + 1]);
+
+/**
+ * How far (degrees, the larger of the longitude and latitude gaps) a point
+ * is outside the footprint; 0 inside or on its edge. Longitudes wrap.
+ */
+export function outside(rects, lon, lat) {
+  let best = Infinity;
+  for (const [w, s, e, n] of rects) {
+    let dx = Infinity;
+    for (const k of [-360, 0, 360]) {
+      const x = lon + k;
+      dx = Math.min(dx, Math.max(w - x, 0, x - e));
+    }
+    const dy = Math.max(s - lat, 0, lat - n);
+    best = Math.min(best, Math.max(dx, dy));
+  }
+  return best;
+}
+
+/** The area (square degrees) a rectangle shares with the footprint (its rectangles do not overlap but may share edges). */
+export function sharedArea(rects, [w, s, e, n]) {
+  let a = 0;
+  for (const [fw, fs, fe, fn] of rects) {
+    a += Math.max(0, Math.min(e, fe) - Math.max(w, fw)) * Math.max(0, Math.min(n, fn) - Math.max(s, fs));
+  }
+  return a;
+}
+
+/** The width (degrees) of a tile of zoom z in the geographic TMS tiling (two root tiles). */
+export const tileDeg = (z) => 180 / 2 ** z;
+
+/** A seeded pseudo-random generator in [0, 1) (mulberry32): the same points every run. */
+export function random(seed) {
+  let a = seed >>> 0;
+  return () => {
+    a = (a + 0x6d2b79f5) >>> 0;
+    let t = a;
+    t = Math.imul(t ^ (t >>> 15), t | 1);
+    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
+    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
+  };
+}
