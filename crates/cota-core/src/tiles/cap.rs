@@ -67,24 +67,6 @@ impl Cap {
         Cap::build_with(s.root_cells(), window, top, own, below)
     }
 
-    /// The closure above the window's bitree of the per-point codes `dev`
-    /// (the window's, row-major): each coarse split point's largest value
-    /// over its children's.
-    pub(crate) fn build_closure(lattice: &Lattice, dev: &[u16]) -> Cap {
-        let s = lattice.scheme();
-        let top = s.cells_at(lattice.align_zoom());
-        let window = lattice.window();
-        let w = lattice.grid().width();
-        let below = |m: Pt| {
-            let (x, y) = (u64::from(m[0]), u64::from(m[1]));
-            if x < window[0] || x > window[2] || y < window[1] || y > window[3] {
-                return 0.0;
-            }
-            error_code::decode(dev[(y - window[1]) as usize * w + (x - window[0]) as usize])
-        };
-        Cap::build_with(s.root_cells(), window, top, |_| 0.0, below)
-    }
-
     /// The coarse levels above squares of side `top` over `window`, on a
     /// world of `root_cells` rows: `own(T)` the own error of a coarse
     /// triangle, `below(m)` the error of a split point of the level `top`

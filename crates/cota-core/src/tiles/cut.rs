@@ -30,7 +30,8 @@ use super::lattice::SourcePart;
 use super::plan::{children_in, plan_with, LatticeStats, TileRange, TilerOptions, ZoomPlan};
 use super::scheme::{GeographicScheme, TileId};
 use super::source_error::{own_errors, Samples, BY_SAMPLE_BELOW};
-use crate::bitree::closure::{max_closure, source_closure};
+use crate::bitree::closure::source_closure;
+use crate::bitree::error_code::SplitRule;
 use crate::bitree::Bitree;
 use crate::grid::metres_per_degree;
 use crate::grid::HeightGrid;
@@ -92,14 +93,13 @@ pub struct Prepared<'l> {
     lattice: &'l Lattice,
     tree: Bitree<'l>,
     cap: Cap,
-    /// Per stored point, the code of the bound of its error against the
-    /// source's own samples (`bitree::closure::source_closure`).
+    /// Per stored point, the code of its error against the source's own
+    /// samples, closed over its descendants (`bitree::closure`).
     src: Vec<u16>,
-    /// Per stored point, the code of the closure of the fitted lattice's
-    /// residuals ([`super::fit`]).
-    dev: Vec<u16>,
-    /// That closure above the window's bitree.
-    dev_cap: Cap,
+    /// The fitted lattice's largest residual at the source's samples: what
+    /// the coarse levels above the window's bitree add to their lattice
+    /// error to bound their error against the source ([`super::fit`]).
+    residual_m: f64,
     zooms: Vec<ZoomPlan>,
     bound: DrawnBound,
     /// Per zoom of `zooms`, the rules per level ([`super::drawn`]).
@@ -153,16 +153,14 @@ impl<'l> Prepared<'l> {
             grid: source,
             offset: [0, 0],
         };
-        let (src, dev) = source_codes(lattice, &tree, whole);
-        let dev_cap = Cap::build_closure(lattice, &dev);
+        let src = source_codes(lattice, &tree, whole);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), &stats, &zooms);
         Ok(Prepared {
             lattice,
             tree,
             cap,
             src,
-            dev,
-            dev_cap,
+            residual_m: stats.residual_m,
             zooms,
             bound,
             rules,
@@ -191,15 +189,14 @@ impl<'l> Prepared<'l> {
         stats: &LatticeStats,
     ) -> Result<Self, TilesError> {
         let tree = Bitree::build(lattice.grid())?;
-        let (src, dev) = source_codes(lattice, &tree, source);
+        let src = source_codes(lattice, &tree, source);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), stats, &zooms);
         Ok(Prepared {
             lattice,
             tree,
             cap: Cap::default(),
             src,
-            dev,
-            dev_cap: Cap::default(),
+            residual_m: stats.residual_m,
             zooms,
             bound,
             rules,
@@ -239,13 +236,12 @@ impl<'l> Prepared<'l> {
     }
 
     /// The window bitree's codes of the split point `m` (stored by a part):
-    /// its lattice error, its bound against the source, its residuals'
-    /// closure.
-    pub(crate) fn code_at(&self, m: Pt) -> [u16; 3] {
+    /// its lattice error and its error against the source.
+    pub(crate) fn code_at(&self, m: Pt) -> [u16; 2] {
         let [x0, y0, _, _] = self.lattice.stored();
         let w = self.lattice.grid().width();
         let i = (u64::from(m[1]) - y0) as usize * w + (u64::from(m[0]) - x0) as usize;
-        [self.tree.error_codes()[i], self.src[i], self.dev[i]]
+        [self.tree.error_codes()[i], self.src[i]]
     }
 
     /// The lattice.
@@ -349,8 +345,7 @@ impl<'l> Prepared<'l> {
         let size = t.a[0].abs_diff(t.b[0]).max(t.a[1].abs_diff(t.b[1]));
         let top = self.lattice.scheme().cells_at(self.lattice.align_zoom());
         if u64::from(size) > top {
-            let e = f64::from(self.cap.error(m)) + f64::from(self.dev_cap.error(m));
-            return e > f64::from(rule.threshold);
+            return above_cap(self.cap.error(m), self.residual_m, &rule);
         }
         // Beyond the window every error is 0; a part holds the split points
         // its tiles read ([`Prepared::holds`]).
@@ -394,40 +389,32 @@ impl<'l> Prepared<'l> {
     }
 }
 
-/// Squares of this side and larger have their error against the source's
-/// samples measured ([`super::source_error`]); below, it is bounded by the
-/// lattice error plus the residuals' closure.
-pub const SOURCE_FROM_CELLS: u64 = 2;
+/// Whether a coarse split point above the window's bitree, of lattice
+/// error `e_m`, splits under `rule`: its error against the source is at
+/// most `e_m` plus the fitted lattice's largest residual `residual_m` (the
+/// triangle's plane minus the lattice is linear on each unit triangle).
+#[inline]
+pub(crate) fn above_cap(e_m: f32, residual_m: f64, rule: &SplitRule) -> bool {
+    f64::from(e_m) + residual_m > f64::from(rule.threshold)
+}
 
-/// Per stored point of `lattice` (whose bitree is `tree`): the bound of its
-/// error against the source's samples in `source`
-/// (`bitree::closure::source_closure`) and the closure of the residuals.
-fn source_codes(
-    lattice: &Lattice,
-    tree: &Bitree<'_>,
-    source: SourcePart<'_>,
-) -> (Vec<u16>, Vec<u16>) {
+/// Per stored point of `lattice` (whose bitree is `tree`): the code of its
+/// error against the source's samples in `source`, closed over its
+/// descendants (`bitree::closure::source_closure`).
+fn source_codes(lattice: &Lattice, tree: &Bitree<'_>, source: SourcePart<'_>) -> Vec<u16> {
     let g = lattice.grid();
     let samples = Samples::new(lattice.frame(), source, lattice.stored());
     let top = lattice.scheme().cells_at(lattice.align_zoom());
     let height = |x: u64, y: u64| lattice.height_at(x, y);
-    let t0 = std::time::Instant::now();
     let own = own_errors(
         &samples,
         lattice.origin(),
         [g.width(), g.height()],
-        [SOURCE_FROM_CELLS, top],
+        [2, top],
         BY_SAMPLE_BELOW.min(u64::from(lattice.scheme().tile_cells)),
         &height,
     );
-    let t1 = std::time::Instant::now();
-    let dev = max_closure(tree.hierarchy(), lattice.near_codes());
-    let codes = [tree.error_codes(), dev.as_slice(), own.as_slice()];
-    let src = source_closure(tree.hierarchy(), codes, SOURCE_FROM_CELLS as u32);
-    if std::env::var("COTA_TIMING").is_ok() {
-        eprintln!("own {:?} closures {:?}", t1 - t0, t1.elapsed());
-    }
-    (src, dev)
+    source_closure(tree.hierarchy(), &own)
 }
 
 /// The leaves under the square with north-west corner `o` and side `cells`,

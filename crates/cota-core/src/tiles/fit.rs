@@ -70,13 +70,10 @@ pub(crate) struct Placement {
 }
 
 /// What [`fit`] left.
-#[derive(Debug, Clone, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct Fitted {
     /// The largest |residual| over the samples of the inner region, metres.
     pub residual_m: f64,
-    /// Per region point, the largest |residual| over the samples in the
-    /// four cells around it (rounded up to `f32`), metres.
-    pub near_m: Vec<f32>,
 }
 
 /// The unit triangle under region position `(x, y)` of a region of width
@@ -116,10 +113,7 @@ pub(crate) fn fit(
     inner: [u64; 4],
 ) -> Fitted {
     if w < 2 || h < 2 || at.cols.is_empty() || at.rows.is_empty() {
-        return Fitted {
-            residual_m: 0.0,
-            near_m: vec![0.0; w * h],
-        };
+        return Fitted::default();
     }
     let even0 = (at.origin[0] + at.origin[1]).is_multiple_of(2);
     let (nc, nr) = (at.cols.len(), at.rows.len());
@@ -175,32 +169,7 @@ pub(crate) fn fit(
         })
         .map(|k| r[k].abs())
         .fold(0.0, f64::max);
-    Fitted {
-        residual_m,
-        near_m: near(at, &r, [w, h]),
-    }
-}
-
-/// Per region point, the largest `|r|` of the samples in the four cells
-/// around it, rounded up to `f32`.
-fn near(at: &Placement, r: &[f64], [w, h]: [usize; 2]) -> Vec<f32> {
-    let nc = at.cols.len();
-    let mut out = vec![0f32; w * h];
-    for (k, v) in r.iter().enumerate() {
-        let (x, y) = (at.cols[k % nc].1, at.rows[k / nc].1);
-        let i = (x.floor() as usize).min(w - 2);
-        let j = (y.floor() as usize).min(h - 2);
-        let e = crate::bitree::round_up_f32(v.abs());
-        for c in [
-            j * w + i,
-            j * w + i + 1,
-            (j + 1) * w + i,
-            (j + 1) * w + i + 1,
-        ] {
-            out[c] = out[c].max(e);
-        }
-    }
-    out
+    Fitted { residual_m }
 }
 
 /// The samples (indices into the placement's `cols × rows`) in the cells

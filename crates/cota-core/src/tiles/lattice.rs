@@ -96,9 +96,6 @@ pub struct Lattice {
     grid: HeightGrid,
     origin: [u64; 2],
     residual_m: f64,
-    /// Per stored point, the code of the largest residual of the source's
-    /// samples in the four cells around it ([`super::fit`]).
-    near_codes: Vec<u16>,
 }
 
 /// The window of a footprint at one alignment zoom: `[x0, y0, x1, y1]`
@@ -277,7 +274,7 @@ impl Lattice {
                 height: h,
             });
         }
-        let (heights, near, residual_m) = fitted(frame, source, region)?;
+        let (heights, residual_m) = fitted(frame, source, region)?;
         let d = frame.scheme.cell_deg();
         let georef = GeoRef {
             crs: Crs::WGS84,
@@ -295,7 +292,6 @@ impl Lattice {
             grid,
             origin: [region[0], region[1]],
             residual_m,
-            near_codes: crate::bitree::closure::codes_of(&near),
         })
     }
 
@@ -303,12 +299,6 @@ impl Lattice {
     /// metres: what the lattice's own surface leaves of the source.
     pub fn residual_m(&self) -> f64 {
         self.residual_m
-    }
-
-    /// Per stored point (row-major), the error code of the largest residual
-    /// of the source's samples in the four cells around it.
-    pub(crate) fn near_codes(&self) -> &[u16] {
-        &self.near_codes
     }
 
     /// The frame (scheme, footprint, window, source mapping).
@@ -609,7 +599,7 @@ fn fitted(
     frame: &LatticeFrame,
     source: SourcePart<'_>,
     region: Window,
-) -> Result<(Vec<f32>, Vec<f32>, f64), TilesError> {
+) -> Result<(Vec<f32>, f64), TilesError> {
     let grown = frame.fit_region(region);
     let mut heights = fill(frame, source, grown)?;
     let (w, h) = (
@@ -631,7 +621,7 @@ fn fitted(
             })
             .collect()
     };
-    Ok((crop(&heights), crop(&f.near_m), f.residual_m))
+    Ok((crop(&heights), f.residual_m))
 }
 
 /// Where the samples of `source` fall in the cells of `region`: the

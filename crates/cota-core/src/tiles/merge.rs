@@ -27,7 +27,7 @@ use std::sync::Mutex;
 use super::cap::{own_rows, square_tris, t_heights, Cap};
 use super::cut::rules_of;
 use super::cut::{
-    in_window, mesh_of_leaves, walk_leaves, water_of, TileMesh, WaterMask, SOURCE_FROM_CELLS, UP,
+    above_cap, in_window, mesh_of_leaves, walk_leaves, water_of, TileMesh, WaterMask, UP,
 };
 use super::drawn::{LevelRule, ZoomRules};
 use super::error::TilesError;
@@ -53,10 +53,11 @@ pub struct CoarseHierarchy {
     /// The band squares' centres and the window bitree's levels above:
     /// their 16-bit codes (the rules' thresholds are code values, so a code
     /// decides exactly, see [`super::drawn::DrawnBound::rules`]): the
-    /// lattice error, the bound against the source, the residuals' closure.
-    coded: HashMap<u64, [u16; 3]>,
+    /// lattice error and the error against the source.
+    coded: HashMap<u64, [u16; 2]>,
     cap: Cap,
-    dev_cap: Cap,
+    /// The fitted lattice's largest residual ([`super::cut::above_cap`]).
+    residual_m: f64,
     normals: HashMap<(u64, u8), [f32; 3]>,
     water: HashMap<TileId, Vec<u8>>,
 }
@@ -104,15 +105,14 @@ impl CoarseHierarchy {
             fine: HashMap::default(),
             coded: HashMap::default(),
             cap: Cap::default(),
-            dev_cap: Cap::default(),
+            residual_m: stats.residual_m,
             normals: HashMap::default(),
             water: HashMap::default(),
         };
         let own = h.absorb(partials);
         h.bitree_levels(&own)?;
         let own = own.0;
-        h.cap = h.cap_levels(&own, false)?;
-        h.dev_cap = h.cap_levels(&own, true)?;
+        h.cap = h.cap_levels(&own)?;
         Ok(h)
     }
 
@@ -126,8 +126,8 @@ impl CoarseHierarchy {
             for f in p.fine {
                 let centre = f.at.map(u64::from).map(|v| v % t == t / 2);
                 if centre == [true, true] {
-                    let slot = self.coded.entry(key(f.at)).or_insert([0; 3]);
-                    *slot = [slot[0].max(f.code), slot[1].max(f.src), slot[2].max(f.dev)];
+                    let slot = self.coded.entry(key(f.at)).or_insert([0; 2]);
+                    *slot = [slot[0].max(f.code), slot[1].max(f.src)];
                 }
                 let slot = self.fine.entry(key(f.at)).or_insert((0, f.height_m));
                 slot.0 |= f.splits;
@@ -177,12 +177,12 @@ impl CoarseHierarchy {
                 .collect();
             for &[i, j] in &squares {
                 for tri in square_tris(i, j, size).0 {
-                    self.join(own, &tri, size)?;
+                    self.join(own, &tri)?;
                 }
             }
             for &[i, j] in &squares {
                 for tri in square_tris(i, j, size).1 {
-                    self.join(own, &tri, size)?;
+                    self.join(own, &tri)?;
                 }
             }
             size *= 2;
@@ -191,18 +191,17 @@ impl CoarseHierarchy {
     }
 
     /// Adds triangle `tri`'s own errors and its children's to its split
-    /// point (of a square of side `size`), as the bitree and
-    /// `bitree::closure::source_closure` build them.
+    /// point, as the bitree and `bitree::closure::source_closure` build
+    /// them.
     fn join(
         &mut self,
         (own, own_src): &(HashMap<u64, f32>, HashMap<u64, f32>),
         tri: &Tri,
-        size: u64,
     ) -> Result<(), TilesError> {
         let m = key(tri.mid());
         let e = own.get(&m).copied().unwrap_or(0.0);
         let e_src = own_src.get(&m).copied().unwrap_or(0.0);
-        let mut c = [encode_up(e), encode_up(e_src), 0u16];
+        let mut c = [encode_up(e), encode_up(e_src)];
         let (c0, c1) = tri.children();
         for q in [c0.mid(), c1.mid()] {
             let cc = self
@@ -210,29 +209,21 @@ impl CoarseHierarchy {
                 .get(&key(q))
                 .copied()
                 .ok_or_else(|| incomplete(format!("the split point {q:?}")))?;
-            c = [c[0].max(cc[0]), c[1].max(cc[1]), c[2].max(cc[2])];
+            c = [c[0].max(cc[0]), c[1].max(cc[1])];
         }
-        let slot = self.coded.entry(m).or_insert([0; 3]);
-        *slot = [slot[0].max(c[0]), slot[1].max(c[1]), slot[2].max(c[2])];
-        if size < SOURCE_FROM_CELLS {
-            let sum = f64::from(decode(slot[0])) + f64::from(decode(slot[2]));
-            slot[1] = encode_up(round_up_f32(sum));
-        }
+        let slot = self.coded.entry(m).or_insert([0; 2]);
+        *slot = [slot[0].max(c[0]), slot[1].max(c[1])];
         Ok(())
     }
 
-    /// The coarse levels above the window bitree's: the cap of the errors,
-    /// or with `dev` the closure of the residuals.
-    fn cap_levels(&self, own: &HashMap<u64, f32>, dev: bool) -> Result<Cap, TilesError> {
+    /// The coarse levels above the window bitree's: the cap.
+    fn cap_levels(&self, own: &HashMap<u64, f32>) -> Result<Cap, TilesError> {
         let s = self.frame.scheme;
         let top = s.cells_at(self.frame.align_zoom);
         let window = self.frame.window;
         let missing: Mutex<Option<Pt>> = Mutex::new(None);
         let corners = &self.corners;
         let own_of = |tri: &Tri| {
-            if dev {
-                return 0.0;
-            }
             let inside = own.get(&key(tri.mid())).copied().unwrap_or(0.0);
             let z = t_heights(tri, |x, y| corners.height(x, y).unwrap_or(0.0));
             inside.max(round_up_f32(own_rows(window, tri, z, true, None)))
@@ -243,7 +234,7 @@ impl CoarseHierarchy {
                 return 0.0;
             }
             match self.coded.get(&key(m)) {
-                Some(&c) => decode(if dev { c[2] } else { c[0] }),
+                Some(&c) => decode(c[0]),
                 None => {
                     if let Ok(mut g) = missing.lock() {
                         *g = Some(m);
@@ -284,8 +275,7 @@ impl CoarseHierarchy {
         let size = tri.a[0].abs_diff(tri.b[0]).max(tri.a[1].abs_diff(tri.b[1]));
         let s = self.frame.scheme;
         if u64::from(size) > s.cells_at(self.frame.align_zoom) {
-            let e = f64::from(self.cap.error(m)) + f64::from(self.dev_cap.error(m));
-            return e > f64::from(rule.threshold);
+            return above_cap(self.cap.error(m), self.residual_m, &rule);
         }
         let [x0, y0, x1, y1] = self.frame.window;
         let (x, y) = (u64::from(m[0]), u64::from(m[1]));

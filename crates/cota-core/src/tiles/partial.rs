@@ -125,12 +125,9 @@ pub struct FinePoint {
     pub splits: u32,
     /// Its 16-bit error code (band squares' centres; 0 for the others).
     pub code: u16,
-    /// The code of its bound against the source's samples (band squares'
+    /// The code of its error against the source's samples (band squares'
     /// centres; 0 for the others).
     pub src: u16,
-    /// The code of its closure of the fitted lattice's residuals (band
-    /// squares' centres; 0 for the others).
-    pub dev: u16,
     /// The lattice's height there, metres.
     pub height_m: f32,
 }
@@ -280,13 +277,12 @@ fn fine_points(
             let sq = [[x0, y0], [x0 + s, y0], [x0, y0 + s], [x0 + s, y0 + s]];
             let halves = square_halves(sq, (x / t + y / t).is_multiple_of(2));
             let centre = halves[0].mid();
-            let [code, src, dev] = prep.code_at(centre);
+            let [code, src] = prep.code_at(centre);
             let mut out = vec![FinePoint {
                 at: centre,
                 splits: mask(&halves[0]),
                 code,
                 src,
-                dev,
                 height_m: lat.height_at(u64::from(centre[0]), u64::from(centre[1])),
             }];
             let mut stack: Vec<Tri> = halves.to_vec();
@@ -303,7 +299,6 @@ fn fine_points(
                         splits: mask(&tri),
                         code: 0,
                         src: 0,
-                        dev: 0,
                         height_m: lat.height_at(u64::from(m[0]), u64::from(m[1])),
                     });
                 }

@@ -243,7 +243,6 @@ fn encode_partial(h: &PartialHeader, p: &CoarsePartial) -> Vec<u8> {
         b.extend(f.splits.to_le_bytes());
         b.extend(f.code.to_le_bytes());
         b.extend(f.src.to_le_bytes());
-        b.extend(f.dev.to_le_bytes());
         b.extend(f.height_m.to_le_bytes());
     }
     for own in [&p.own, &p.own_src] {
@@ -300,16 +299,15 @@ fn decode_partial(r: &mut Reader<'_>) -> Result<(PartialHeader, CoarsePartial), 
         });
     }
     let mut p = CoarsePartial::default();
-    for _ in 0..r.count(22)? {
+    for _ in 0..r.count(20)? {
         let at = [r.u32()?, r.u32()?];
         let (splits, code) = (r.u32()?, r.u16()?);
-        let (src, dev, height_m) = (r.u16()?, r.u16()?, r.f32()?);
+        let (src, height_m) = (r.u16()?, r.f32()?);
         p.fine.push(FinePoint {
             at,
             splits,
             code,
             src,
-            dev,
             height_m,
         });
     }
