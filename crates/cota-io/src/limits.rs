@@ -117,16 +117,58 @@ pub fn max_file_bytes(opts: &ReadOptions) -> u64 {
 
 /// Refuses a file of `bytes` bytes over [`max_file_bytes`].
 pub(crate) fn check_file_bytes(bytes: u64, opts: &ReadOptions) -> Result<(), ReadErrorKind> {
-    let limit = max_file_bytes(opts);
-    if bytes > limit {
-        return Err(ReadErrorKind::FileTooLarge {
-            bytes,
-            limit,
-            max_samples: max_samples(opts),
-            per_sample: MAX_FILE_BYTES_PER_SAMPLE,
-        });
+    if bytes > max_file_bytes(opts) {
+        return Err(file_too_large(bytes, opts));
     }
     Ok(())
+}
+
+/// The error for a file of `bytes` bytes over [`max_file_bytes`].
+pub(crate) fn file_too_large(bytes: u64, opts: &ReadOptions) -> ReadErrorKind {
+    ReadErrorKind::FileTooLarge {
+        bytes,
+        limit: max_file_bytes(opts),
+        max_samples: max_samples(opts),
+        per_sample: MAX_FILE_BYTES_PER_SAMPLE,
+    }
+}
+
+/// Appends at most `limit` bytes of `reader` to `buf`, stopping while it
+/// reads: `Ok(true)` when the input ended within the limit, `Ok(false)` when
+/// more followed (then `buf` holds one byte past the limit). Whatever a
+/// file's size says, a device, a pipe or a file that grows is never read
+/// past `limit + 1` bytes.
+///
+/// # Errors
+/// The reader's I/O error.
+pub fn read_capped(
+    reader: &mut impl std::io::Read,
+    limit: u64,
+    buf: &mut Vec<u8>,
+) -> std::io::Result<bool> {
+    use std::io::Read;
+    let before = buf.len() as u64;
+    reader.take(limit.saturating_add(1)).read_to_end(buf)?;
+    Ok(buf.len() as u64 - before <= limit)
+}
+
+/// Reads the file at `path` whole, at most `limit` bytes of it (see
+/// [`read_capped`]).
+///
+/// # Errors
+/// The I/O error, or one of kind [`std::io::ErrorKind::FileTooLarge`]
+/// saying "more than `limit` bytes" when the file holds more.
+pub fn read_file_capped(path: &std::path::Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    let mut file = std::fs::File::open(path)?;
+    let mut buf = Vec::new();
+    if read_capped(&mut file, limit, &mut buf)? {
+        Ok(buf)
+    } else {
+        Err(std::io::Error::new(
+            std::io::ErrorKind::FileTooLarge,
+            format!("more than {limit} bytes, the most read"),
+        ))
+    }
 }
 
 /// An empty vector with room for `n` items, or a "too large" error naming

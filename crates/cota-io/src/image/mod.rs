@@ -133,8 +133,13 @@ pub fn read_image(path: &Path, opts: &ImageOptions) -> Result<Image, ImageError>
     read(path, opts).map_err(|k| ImageError::new(path, k))
 }
 
+/// Largest image file read: [`MAX_PIXELS`] pixels of four 16-bit bands
+/// stored raw, plus 1 MiB of headers. Reading stops there, whatever the
+/// file's size says (a device, a pipe, a growing file).
+pub const MAX_IMAGE_FILE_BYTES: u64 = MAX_PIXELS * 8 + (1 << 20);
+
 fn read(path: &Path, opts: &ImageOptions) -> Result<Image, ImageErrorKind> {
-    let bytes = std::fs::read(path)?;
+    let bytes = crate::limits::read_file_capped(path, MAX_IMAGE_FILE_BYTES)?;
     let (format, decoded, count, bands) = if bytes.starts_with(b"II") || bytes.starts_with(b"MM") {
         let count = decode::tiff_bands(&bytes)?;
         let bands = pick_bands(opts.bands, count)?;

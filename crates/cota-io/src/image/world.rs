@@ -27,9 +27,14 @@ pub(super) fn find(image: &Path) -> Option<PathBuf> {
         .find(|p| p.is_file())
 }
 
+/// Largest world file read (six numbers take well under a kilobyte).
+const MAX_WORLD_FILE_BYTES: u64 = 64 << 10;
+
 /// Reads and parses the world file `file`.
 pub(super) fn read(file: &Path) -> Result<ImagePlacement, ImageErrorKind> {
-    let text = std::fs::read_to_string(file)?;
+    let bytes = crate::limits::read_file_capped(file, MAX_WORLD_FILE_BYTES)?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))?;
     parse(&text).map_err(|(expected, found)| ImageErrorKind::WorldFile {
         file: file.to_path_buf(),
         expected,

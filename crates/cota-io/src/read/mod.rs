@@ -83,19 +83,51 @@ pub fn read_dem_from<R: std::io::Read>(
     name: &Path,
     opts: &ReadOptions,
 ) -> Result<Dem, ReadError> {
-    use std::io::Read;
     let wrap = |kind| ReadError::new(name, kind);
-    let limit = crate::limits::max_file_bytes(opts);
-    let mut bytes = Vec::new();
-    reader
-        .take(limit.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(|e| wrap(ReadErrorKind::Io(e)))?;
-    crate::limits::check_file_bytes(bytes.len() as u64, opts).map_err(wrap)?;
+    let bytes = read_capped_content(reader, name, opts).map_err(wrap)?;
     if bytes.is_empty() {
         return Err(wrap(ReadErrorKind::Empty));
     }
     decode_bytes(&bytes, name, opts).map_err(wrap)
+}
+
+/// Bytes read before the content decides how many more may follow.
+const SNIFF_BYTES: u64 = 1 << 16;
+
+/// Reads `reader` whole, stopping as soon as it holds more than its content
+/// may be: content without a known magic number or text header can only be
+/// a raw `.hgt` (at most [`crate::limits::HGT_MAX_BYTES`] unless the limit is
+/// set), anything else at most [`crate::limits::max_file_bytes`]. A device
+/// or a pipe that never ends (`/dev/zero`, standard input) is refused once
+/// that many bytes have arrived, whatever its size claims.
+fn read_capped_content<R: std::io::Read>(
+    mut reader: R,
+    name: &Path,
+    opts: &ReadOptions,
+) -> Result<Vec<u8>, ReadErrorKind> {
+    use crate::limits::read_capped;
+    let mut bytes = Vec::new();
+    read_capped(&mut reader, SNIFF_BYTES, &mut bytes)?;
+    let headless = sniff(&bytes) == Sniffed::Unknown;
+    let limit = if headless {
+        crate::limits::gzip_cap(true, opts)
+    } else {
+        crate::limits::max_file_bytes(opts)
+    };
+    let room = limit.saturating_sub(bytes.len() as u64);
+    if read_capped(&mut reader, room, &mut bytes)? {
+        return Ok(bytes);
+    }
+    if headless {
+        return Err(ReadErrorKind::UnknownFormat {
+            found: format!(
+                "{}{} and more than {limit} bytes, longer than any raw .hgt",
+                describe_bytes(&bytes),
+                name_hint(name)
+            ),
+        });
+    }
+    Err(crate::limits::file_too_large(limit.saturating_add(1), opts))
 }
 
 /// Applies [`cota_core::GeoRef::guess_geographic`] to a freshly read DEM.
