@@ -64,6 +64,7 @@ pub mod pair;
 mod par;
 pub mod quadtree;
 pub mod refine;
+pub mod relief;
 pub mod stream;
 pub mod strip;
 #[cfg(test)]

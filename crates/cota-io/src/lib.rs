@@ -26,6 +26,7 @@ pub mod export;
 pub mod image;
 pub mod limits;
 pub mod read;
+pub mod relief;
 pub mod stream_file;
 pub mod tiles;
 
