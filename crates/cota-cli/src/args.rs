@@ -1,6 +1,5 @@
 //! Command-line flags, turned into library option structs and nothing more.
 
-use std::net::SocketAddr;
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -998,12 +997,35 @@ pub struct ServeArgs {
     /// on demand from the input (geographic inputs only) and kept.
     #[arg(long, value_name = "DIR")]
     pub tiles: Option<PathBuf>,
-    /// Address and port to listen on (port 0: any free port).
-    #[arg(long, default_value = "127.0.0.1:8080", value_name = "IP:PORT")]
-    pub addr: SocketAddr,
+    /// Address and port to listen on: an IP address (`127.0.0.1:8080`,
+    /// `[::1]:8080`, `0.0.0.0:8080`) or a host name (`localhost:8080`:
+    /// every address it resolves to, IPv4 and IPv6). Port 0: any free port.
+    #[arg(long, default_value = "127.0.0.1:8080", value_name = "HOST:PORT")]
+    pub addr: String,
     /// What to do with voids (no data) before encoding.
     #[arg(long, value_enum, default_value_t = Voids::Fill)]
     pub voids: Voids,
+    /// Memory for tiles kept after they are sent (terrain and imagery,
+    /// least recently used dropped first), MiB.
+    #[arg(long, default_value_t = 256, value_name = "MIB")]
+    pub cache_mib: usize,
+    /// Threads that make tiles. Default: the machine's cores, at most 8.
+    #[arg(long, value_name = "N")]
+    pub workers: Option<usize>,
+    /// Tiles that may wait for a worker; past them requests get 503 with
+    /// Retry-After.
+    #[arg(long, default_value_t = 64, value_name = "N")]
+    pub queue: usize,
+    /// Connections open at once; one more is answered 503 and closed.
+    #[arg(long, default_value_t = 512, value_name = "N")]
+    pub max_connections: usize,
+    /// Seconds a client has to send a request's headers (and the most a
+    /// kept-alive connection may stay idle).
+    #[arg(long, default_value_t = 10, value_name = "S")]
+    pub header_timeout_s: u64,
+    /// Seconds the server takes at most to answer one request (then 503).
+    #[arg(long, default_value_t = 30, value_name = "S")]
+    pub request_timeout_s: u64,
 }
 
 /// `I/N` with `I < N`.

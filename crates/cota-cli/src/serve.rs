@@ -1,9 +1,12 @@
 //! `cota serve`: read and mosaic DEM files like `cota mesh` (or take a
-//! `.cstream`), encode the progressive stream, and serve it with the viewer,
-//! the CesiumJS page and quantized-mesh tiles: with `--tiles`, a `cota tiles`
-//! directory; without, tiles made on demand from the hierarchy prepared in
-//! memory (`cota_server`). Stops on Ctrl-C or SIGTERM.
+//! `.cstream`), listen at once, and make in the background what takes time:
+//! the progressive stream, the tiles' hierarchy (tiles made on demand; or a
+//! `cota tiles` directory with `--tiles`) and the shaded-relief imagery.
+//! Until each is ready its routes answer 503 with `Retry-After`. Stops on
+//! Ctrl-C or SIGTERM.
 
+use std::net::{SocketAddr, ToSocketAddrs};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::Instant;
@@ -14,34 +17,12 @@ use cota_core::HeightGrid;
 use cota_io::stream_file::MAGIC;
 use cota_io::tiles::{PyramidOptions, TileExtensions};
 use cota_server::{
-    DemandTileSource, DirTileSource, ServeError, ServerState, StreamAsset, TileSource,
+    DemandTileSource, DirTileSource, Imagery, ServeError, ServeOptions, ServerState, StreamAsset,
+    TileSource,
 };
 
 use crate::args::ServeArgs;
 use crate::input::{fill, load, name};
-
-/// The stream of the inputs (a `.cstream` as it is, DEMs encoded
-/// losslessly) and, for DEMs, their grid.
-fn stream_of(a: &ServeArgs) -> anyhow::Result<(StreamAsset, Option<HeightGrid>)> {
-    if let [one] = a.input.files.as_slice() {
-        let mut head = [0u8; 8];
-        let is_stream = std::fs::File::open(one)
-            .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
-            .is_ok()
-            && &head == MAGIC;
-        if is_stream {
-            let bytes = std::fs::read(one).with_context(|| format!("reading {}", one.display()))?;
-            let name = one.display().to_string();
-            return Ok((StreamAsset::from_stream_bytes(bytes, &name)?, None));
-        }
-    }
-    let input = load(&a.input)?;
-    let mut grid = input.grid;
-    fill(&mut grid, a.voids)?;
-    let _spinner = crate::progress::spinner("encoding");
-    let stream = StreamAsset::from_grid(&grid, &name(&input.files))?;
-    Ok((stream, Some(grid)))
-}
 
 /// The extensions and encoding of tiles made on demand: normals and
 /// metadata (child availability), gzipped.
@@ -49,14 +30,108 @@ const DEMAND_TILES: PyramidOptions = PyramidOptions::DEFAULT
     .with_extensions(TileExtensions::with(true, false, true))
     .with_gzip(true);
 
+/// What the background makes from: a `.cstream` file or a grid.
+enum Source {
+    Stream(PathBuf),
+    Grid(Arc<HeightGrid>, String),
+}
+
+/// The `.cstream` given alone, if that is what the input is.
+fn stream_file(a: &ServeArgs) -> Option<PathBuf> {
+    let [one] = a.input.files.as_slice() else {
+        return None;
+    };
+    let mut head = [0u8; 8];
+    let is_stream = std::fs::File::open(one)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
+        .is_ok()
+        && &head == MAGIC;
+    is_stream.then(|| one.clone())
+}
+
+/// Reads the input in the foreground (errors name the file before the
+/// server listens); a `.cstream` is only recognised here.
+fn source_of(a: &ServeArgs) -> anyhow::Result<Source> {
+    if let Some(f) = stream_file(a) {
+        return Ok(Source::Stream(f));
+    }
+    let input = load(&a.input)?;
+    let mut grid = input.grid;
+    fill(&mut grid, a.voids)?;
+    Ok(Source::Grid(Arc::new(grid), name(&input.files)))
+}
+
+/// The addresses `--addr` names: an IP address and port, or a host name
+/// and port resolved to each of its addresses.
+fn addresses(addr: &str) -> anyhow::Result<Vec<SocketAddr>> {
+    let mut v: Vec<SocketAddr> = addr
+        .to_socket_addrs()
+        .with_context(|| {
+            format!(
+                "--addr {addr}: expected HOST:PORT (127.0.0.1:8080, [::1]:8080, localhost:8080)"
+            )
+        })?
+        .collect();
+    v.dedup();
+    anyhow::ensure!(
+        !v.is_empty(),
+        "--addr {addr}: the name resolves to no address"
+    );
+    Ok(v)
+}
+
+fn options(a: &ServeArgs) -> ServeOptions {
+    let mut o = ServeOptions::default()
+        .with_queue(a.queue)
+        .with_cache_bytes(a.cache_mib.saturating_mul(1 << 20))
+        .with_max_connections(a.max_connections)
+        .with_header_timeout_s(a.header_timeout_s)
+        .with_request_timeout_s(a.request_timeout_s);
+    if let Some(n) = a.workers {
+        o = o.with_workers(n);
+    }
+    o
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// Encodes (or checks) the stream.
+fn make_stream(source: &Source) -> Result<StreamAsset, String> {
+    let t = Instant::now();
+    let s = match source {
+        Source::Stream(f) => {
+            let cap = cota_io::limits::max_file_bytes(&cota_io::ReadOptions::DEFAULT);
+            let bytes = cota_io::limits::read_file_capped(f, cap)
+                .map_err(|e| format!("reading {}: {e}", f.display()))?;
+            StreamAsset::from_stream_bytes(bytes, &f.display().to_string())
+        }
+        Source::Grid(grid, name) => StreamAsset::from_grid(grid, name),
+    }
+    .map_err(|e| e.to_string())?;
+    let m = s.meta();
+    println!(
+        "stream      {} ({} x {}): {} bytes in {} steps, ready in {:.0} ms",
+        m.name,
+        m.width,
+        m.height,
+        m.bytes,
+        m.steps.len(),
+        ms(t)
+    );
+    Ok(s)
+}
+
 /// The tile source: `--tiles DIR`, or tiles made on demand from `grid`
 /// (none for a stream, or a source that is not geographic: said, not fatal).
-fn tiles_of(
-    a: &ServeArgs,
+fn make_tiles(
+    dir: Option<&Path>,
     grid: Option<&HeightGrid>,
-) -> anyhow::Result<Option<Arc<dyn TileSource>>> {
-    if let Some(dir) = &a.tiles {
-        let src = DirTileSource::open(dir).with_context(|| format!("--tiles {}", dir.display()))?;
+) -> Result<Option<Arc<dyn TileSource>>, String> {
+    if let Some(dir) = dir {
+        let src =
+            DirTileSource::open(dir).map_err(|e| format!("--tiles {}: {e}", dir.display()))?;
         println!("tiles       {}", dir.display());
         return Ok(Some(Arc::new(src)));
     }
@@ -65,14 +140,12 @@ fn tiles_of(
         return Ok(None);
     };
     let t = Instant::now();
-    let spinner = crate::progress::spinner("preparing tiles");
     let source = DemandTileSource::new(
         grid,
         &LatticeOptions::DEFAULT,
         &TilerOptions::DEFAULT,
         DEMAND_TILES,
     );
-    drop(spinner);
     match source {
         Ok(src) => {
             let p = src.prepared();
@@ -81,7 +154,7 @@ fn tiles_of(
                 p.zooms().first().map_or(0, |z| z.zoom),
                 p.lattice().scheme().max_zoom,
                 p.tile_count(),
-                t.elapsed().as_secs_f64() * 1e3
+                ms(t)
             );
             Ok(Some(Arc::new(src)))
         }
@@ -89,31 +162,64 @@ fn tiles_of(
             println!("tiles       none: {e}");
             Ok(None)
         }
-        Err(e) => Err(e).context("preparing tiles on demand"),
+        Err(e) => Err(format!("preparing tiles on demand: {e}")),
     }
+}
+
+/// The shaded-relief imagery of `grid` (none for a stream or a projected grid).
+fn make_imagery(grid: Option<&HeightGrid>) -> Option<Imagery> {
+    let t = Instant::now();
+    match grid.map(Imagery::new) {
+        Some(Ok(i)) => {
+            let r = i.relief();
+            println!(
+                "imagery     shaded relief: zooms 0..={}, prepared in {:.0} ms",
+                r.max_zoom(),
+                ms(t)
+            );
+            Some(i)
+        }
+        Some(Err(e)) => {
+            println!("imagery     none: {e}");
+            None
+        }
+        None => None,
+    }
+}
+
+/// Makes the stream on one thread, the imagery then the tiles on another,
+/// each set on `state` when ready.
+fn start_background(state: &ServerState, source: Source, tiles_dir: Option<PathBuf>) {
+    let source = Arc::new(source);
+    let (s1, src1) = (state.clone(), source.clone());
+    std::thread::spawn(move || s1.set_stream(make_stream(&src1)));
+    let s2 = state.clone();
+    std::thread::spawn(move || {
+        let grid = match source.as_ref() {
+            Source::Grid(g, _) => Some(g.as_ref()),
+            Source::Stream(_) => None,
+        };
+        s2.set_imagery(Ok(make_imagery(grid)));
+        let tiles = make_tiles(tiles_dir.as_deref(), grid);
+        if let Err(e) = &tiles {
+            eprintln!("cota serve: {e}");
+        }
+        s2.set_tiles(tiles);
+    });
 }
 
 pub fn run(a: &ServeArgs) -> anyhow::Result<ExitCode> {
     let t = Instant::now();
-    let (stream, grid) = stream_of(a)?;
-    let m = stream.meta();
-    println!(
-        "stream      {} ({} x {}): {} bytes in {} steps, ready in {:.0} ms",
-        m.name,
-        m.width,
-        m.height,
-        m.bytes,
-        m.steps.len(),
-        t.elapsed().as_secs_f64() * 1e3
-    );
-    let mut state = ServerState::new(stream);
-    if let Some(src) = tiles_of(a, grid.as_ref())? {
-        state = state.with_tiles(src);
-    }
-    drop(grid);
-    cota_server::run(a.addr, state, |addr| {
+    let addrs = addresses(&a.addr)?;
+    let source = source_of(a)?;
+    let state = ServerState::starting(options(a));
+    start_background(&state, source, a.tiles.clone());
+    cota_server::run(&addrs, state, |bound| {
+        let urls: Vec<String> = bound.iter().map(|b| format!("http://{b}/")).collect();
         println!(
-            "listening   http://{addr}/ (viewer), /cesium, /stream, /tiles/, /health; Ctrl-C stops"
+            "listening   {} (viewer), /cesium, /stream, /tiles/, /imagery/, /health; in {:.0} ms; Ctrl-C stops",
+            urls.join(" and "),
+            ms(t)
         );
     })?;
     println!("stopped");

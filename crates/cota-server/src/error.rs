@@ -55,6 +55,9 @@ pub enum ServeError {
     /// Tiles cannot be made from the source (at start).
     #[error("tiles: {0}")]
     Tiling(#[from] cota_core::tiles::TilesError),
+    /// Shaded relief cannot be drawn from the source (at start).
+    #[error("imagery: {0}")]
+    Relief(#[from] cota_core::relief::ReliefError),
     /// Reading a file failed.
     #[error("{}: {source}", path.display())]
     Io {
@@ -79,6 +82,19 @@ pub enum ServeError {
         /// The cause.
         source: std::io::Error,
     },
+    /// The server cannot answer now: its tile queue is full, or what the
+    /// request needs is still being made at start (the stream, the tiles).
+    /// Sent as 503 with `Retry-After`.
+    #[error("service unavailable: {reason}; retry in {retry_after_s} s")]
+    Unavailable {
+        /// Why.
+        reason: String,
+        /// Seconds to wait.
+        retry_after_s: u64,
+    },
+    /// One error shared by every request that waited on the same work.
+    #[error(transparent)]
+    Shared(std::sync::Arc<ServeError>),
     /// Our bug: a task panicked or was cancelled.
     #[error("internal error: {0}")]
     Internal(String),
@@ -97,9 +113,12 @@ pub fn status_of(e: &ServeError) -> StatusCode {
         ServeError::Io { source, .. } if source.kind() == std::io::ErrorKind::NotFound => {
             StatusCode::NOT_FOUND
         }
+        ServeError::Unavailable { .. } => StatusCode::SERVICE_UNAVAILABLE,
+        ServeError::Shared(e) => status_of(e),
         ServeError::CorruptTile { .. }
         | ServeError::BadTileSet { .. }
         | ServeError::Tiling(_)
+        | ServeError::Relief(_)
         | ServeError::Io { .. }
         | ServeError::BadStream { .. }
         | ServeError::Bind { .. }
@@ -110,10 +129,16 @@ pub fn status_of(e: &ServeError) -> StatusCode {
 impl IntoResponse for ServeError {
     fn into_response(self) -> Response {
         let status = status_of(&self);
+        let inner = match &self {
+            ServeError::Shared(e) => e.as_ref(),
+            e => e,
+        };
         // Server-side failures name files on disk: log them, tell the client less.
-        let body = if status.is_server_error() {
+        let body = if let ServeError::Unavailable { .. } = inner {
+            format!("{inner}\n")
+        } else if status.is_server_error() {
             eprintln!("cota serve: {self}");
-            match &self {
+            match inner {
                 ServeError::CorruptTile { .. } => "corrupt tile\n".to_string(),
                 _ => "internal server error\n".to_string(),
             }
@@ -121,10 +146,18 @@ impl IntoResponse for ServeError {
             format!("{self}\n")
         };
         let mut r = (status, body).into_response();
-        if let ServeError::RangeNotSatisfiable { len, .. } = self {
-            if let Ok(v) = HeaderValue::from_str(&format!("bytes */{len}")) {
-                r.headers_mut().insert(header::CONTENT_RANGE, v);
+        let h = r.headers_mut();
+        match inner {
+            ServeError::RangeNotSatisfiable { len, .. } => {
+                if let Ok(v) = HeaderValue::from_str(&format!("bytes */{len}")) {
+                    h.insert(header::CONTENT_RANGE, v);
+                }
             }
+            ServeError::Unavailable { retry_after_s, .. } => {
+                h.insert(header::RETRY_AFTER, HeaderValue::from(*retry_after_s));
+                h.insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
+            }
+            _ => {}
         }
         r
     }

@@ -13,9 +13,12 @@ use tower_http::cors::{Any, CorsLayer};
 
 use crate::assets;
 use crate::error::{Result, ServeError};
-use crate::range::parse_range;
-use crate::tiles::TileId;
-use crate::ServerState;
+use crate::later::{Later, Stage};
+use crate::range::{boundary, multipart, parse_range, Ranges};
+use crate::stream::StreamAsset;
+use crate::tiles::{Tile, TileId, MAX_TILE_BYTES};
+use crate::work::Key;
+use crate::{ServerState, Tiles};
 
 /// Longest request target (path and query) served; longer ones get 414.
 pub const MAX_URI_BYTES: usize = 2048;
@@ -24,6 +27,8 @@ pub const MAX_URI_BYTES: usize = 2048;
 const STREAM_TYPE: &str = "application/vnd.cota.stream";
 /// `Content-Type` of a quantized-mesh tile.
 const TILE_TYPE: &str = "application/vnd.quantized-mesh";
+/// `Cache-Control` of tiles and imagery: a day, then revalidated by ETag.
+const TILE_CACHE: &str = "public, max-age=86400";
 
 /// The whole service: routes, request checks, CORS. No socket involved.
 pub fn router(state: ServerState) -> Router {
@@ -37,6 +42,7 @@ pub fn router(state: ServerState) -> Router {
             header::ACCEPT_RANGES,
             header::ETAG,
             header::CONTENT_ENCODING,
+            header::RETRY_AFTER,
         ]);
     Router::new()
         .route("/", get(index))
@@ -47,18 +53,42 @@ pub fn router(state: ServerState) -> Router {
         .route("/layer.json", get(root_layer))
         .route("/tiles/layer.json", get(layer))
         .route("/tiles/{z}/{x}/{y}", get(tile))
+        .route("/imagery.json", get(imagery_json))
+        .route("/imagery/{z}/{x}/{y}", get(imagery_tile))
         .fallback(embedded)
+        .layer(middleware::from_fn_with_state(state.clone(), check_request))
         .with_state(state)
-        .layer(middleware::from_fn(check_request))
         .layer(cors)
 }
 
 /// Refuses, before any route: targets longer than [`MAX_URI_BYTES`] (414)
-/// and paths with `..` segments, backslashes, NUL or encoded separators (400).
-async fn check_request(req: Request, next: Next) -> Response {
-    match check_uri(req.uri()) {
-        Ok(()) => next.run(req).await,
-        Err(e) => e.into_response(),
+/// and paths with `..` segments, backslashes, NUL or encoded separators
+/// (400); then answers 503 for a request not answered within the request
+/// timeout.
+async fn check_request(State(s): State<ServerState>, req: Request, next: Next) -> Response {
+    if let Err(e) = check_uri(req.uri()) {
+        return e.into_response();
+    }
+    let limit = s.options.request_timeout();
+    match tokio::time::timeout(limit, next.run(req)).await {
+        Ok(r) => r,
+        Err(_) => ServeError::Unavailable {
+            reason: format!("no answer within {} s", limit.as_secs()),
+            retry_after_s: s.options.retry_after_s,
+        }
+        .into_response(),
+    }
+}
+
+/// The value of `later` once made; 503 with `Retry-After` until then.
+fn ready<'a, T>(s: &ServerState, later: &'a Later<T>) -> Result<&'a T> {
+    match later.stage() {
+        Stage::Ready(v) => Ok(v),
+        Stage::Pending => Err(ServeError::Unavailable {
+            reason: format!("{} is still being made at start", later.what()),
+            retry_after_s: s.options.retry_after_s,
+        }),
+        Stage::Failed(e) => Err(ServeError::Internal(format!("{}: {e}", later.what()))),
     }
 }
 
@@ -142,13 +172,27 @@ async fn embedded(headers: HeaderMap, uri: Uri) -> Result<Response> {
     embedded_file(&headers, path)
 }
 
+/// Whether an optional part is served: `"yes"`, `"no"`, `"pending"` or `"failed"`.
+fn served<T>(later: &Later<Option<T>>) -> &'static str {
+    match later.stage() {
+        Stage::Ready(Some(_)) => "yes",
+        Stage::Ready(None) => "no",
+        Stage::Pending => "pending",
+        Stage::Failed(_) => "failed",
+    }
+}
+
 async fn health(State(s): State<ServerState>) -> Response {
+    let stream = s.stream.get();
     let body = serde_json::json!({
         "status": "ok",
         "viewer": if assets::BUILT { "built" } else { "missing" },
-        "stream_bytes": s.stream.bytes().len(),
-        "steps": s.stream.meta().steps.len(),
-        "tiles": s.tiles.is_some(),
+        "stream": s.stream.word(),
+        "stream_bytes": stream.map(|a| a.bytes().len()),
+        "steps": stream.map(|a| a.meta().steps.len()),
+        "tiles": served(&s.tiles),
+        "imagery": served(&s.imagery),
+        "work": s.work.summary(),
     });
     let mut r = axum::Json(body).into_response();
     r.headers_mut()
@@ -157,10 +201,12 @@ async fn health(State(s): State<ServerState>) -> Response {
 }
 
 async fn meta(State(s): State<ServerState>, headers: HeaderMap) -> Result<Response> {
-    let mut v = serde_json::to_value(s.stream.meta())
-        .map_err(|e| ServeError::Internal(format!("meta: {e}")))?;
+    let a = ready(&s, &s.stream)?;
+    let mut v =
+        serde_json::to_value(a.meta()).map_err(|e| ServeError::Internal(format!("meta: {e}")))?;
     if let Some(o) = v.as_object_mut() {
-        o.insert("tiles".into(), s.tiles.is_some().into());
+        o.insert("tiles".into(), (served(&s.tiles) != "no").into());
+        o.insert("imagery".into(), (served(&s.imagery) != "no").into());
     }
     let body = serde_json::to_vec(&v).map_err(|e| ServeError::Internal(format!("meta: {e}")))?;
     Ok(cached(
@@ -170,7 +216,7 @@ async fn meta(State(s): State<ServerState>, headers: HeaderMap) -> Result<Respon
             (header::CONTENT_TYPE, "application/json"),
             (header::CACHE_CONTROL, "no-cache"),
         ],
-        s.stream.etag(),
+        a.etag(),
     ))
 }
 
@@ -182,49 +228,96 @@ fn if_range_stale(headers: &HeaderMap, etag: &str) -> bool {
 }
 
 async fn stream(State(s): State<ServerState>, headers: HeaderMap) -> Result<Response> {
-    let a = &s.stream;
-    let len = a.bytes().len() as u64;
-    let range = parse_range(&headers, len)?;
+    let a = ready(&s, &s.stream)?;
     let extra = [
         (header::CONTENT_TYPE, STREAM_TYPE),
         (header::CACHE_CONTROL, "no-cache"),
         (header::ACCEPT_RANGES, "bytes"),
     ];
-    let (first, last) = match range {
-        Some(r) if !if_range_stale(&headers, a.etag()) && !not_modified(&headers, a.etag()) => r,
-        _ => return Ok(cached(&headers, a.bytes().clone(), &extra, a.etag())),
-    };
-    let body = a.bytes().slice(first as usize..=last as usize);
-    let mut r = (StatusCode::PARTIAL_CONTENT, Body::from(body)).into_response();
+    let whole = || cached(&headers, a.bytes().clone(), &extra, a.etag());
+    if if_range_stale(&headers, a.etag()) || not_modified(&headers, a.etag()) {
+        return Ok(whole());
+    }
+    let (status, body, content_type, content_range) =
+        match parse_range(&headers, a.bytes().len() as u64)? {
+            Ranges::Whole => return Ok(whole()),
+            Ranges::One(first, last) => one_range(a, first, last),
+            Ranges::Many(parts) => match many_ranges(a, &parts) {
+                Some(r) => r,
+                None => return Ok(whole()),
+            },
+        };
+    let mut r = (status, Body::from(body)).into_response();
     let h = r.headers_mut();
     h.insert(header::ETAG, header_value(a.etag()));
     for (k, v) in extra {
         h.insert(k, HeaderValue::from_static(v));
     }
-    h.insert(
-        header::CONTENT_RANGE,
-        header_value(&format!("bytes {first}-{last}/{len}")),
-    );
+    h.insert(header::CONTENT_TYPE, header_value(&content_type));
+    if let Some(cr) = content_range {
+        h.insert(header::CONTENT_RANGE, header_value(&cr));
+    }
     Ok(r)
 }
 
-fn no_tiles() -> ServeError {
-    ServeError::NotFound(
-        "no tile set: `cota serve` makes tiles from a geographic source, or serves --tiles DIR"
-            .into(),
+/// Status, body, type and `Content-Range` of a ranged answer.
+type Ranged = (StatusCode, Bytes, String, Option<String>);
+
+fn one_range(a: &StreamAsset, first: u64, last: u64) -> Ranged {
+    let len = a.bytes().len();
+    (
+        StatusCode::PARTIAL_CONTENT,
+        a.bytes().slice(first as usize..=last as usize),
+        STREAM_TYPE.into(),
+        Some(format!("bytes {first}-{last}/{len}")),
     )
+}
+
+/// `multipart/byteranges`, or `None` when no boundary fits (send the whole).
+fn many_ranges(a: &StreamAsset, parts: &[(u64, u64)]) -> Option<Ranged> {
+    let b = boundary(a.bytes(), parts, a.etag())?;
+    let body = multipart(a.bytes(), parts, STREAM_TYPE, &b);
+    Some((
+        StatusCode::PARTIAL_CONTENT,
+        Bytes::from(body),
+        format!("multipart/byteranges; boundary={b}"),
+        None,
+    ))
+}
+
+/// The tile set, 503 while it is prepared, 404 when there is none.
+fn tiles_of(s: &ServerState) -> Result<&Tiles> {
+    ready(s, &s.tiles)?.as_ref().ok_or_else(|| {
+        ServeError::NotFound(
+            "no tile set: `cota serve` makes tiles from a geographic source, or serves --tiles DIR"
+                .into(),
+        )
+    })
+}
+
+/// The imagery, 503 while it is prepared, 404 when there is none.
+fn imagery_of(s: &ServerState) -> Result<&std::sync::Arc<crate::Imagery>> {
+    ready(s, &s.imagery)?.as_ref().ok_or_else(|| {
+        ServeError::NotFound("no imagery: it is drawn from a geographic source".into())
+    })
 }
 
 /// `/tiles/layer.json`: the layer as the source has it.
 async fn layer(State(s): State<ServerState>, headers: HeaderMap) -> Result<Response> {
-    let t = s.tiles.as_ref().ok_or_else(no_tiles)?;
+    let t = tiles_of(&s)?;
     Ok(json_layer(&headers, t.source.layer_json().clone()))
 }
 
 /// `/layer.json`: the layer with its template relative to the root.
 async fn root_layer(State(s): State<ServerState>, headers: HeaderMap) -> Result<Response> {
-    let t = s.tiles.as_ref().ok_or_else(no_tiles)?;
+    let t = tiles_of(&s)?;
     Ok(json_layer(&headers, t.root_layer.clone()))
+}
+
+/// `/imagery.json`: where the relief tiles are (bounds, zooms, template).
+async fn imagery_json(State(s): State<ServerState>, headers: HeaderMap) -> Result<Response> {
+    let i = imagery_of(&s)?;
+    Ok(json_layer(&headers, i.json().clone()))
 }
 
 fn json_layer(headers: &HeaderMap, body: Bytes) -> Response {
@@ -245,22 +338,94 @@ async fn tile(
     Path((z, x, y)): Path<(String, String, String)>,
     headers: HeaderMap,
 ) -> Result<Response> {
-    let src = s.tiles.as_ref().ok_or_else(no_tiles)?.source.clone();
+    let src = tiles_of(&s)?.source.clone();
     let id = TileId::parse(&z, &x, &y)?;
-    let t = match src.cached(id) {
-        Some(t) => t,
-        None => tokio::task::spawn_blocking(move || src.tile(id))
-            .await
-            .map_err(|e| ServeError::Internal(format!("tile task: {e}")))??,
-    };
-    let mut extra = vec![
-        (header::CONTENT_TYPE, TILE_TYPE),
-        (header::CACHE_CONTROL, "public, max-age=86400"),
-    ];
-    if t.gzip {
-        extra.push((header::CONTENT_ENCODING, "gzip"));
+    src.has(id)?;
+    let t = s.work.get(Key::Terrain(id), move || src.tile(id)).await?;
+    let vary = [(header::VARY, "Accept-Encoding")];
+    if !t.gzip {
+        return Ok(tile_response(&headers, t.bytes, &t.etag, TILE_TYPE, &vary));
     }
-    Ok(cached(&headers, t.bytes, &extra, &t.etag))
+    if accepts_gzip(&headers) {
+        let extra = [
+            (header::VARY, "Accept-Encoding"),
+            (header::CONTENT_ENCODING, "gzip"),
+        ];
+        return Ok(tile_response(&headers, t.bytes, &t.etag, TILE_TYPE, &extra));
+    }
+    // A client that does not take gzip gets the tile decompressed, under
+    // its own validator.
+    let plain = gunzip(&t.bytes)?;
+    let etag = format!("{}-identity\"", t.etag.trim_end_matches('"'));
+    Ok(tile_response(&headers, plain, &etag, TILE_TYPE, &vary))
+}
+
+async fn imagery_tile(
+    State(s): State<ServerState>,
+    Path((z, x, y)): Path<(String, String, String)>,
+    headers: HeaderMap,
+) -> Result<Response> {
+    let img = imagery_of(&s)?.clone();
+    let id = TileId::parse_file(&z, &x, &y, ".png")?;
+    img.check(id)?;
+    let t: Tile = s.work.get(Key::Imagery(id), move || img.tile(id)).await?;
+    Ok(tile_response(&headers, t.bytes, &t.etag, "image/png", &[]))
+}
+
+fn tile_response(
+    headers: &HeaderMap,
+    body: Bytes,
+    etag: &str,
+    content_type: &str,
+    extra: &[(HeaderName, &str)],
+) -> Response {
+    let mut all = vec![
+        (header::CONTENT_TYPE, content_type),
+        (header::CACHE_CONTROL, TILE_CACHE),
+    ];
+    all.extend(extra.iter().cloned());
+    cached(headers, body, &all, etag)
+}
+
+/// True when `Accept-Encoding` lists gzip (or `*`) with a nonzero quality.
+/// Without the header the tile is sent decompressed: RFC 9110 §12.5.3
+/// would allow any coding, but clients that send none (curl, scripts)
+/// expect the plain bytes.
+fn accepts_gzip(headers: &HeaderMap) -> bool {
+    let mut gzip = None;
+    let mut star = None;
+    for v in headers.get_all(header::ACCEPT_ENCODING) {
+        let Ok(s) = v.to_str() else { continue };
+        for item in s.split(',') {
+            let mut parts = item.split(';');
+            let coding = parts.next().unwrap_or("").trim().to_ascii_lowercase();
+            let q = parts
+                .find_map(|p| p.trim().strip_prefix("q=").or(p.trim().strip_prefix("Q=")))
+                .and_then(|q| q.trim().parse::<f32>().ok())
+                .unwrap_or(1.0);
+            match coding.as_str() {
+                "gzip" | "x-gzip" => gzip = Some(q > 0.0),
+                "*" => star = Some(q > 0.0),
+                _ => {}
+            }
+        }
+    }
+    gzip.or(star).unwrap_or(false)
+}
+
+/// Decompresses a stored gzip tile, at most [`MAX_TILE_BYTES`].
+fn gunzip(b: &[u8]) -> Result<Bytes> {
+    use std::io::Read;
+    let mut out = Vec::new();
+    let mut d = flate2::read::MultiGzDecoder::new(b).take(MAX_TILE_BYTES + 1);
+    d.read_to_end(&mut out)
+        .map_err(|e| ServeError::Internal(format!("a stored gzip tile does not inflate: {e}")))?;
+    if out.len() as u64 > MAX_TILE_BYTES {
+        return Err(ServeError::Internal(format!(
+            "a stored gzip tile inflates past {MAX_TILE_BYTES} bytes"
+        )));
+    }
+    Ok(Bytes::from(out))
 }
 
 #[cfg(test)]
@@ -277,6 +442,25 @@ mod test {
         assert!(!ok("/a/%2F/b"));
         assert!(!ok("/a/./b"));
         assert!(!ok(&format!("/{}", "a".repeat(3000))));
+    }
+
+    #[test]
+    fn gzip_acceptance() {
+        let acc = |v: Option<&str>| {
+            let mut h = HeaderMap::new();
+            if let Some(v) = v {
+                h.insert(header::ACCEPT_ENCODING, HeaderValue::from_str(v).unwrap());
+            }
+            accepts_gzip(&h)
+        };
+        assert!(acc(Some("gzip, deflate, br")));
+        assert!(acc(Some("br;q=1.0, gzip;q=0.8")));
+        assert!(acc(Some("*")));
+        assert!(!acc(None));
+        assert!(!acc(Some("identity")));
+        assert!(!acc(Some("gzip;q=0")));
+        assert!(!acc(Some("*, gzip;q=0")));
+        assert!(!acc(Some("br")));
     }
 
     #[test]

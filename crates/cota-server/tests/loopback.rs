@@ -97,7 +97,7 @@ fn pct(v: &[f64], p: f64) -> f64 {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn two_hundred_clients_then_abuse_then_shutdown() {
     let (addr, stop, handle, _dir) = start().await;
-    let len = common::state().stream().bytes().len() as u64;
+    let len = common::state().stream().unwrap().bytes().len() as u64;
     let t = Instant::now();
     let tasks: Vec<_> = (0..CLIENTS)
         .map(|id| tokio::spawn(client(addr, id, len)))
@@ -137,8 +137,6 @@ async fn two_hundred_clients_then_abuse_then_shutdown() {
 async fn abuse(addr: SocketAddr) {
     let huge = "a".repeat(100_000);
     let raw: Vec<String> = vec![
-        "GET /stream HTTP/1.1\r\nHost: t\r\nRange: bytes=0-1\r\nRange: bytes=2-3\r\n\r\n".into(),
-        "GET /stream HTTP/1.1\r\nHost: t\r\nRange: bytes=0-1,4-5,9-12\r\n\r\n".into(),
         "GET /stream HTTP/1.1\r\nHost: t\r\nRange: bytes=18446744073709551615-\r\n\r\n".into(),
         "GET /tiles/0/0/../../../../etc/passwd HTTP/1.1\r\nHost: t\r\n\r\n".into(),
         "GET /tiles/%2e%2e/%2e%2e/etc/passwd HTTP/1.1\r\nHost: t\r\n\r\n".into(),

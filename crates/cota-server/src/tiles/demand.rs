@@ -1,5 +1,5 @@
 //! [`DemandTileSource`]: quantized-mesh tiles made on demand from one
-//! prepared hierarchy in memory, each made once and kept.
+//! prepared hierarchy in memory.
 //!
 //! The pyramid is the one `cota tiles` writes (issue 17's design,
 //! `ARCHITECTURE.md`): the source resampled onto the tiling's lattice, one
@@ -9,20 +9,17 @@
 //! `cota tiles` writes with the same options, and same-zoom neighbours share
 //! their borders whichever order they are asked in.
 //!
-//! Concurrent requests for one tile make it once: the first caller makes it,
-//! the others wait for its result. Tiles are kept up to [`CACHE_BYTES`];
-//! beyond that they are made again when asked.
-
-use std::collections::HashMap;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex, OnceLock};
+//! The source makes a tile each time it is asked: the server asks on its
+//! bounded worker pool, once per tile at a time (concurrent requests for one
+//! tile share one making), and keeps what it made in its byte-bounded LRU
+//! cache.
 
 use axum::body::Bytes;
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
 use cota_core::HeightGrid;
 use cota_io::tiles::{layer_json, make_tile, PyramidOptions};
 
-use super::{check_in_world, etag_of, Tile, TileId, TileSource, CACHE_BYTES};
+use super::{check_in_world, etag_of, Tile, TileId, TileSource};
 use crate::error::{Result, ServeError};
 
 self_cell::self_cell!(
@@ -35,17 +32,12 @@ self_cell::self_cell!(
     impl {Debug}
 );
 
-/// A tile being made or made: its bytes, or why it could not be made.
-type Slot = Arc<OnceLock<std::result::Result<Tile, String>>>;
-
 /// Tiles made on demand from a prepared hierarchy (see the module docs).
 #[derive(Debug)]
 pub struct DemandTileSource {
     pyramid: Pyramid,
     options: PyramidOptions,
     layer: Bytes,
-    slots: Mutex<HashMap<TileId, Slot>>,
-    kept_bytes: AtomicUsize,
 }
 
 impl DemandTileSource {
@@ -72,8 +64,6 @@ impl DemandTileSource {
             layer: Bytes::from(format!("{layer:#}\n")),
             pyramid,
             options,
-            slots: Mutex::new(HashMap::new()),
-            kept_bytes: AtomicUsize::new(0),
         })
     }
 
@@ -111,18 +101,6 @@ impl DemandTileSource {
             bytes: Bytes::from(m.bytes),
         })
     }
-
-    /// The slot of tile `id`, new and empty if it was not asked for before.
-    fn slot(&self, id: TileId) -> Slot {
-        let mut slots = self.slots.lock().unwrap_or_else(|p| p.into_inner());
-        slots.entry(id).or_default().clone()
-    }
-
-    /// Forgets tile `id` (made again when next asked).
-    fn forget(&self, id: TileId) {
-        let mut slots = self.slots.lock().unwrap_or_else(|p| p.into_inner());
-        slots.remove(&id);
-    }
 }
 
 impl TileSource for DemandTileSource {
@@ -130,32 +108,13 @@ impl TileSource for DemandTileSource {
         &self.layer
     }
 
-    fn cached(&self, id: TileId) -> Option<Tile> {
-        let slots = self.slots.lock().ok()?;
-        match slots.get(&id)?.get()? {
-            Ok(t) => Some(t.clone()),
-            Err(_) => None,
-        }
+    fn has(&self, id: TileId) -> Result<()> {
+        self.find(id).map(|_| ())
     }
 
     fn tile(&self, id: TileId) -> Result<Tile> {
         let t = self.find(id)?;
-        let slot = self.slot(id);
-        let mut made = false;
-        let r = slot.get_or_init(|| {
-            made = true;
-            self.make(t)
-        });
-        match r {
-            Ok(tile) => {
-                let n = tile.bytes.len();
-                if made && self.kept_bytes.fetch_add(n, Ordering::Relaxed) + n > CACHE_BYTES {
-                    self.kept_bytes.fetch_sub(n, Ordering::Relaxed);
-                    self.forget(id);
-                }
-                Ok(tile.clone())
-            }
-            Err(e) => Err(ServeError::Internal(format!("tile {t}: {e}"))),
-        }
+        self.make(t)
+            .map_err(|e| ServeError::Internal(format!("tile {t}: {e}")))
     }
 }

@@ -7,16 +7,14 @@
 //! short for its header and vertex count). Layout: the quantized-mesh-1.0
 //! specification (CesiumGS/quantized-mesh), `layer.json` as TileJSON 2.1.
 
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::RwLock;
 
 use axum::body::Bytes;
 use serde_json::Value;
 
 use super::{
     check_in_world, check_tile_bytes, clip, etag_of, is_gzip, Tile, TileId, TileSource,
-    CACHE_BYTES, MAX_TILE_BYTES, MAX_ZOOM,
+    MAX_TILE_BYTES, MAX_ZOOM,
 };
 use crate::error::{Result, ServeError};
 
@@ -32,9 +30,9 @@ struct TileRange {
     end_y: u32,
 }
 
-/// The tiles of a `cota tiles` output directory. Tiles read once are kept in
-/// memory (up to [`CACHE_BYTES`]): the directory is taken as immutable while
-/// it is served.
+/// The tiles of a `cota tiles` output directory (the server keeps those it
+/// sent in its cache: the directory is taken as immutable while it is
+/// served).
 #[derive(Debug)]
 pub struct DirTileSource {
     root: PathBuf,
@@ -42,7 +40,6 @@ pub struct DirTileSource {
     max_zoom: u32,
     geographic: bool,
     available: Option<Vec<Vec<TileRange>>>,
-    cache: RwLock<(HashMap<TileId, Tile>, usize)>,
 }
 
 impl DirTileSource {
@@ -59,17 +56,16 @@ impl DirTileSource {
         };
         let root = dir.canonicalize().map_err(io(dir))?;
         let layer_path = root.join("layer.json");
-        let size = std::fs::metadata(&layer_path)
-            .map_err(io(&layer_path))?
-            .len();
-        if size > MAX_LAYER_BYTES {
-            return Err(bad_set(
-                &layer_path,
-                &format!("at most {MAX_LAYER_BYTES} bytes"),
-                &format!("{size} bytes"),
-            ));
-        }
-        let text = std::fs::read(&layer_path).map_err(io(&layer_path))?;
+        let text = match cota_io::limits::read_file_capped(&layer_path, MAX_LAYER_BYTES) {
+            Err(e) if e.kind() == std::io::ErrorKind::FileTooLarge => {
+                return Err(bad_set(
+                    &layer_path,
+                    &format!("at most {MAX_LAYER_BYTES} bytes"),
+                    "more",
+                ))
+            }
+            r => r.map_err(io(&layer_path))?,
+        };
         let v: Value = serde_json::from_slice(&text)
             .map_err(|e| bad_set(&layer_path, "a JSON object", &format!("invalid JSON ({e})")))?;
         let parsed = parse_layer(&layer_path, &v)?;
@@ -79,7 +75,6 @@ impl DirTileSource {
             max_zoom: parsed.0,
             geographic: parsed.1,
             available: parsed.2,
-            cache: RwLock::new((HashMap::new(), 0)),
         })
     }
 
@@ -196,23 +191,13 @@ impl TileSource for DirTileSource {
         &self.layer
     }
 
-    fn cached(&self, id: TileId) -> Option<Tile> {
-        self.cache.read().ok()?.0.get(&id).cloned()
+    fn has(&self, id: TileId) -> Result<()> {
+        self.check(id)
     }
 
     fn tile(&self, id: TileId) -> Result<Tile> {
         self.check(id)?;
-        if let Some(t) = self.cached(id) {
-            return Ok(t);
-        }
-        let t = self.read(id)?;
-        if let Ok(mut c) = self.cache.write() {
-            if c.1 + t.bytes.len() <= CACHE_BYTES {
-                c.1 += t.bytes.len();
-                c.0.insert(id, t.clone());
-            }
-        }
-        Ok(t)
+        self.read(id)
     }
 }
 
@@ -235,14 +220,18 @@ impl DirTileSource {
         if !meta.is_file() {
             return Err(missing());
         }
-        if meta.len() > MAX_TILE_BYTES {
-            return Err(ServeError::CorruptTile {
-                path: path.clone(),
-                expected: format!("at most {MAX_TILE_BYTES} bytes"),
-                found: format!("{} bytes", meta.len()),
-            });
-        }
-        let bytes = std::fs::read(&real).map_err(io)?;
+        // Stops at the limit while reading, whatever the size said (a file
+        // that grows).
+        let bytes = match cota_io::limits::read_file_capped(&real, MAX_TILE_BYTES) {
+            Err(e) if e.kind() == std::io::ErrorKind::FileTooLarge => {
+                return Err(ServeError::CorruptTile {
+                    path: path.clone(),
+                    expected: format!("at most {MAX_TILE_BYTES} bytes"),
+                    found: "more".into(),
+                })
+            }
+            r => r.map_err(io)?,
+        };
         check_tile_bytes(&bytes).map_err(|(expected, found)| ServeError::CorruptTile {
             path: path.clone(),
             expected,

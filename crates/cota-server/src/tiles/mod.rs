@@ -3,10 +3,13 @@
 //!
 //! A [`TileSource`] answers the layer description and single tiles:
 //! * [`DirTileSource`]: the directory `cota tiles` writes (`OUT/layer.json`,
-//!   `OUT/{z}/{x}/{y}.terrain`, raw or gzipped), read once per tile and kept;
+//!   `OUT/{z}/{x}/{y}.terrain`, raw or gzipped);
 //! * [`DemandTileSource`]: tiles made on demand from a prepared hierarchy in
-//!   memory ([`cota_core::tiles::Prepared`], [`cota_io::tiles::make_tile`]),
-//!   each made once and kept.
+//!   memory ([`cota_core::tiles::Prepared`], [`cota_io::tiles::make_tile`]).
+//!
+//! Sources neither cache nor limit: the server calls [`TileSource::tile`]
+//! on its bounded worker pool, once per tile at a time, and keeps what it
+//! sends in its byte-bounded cache (`ServeOptions`).
 //!
 //! **URL layout.** The tile set is mounted at `/tiles/` exactly as `cota
 //! tiles` lays it out: `/tiles/layer.json` is the layer as written, whose
@@ -33,8 +36,6 @@ pub const MAX_TILE_BYTES: u64 = 16 << 20;
 pub const MAX_ZOOM: u32 = 30;
 /// Bytes of a quantized-mesh header (centre, heights, sphere, horizon point).
 const QM_HEADER_BYTES: usize = 88;
-/// Bytes of tiles a source keeps in memory.
-pub const CACHE_BYTES: usize = 256 << 20;
 
 /// A tile's address in the TMS pyramid (`y` counts from the south).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -54,9 +55,17 @@ impl TileId {
     /// [`ServeError::BadRequest`] unless each is a decimal number of at most
     /// 10 digits (the last followed by `.terrain`) and `z ≤` [`MAX_ZOOM`].
     pub fn parse(z: &str, x: &str, y_file: &str) -> Result<Self> {
-        let y = y_file.strip_suffix(".terrain").ok_or_else(|| {
+        Self::parse_file(z, x, y_file, ".terrain")
+    }
+
+    /// As [`TileId::parse`], the last segment ending in `ext` (`.png`).
+    ///
+    /// # Errors
+    /// As [`TileId::parse`].
+    pub fn parse_file(z: &str, x: &str, y_file: &str, ext: &str) -> Result<Self> {
+        let y = y_file.strip_suffix(ext).ok_or_else(|| {
             ServeError::BadRequest(format!(
-                "expected a tile file named {{y}}.terrain, found {:?}",
+                "expected a tile file named {{y}}{ext}, found {:?}",
                 clip(y_file)
             ))
         })?;
@@ -108,8 +117,15 @@ pub trait TileSource: Send + Sync + 'static {
     /// resolves to the `/tiles/{z}/{x}/{y}.terrain` route.
     fn layer_json(&self) -> &Bytes;
 
+    /// Checks that the layer has tile `id`, cheaply (no disk, no making):
+    /// the server asks before it queues [`TileSource::tile`].
+    ///
+    /// # Errors
+    /// As [`TileSource::tile`] for a tile that is not in the layer.
+    fn has(&self, id: TileId) -> Result<()>;
+
     /// The tile `id`. May block (disk, or making the tile): the server calls
-    /// it on the blocking pool.
+    /// it on its worker pool.
     ///
     /// # Errors
     /// [`ServeError::NotFound`] for a tile the layer does not have,
@@ -117,13 +133,6 @@ pub trait TileSource: Send + Sync + 'static {
     /// [`ServeError::CorruptTile`] / [`ServeError::Io`] for a stored tile
     /// that cannot be served.
     fn tile(&self, id: TileId) -> Result<Tile>;
-
-    /// The tile `id` if the source holds it in memory already: answered
-    /// without the blocking pool. Default: `None`.
-    fn cached(&self, id: TileId) -> Option<Tile> {
-        let _ = id;
-        None
-    }
 }
 
 /// Checks that `b` can be a tile: gzip, or a quantized-mesh header followed

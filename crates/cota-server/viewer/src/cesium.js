@@ -1,23 +1,47 @@
 // The CesiumJS page: the server's quantized-mesh tiles (the tile set mounted
 // at /tiles/: /tiles/layer.json, /tiles/{z}/{x}/{y}.terrain) in a stock
-// CesiumJS viewer, served locally (no Ion token, no imagery from the
-// network). window.cotaCesium reports tile loads and errors, and holds the
-// terrain provider, for the browser test.
+// CesiumJS viewer, served locally (no Ion token, nothing from the network),
+// made readable for a person:
+//  * the terrain lit by a light from the north-west (vertex normals
+//    requested: the server's tiles carry them),
+//  * draped with the server's shaded-relief imagery (/imagery.json,
+//    /imagery/{z}/{x}/{y}.png: hillshade over a hypsometric tint made from
+//    the DEM, geographic tiling, TMS rows),
+//  * the data's footprint outlined, the zoom-out bounded, a short help.
+// `?plain` shows the page as it was before (no light, no imagery, no
+// normals): the browser test compares the two.
+// window.cotaCesium reports tile loads and errors, and holds the terrain
+// provider and viewer, for the browser tests.
 const Cesium = window.Cesium;
 const status = document.getElementById('status');
-const report = { ready: false, tileErrors: 0, tilesLoaded: false, error: null };
+const help = document.getElementById('help');
+const plain = new URLSearchParams(location.search).has('plain');
+const report = { ready: false, tileErrors: 0, tilesLoaded: false, error: null, plain, imagery: false };
 window.cotaCesium = report;
 
-async function main() {
-  Cesium.Ion.defaultAccessToken = '';
-  const layer = await (await fetch('/tiles/layer.json')).json();
-  const terrainProvider = await Cesium.CesiumTerrainProvider.fromUrl('/tiles/', { requestVertexNormals: false, requestWaterMask: false });
-  report.terrainProvider = terrainProvider;
-  terrainProvider.errorEvent.addEventListener((e) => {
-    report.tileErrors++;
-    report.lastError = String(e.message || e);
-  });
-  const viewer = new Cesium.Viewer('globe', {
+const sleep = (ms) => new Promise((ok) => setTimeout(ok, ms));
+
+/** /health once the server has made (or given up on) its tiles and imagery. */
+async function health() {
+  for (;;) {
+    const h = await (await fetch('/health')).json();
+    if (h.tiles !== 'pending' && h.imagery !== 'pending') return h;
+    status.textContent = 'the server is preparing its tiles…';
+    await sleep(500);
+  }
+}
+
+/** The direction a light from azimuth `az` (degrees from north) and `alt` degrees up travels at lon, lat. */
+function lightAt(lon, lat, az = 315, alt = 45) {
+  const [a, e] = [Cesium.Math.toRadians(az), Cesium.Math.toRadians(alt)];
+  const toLight = new Cesium.Cartesian3(Math.sin(a) * Math.cos(e), Math.cos(a) * Math.cos(e), Math.sin(e));
+  const enu = Cesium.Transforms.eastNorthUpToFixedFrame(Cesium.Cartesian3.fromDegrees(lon, lat));
+  const d = Cesium.Matrix4.multiplyByPointAsVector(enu, toLight, new Cesium.Cartesian3());
+  return Cesium.Cartesian3.normalize(Cesium.Cartesian3.negate(d, d), d);
+}
+
+function makeViewer(terrainProvider) {
+  return new Cesium.Viewer('globe', {
     terrainProvider,
     baseLayer: false,
     baseLayerPicker: false,
@@ -33,17 +57,113 @@ async function main() {
     skyBox: false,
     skyAtmosphere: false,
   });
+}
+
+/** Light, relief imagery, outline and zoom bounds over the data's bounds `b` (W, S, E, N degrees). */
+function dress(viewer, b, imagery) {
+  const [lon, lat] = [(b[0] + b[2]) / 2, (b[1] + b[3]) / 2];
+  const globe = viewer.scene.globe;
+  globe.enableLighting = true;
+  globe.dynamicAtmosphereLighting = false;
+  viewer.scene.light = new Cesium.DirectionalLight({ direction: lightAt(lon, lat), intensity: 2.2 });
+  if (imagery) {
+    viewer.imageryLayers.addImageryProvider(new Cesium.UrlTemplateImageryProvider({
+      url: '/imagery/{z}/{x}/{reverseY}.png',
+      tilingScheme: new Cesium.GeographicTilingScheme(),
+      rectangle: Cesium.Rectangle.fromDegrees(...imagery.bounds),
+      minimumLevel: 0,
+      maximumLevel: imagery.maxzoom,
+      tileWidth: imagery.tileSize,
+      tileHeight: imagery.tileSize,
+      credit: 'shaded relief drawn by cota from the DEM',
+    }));
+    report.imagery = true;
+  }
+  viewer.entities.add({
+    polyline: {
+      positions: Cesium.Cartesian3.fromDegreesArray([b[0], b[1], b[2], b[1], b[2], b[3], b[0], b[3], b[0], b[1]]),
+      clampToGround: true,
+      width: 2,
+      material: Cesium.Color.fromCssColorString('#ffd54a'),
+    },
+  });
+  const extent = extentM(b);
+  const ctl = viewer.scene.screenSpaceCameraController;
+  ctl.minimumZoomDistance = 50;
+  ctl.maximumZoomDistance = Math.min(2e7, Math.max(2e5, 10 * extent));
+  report.maxZoomDistance = ctl.maximumZoomDistance;
+}
+
+/** The diagonal of bounds `b` in metres. */
+function extentM(b) {
+  const g = new Cesium.EllipsoidGeodesic(Cesium.Cartographic.fromDegrees(b[0], b[1]), Cesium.Cartographic.fromDegrees(b[2], b[3]));
+  return g.surfaceDistance;
+}
+
+/** An oblique view from the south over the middle of bounds `b`. */
+function home(viewer, b) {
+  const centre = Cesium.Cartesian3.fromDegrees((b[0] + b[2]) / 2, (b[1] + b[3]) / 2);
+  viewer.camera.lookAt(centre, new Cesium.HeadingPitchRange(0, Cesium.Math.toRadians(-40), 0.9 * extentM(b)));
+  viewer.camera.lookAtTransform(Cesium.Matrix4.IDENTITY);
+}
+
+/** Renders a frame and measures the canvas: luminance mean and spread over the middle half. */
+report.pixels = () => {
+  const v = report.viewer;
+  v.scene.render();
+  const src = v.scene.canvas;
+  const cv = document.createElement('canvas');
+  [cv.width, cv.height] = [src.width, src.height];
+  const g = cv.getContext('2d');
+  g.drawImage(src, 0, 0);
+  const [x0, y0, w, h] = [src.width >> 2, src.height >> 2, src.width >> 1, src.height >> 1];
+  const px = g.getImageData(x0, y0, w, h).data;
+  let n = 0, sum = 0, sum2 = 0;
+  for (let i = 0; i < px.length; i += 4) {
+    const l = 0.2126 * px[i] + 0.7152 * px[i + 1] + 0.0722 * px[i + 2];
+    n++;
+    sum += l;
+    sum2 += l * l;
+  }
+  const mean = sum / n;
+  return { mean, std: Math.sqrt(Math.max(0, sum2 / n - mean * mean)), pixels: n };
+};
+
+async function main() {
+  Cesium.Ion.defaultAccessToken = '';
+  const h = await health();
+  if (h.tiles !== 'yes') throw new Error(`this server has no tiles (${h.tiles}): run cota serve on a geographic DEM, or with --tiles DIR`);
+  const layer = await (await fetch('/tiles/layer.json')).json();
+  const imagery = !plain && h.imagery === 'yes' ? await (await fetch('/imagery.json')).json() : null;
+  const terrainProvider = await Cesium.CesiumTerrainProvider.fromUrl('/tiles/', { requestVertexNormals: !plain, requestWaterMask: false, requestMetadata: true });
+  report.terrainProvider = terrainProvider;
+  terrainProvider.errorEvent.addEventListener((e) => {
+    report.tileErrors++;
+    report.lastError = String(e.message || e);
+  });
+  const viewer = makeViewer(terrainProvider);
+  report.viewer = viewer;
   viewer.scene.globe.baseColor = Cesium.Color.fromCssColorString('#8aa37b');
-  viewer.scene.globe.enableLighting = false;
-  const b = layer.bounds || [-180, -90, 180, 90];
-  viewer.camera.setView({ destination: Cesium.Rectangle.fromDegrees(b[0], b[1], b[2], b[3]) });
+  const b = (imagery && imagery.bounds) || layer.bounds || [-180, -90, 180, 90];
+  report.bounds = b;
+  if (plain) {
+    viewer.scene.globe.enableLighting = false;
+    viewer.camera.setView({ destination: Cesium.Rectangle.fromDegrees(b[0], b[1], b[2], b[3]) });
+    help.hidden = true;
+  } else {
+    dress(viewer, b, imagery);
+    home(viewer, b);
+  }
   viewer.scene.globe.tileLoadProgressEvent.addEventListener((n) => {
     report.pending = n;
     if (n === 0) report.tilesLoaded = true;
-    status.textContent = `quantized-mesh tiles from this server\npending tiles ${n}  errors ${report.tileErrors}`;
+    status.textContent = `quantized-mesh tiles${imagery ? ' and shaded relief' : ''} from this server\npending tiles ${n}  errors ${report.tileErrors}`;
+  });
+  document.addEventListener('keydown', (e) => {
+    if (e.key === 'h' || e.key === 'H') help.hidden = !help.hidden;
+    if (e.key === 'r' || e.key === 'R') home(viewer, b);
   });
   report.ready = true;
-  report.viewer = viewer;
 }
 
 main().catch((e) => {

@@ -396,8 +396,19 @@ window.addEventListener('resize', () => {
   camera.updateProjectionMatrix();
 });
 
+/** fetch(url), waiting out 503 answers (the server still encoding the stream) as Retry-After says. */
+async function fetchReady(url, onWait) {
+  for (;;) {
+    const r = await fetch(url);
+    if (r.status !== 503) return r;
+    const s = Number(r.headers.get('Retry-After')) || 1;
+    if (onWait) onWait(s);
+    await new Promise((ok) => setTimeout(ok, 1000 * Math.min(s, 10)));
+  }
+}
+
 async function main() {
-  const r = await fetch('/meta.json');
+  const r = await fetchReady('/meta.json', () => { overlay.textContent = 'the server is encoding the stream…'; });
   if (!r.ok) throw new Error(`/meta.json: HTTP ${r.status}`);
   meta = await r.json();
   const n = meta.width * meta.height;

@@ -7,7 +7,12 @@ import { StreamReader } from './decoder.js';
 const FIRST_BYTES = 32 * 1024;
 
 async function fetchRange(url, from, to) {
-  const r = await fetch(url, { headers: { Range: `bytes=${from}-${to}` } });
+  let r = await fetch(url, { headers: { Range: `bytes=${from}-${to}` } });
+  // 503: the stream is still being encoded (or the server is busy): wait as told.
+  for (let k = 0; r.status === 503 && k < 600; k++) {
+    await new Promise((ok) => setTimeout(ok, 1000 * Math.min(Number(r.headers.get('Retry-After')) || 1, 10)));
+    r = await fetch(url, { headers: { Range: `bytes=${from}-${to}` } });
+  }
   if (r.status !== 206 && r.status !== 200) throw new Error(`GET ${url} ${from}-${to}: HTTP ${r.status}`);
   const total = Number((r.headers.get('Content-Range') || '').split('/')[1] || r.headers.get('Content-Length'));
   const body = new Uint8Array(await r.arrayBuffer());
