@@ -427,14 +427,15 @@ mod test {
     use super::*;
     use crate::{Crs, GeoRef, PixelIs};
 
-    /// A cone 1000 m high on a 1° × 1° grid of `n`² samples at (10°E, 0°).
+    /// A cone 30 km high (slopes of about 0.5) on a 1° × 1° grid of `n`²
+    /// samples at (10°E, 0°).
     fn cone(n: usize) -> HeightGrid {
         let mut z = Vec::with_capacity(n * n);
         let c = (n - 1) as f64 / 2.0;
         for r in 0..n {
             for k in 0..n {
                 let d = ((k as f64 - c).powi(2) + (r as f64 - c).powi(2)).sqrt() / c;
-                z.push((1000.0 * (1.0 - d).max(0.0)) as f32 + 10.0);
+                z.push((30_000.0 * (1.0 - d).max(0.0)) as f32 + 10.0);
             }
         }
         let step = 1.0 / (n - 1) as f64;

@@ -408,3 +408,65 @@ fn file_over_the_byte_budget_is_refused_unread() {
     );
     assert!(t0.elapsed() < std::time::Duration::from_secs(2), "{msg}");
 }
+
+/// A reader that counts the bytes taken from it: a stand-in for a device,
+/// a pipe or a file that grows, whose size says nothing.
+struct Counted<R> {
+    inner: R,
+    read: u64,
+}
+
+impl<R: std::io::Read> std::io::Read for Counted<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.read += n as u64;
+        Ok(n)
+    }
+}
+
+// Issue 31: `cota info /dev/zero` grew to 9 GB and 3 GB on standard input
+// were held whole before refusal. Readers stop at the limit while reading.
+#[test]
+fn endless_inputs_stop_at_the_limit_while_reading() {
+    use std::io::Read;
+    // No magic number: only a raw .hgt, so one 3601² tile at most.
+    let mut zeros = Counted {
+        inner: std::io::repeat(0),
+        read: 0,
+    };
+    let e = cota_io::read_dem_from(&mut zeros, Path::new("<stdin>"), &ReadOptions::DEFAULT)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("longer than a raw .hgt"), "{e}");
+    assert_eq!(zeros.read, cota_io::limits::HGT_MAX_BYTES + 1);
+    // A format with a magic number: its byte limit from the sample limit.
+    let opts = ReadOptions::DEFAULT.with_max_samples(Some(1000));
+    let head = png_header_only(10, 10);
+    let mut png = Counted {
+        inner: head.as_slice().chain(std::io::repeat(0)),
+        read: 0,
+    };
+    let e = cota_io::read_dem_from(&mut png, Path::new("x.png"), &opts).unwrap_err();
+    assert!(matches!(e.kind, ReadErrorKind::FileTooLarge { .. }), "{e}");
+    assert_eq!(png.read, cota_io::limits::max_file_bytes(&opts) + 1);
+    #[cfg(target_os = "linux")]
+    {
+        let t = std::time::Instant::now();
+        let e = read_dem(Path::new("/dev/zero"), &ReadOptions::DEFAULT).unwrap_err();
+        assert!(e.to_string().starts_with("/dev/zero: "), "{e}");
+        assert!(t.elapsed().as_secs() < 10);
+    }
+}
+
+#[test]
+fn capped_file_reads_say_too_large() {
+    let dir = tmp();
+    let f = dir.path().join("big.bin");
+    std::fs::write(&f, vec![7u8; 100]).unwrap();
+    assert_eq!(
+        cota_io::limits::read_file_capped(&f, 100).unwrap().len(),
+        100
+    );
+    let e = cota_io::limits::read_file_capped(&f, 99).unwrap_err();
+    assert_eq!(e.kind(), std::io::ErrorKind::FileTooLarge);
+}

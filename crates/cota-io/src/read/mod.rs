@@ -119,10 +119,12 @@ fn read_capped_content<R: std::io::Read>(
         return Ok(bytes);
     }
     if headless {
+        let head = describe_bytes(&bytes[..bytes.len().min(8)]);
+        let head = head.rsplit_once(" (").map_or(head.as_str(), |(h, _)| h);
         return Err(ReadErrorKind::UnknownFormat {
             found: format!(
-                "{}{} and more than {limit} bytes, longer than any raw .hgt",
-                describe_bytes(&bytes),
+                "{head}… with no magic number, and more than {limit} bytes: longer than a raw \
+                 .hgt (the only format without one) may be{} (reading stopped there)",
                 name_hint(name)
             ),
         });
