@@ -167,9 +167,9 @@ fn make_tiles(
 }
 
 /// The shaded-relief imagery of `grid` (none for a stream or a projected grid).
-fn make_imagery(grid: Option<&HeightGrid>) -> Option<Imagery> {
+fn make_imagery(grid: Option<&Arc<HeightGrid>>) -> Option<Imagery> {
     let t = Instant::now();
-    match grid.map(Imagery::new) {
+    match grid.map(|g| Imagery::new(g.clone())) {
         Some(Ok(i)) => {
             let r = i.relief();
             println!(
@@ -187,24 +187,33 @@ fn make_imagery(grid: Option<&HeightGrid>) -> Option<Imagery> {
     }
 }
 
-/// Makes the stream on one thread, the imagery then the tiles on another,
-/// each set on `state` when ready.
+/// Makes, on one thread, the imagery (a fraction of a second), the stream,
+/// then the tiles' hierarchy, each set on `state` as soon as it is ready.
+/// One after the other: the stream's encoder and the tiler each take
+/// several times the grid's memory at their peak.
 fn start_background(state: &ServerState, source: Source, tiles_dir: Option<PathBuf>) {
-    let source = Arc::new(source);
-    let (s1, src1) = (state.clone(), source.clone());
-    std::thread::spawn(move || s1.set_stream(make_stream(&src1)));
-    let s2 = state.clone();
+    let state = state.clone();
     std::thread::spawn(move || {
-        let grid = match source.as_ref() {
-            Source::Grid(g, _) => Some(g.as_ref()),
+        let grid = match &source {
+            Source::Grid(g, _) => Some(g),
             Source::Stream(_) => None,
         };
-        s2.set_imagery(Ok(make_imagery(grid)));
-        let tiles = make_tiles(tiles_dir.as_deref(), grid);
-        if let Err(e) = &tiles {
-            eprintln!("cota serve: {e}");
+        state.set_imagery(Ok(make_imagery(grid)));
+        let set_tiles = || {
+            let tiles = make_tiles(tiles_dir.as_deref(), grid.map(|g| g.as_ref()));
+            if let Err(e) = &tiles {
+                eprintln!("cota serve: {e}");
+            }
+            state.set_tiles(tiles);
+        };
+        // A tile directory opens at once: serve it before the stream.
+        if tiles_dir.is_some() {
+            set_tiles();
+            state.set_stream(make_stream(&source));
+        } else {
+            state.set_stream(make_stream(&source));
+            set_tiles();
         }
-        s2.set_tiles(tiles);
     });
 }
 

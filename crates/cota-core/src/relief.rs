@@ -18,6 +18,8 @@
 //!   tan and brown to white; heights at or below 0 m a pale blue (sea).
 //! * Pixels outside the data are transparent.
 
+use std::sync::Arc;
+
 use crate::grid::metres_per_degree;
 use crate::HeightGrid;
 
@@ -80,17 +82,32 @@ pub enum ReliefError {
     },
 }
 
+/// The heights of a level: the grid itself (level 0, shared), or a
+/// box-filtered copy.
+#[derive(Debug)]
+enum Heights {
+    Grid(Arc<HeightGrid>),
+    Own(Vec<f32>),
+}
+
 /// One box-filtered level: `2^k` level-0 cells per cell.
 #[derive(Debug)]
 struct Level {
     width: usize,
     height: usize,
-    z: Vec<f32>,
+    z: Heights,
     /// Level-0 cells per cell.
     scale: f64,
 }
 
 impl Level {
+    fn heights(&self) -> &[f32] {
+        match &self.z {
+            Heights::Grid(g) => g.heights(),
+            Heights::Own(v) => v,
+        }
+    }
+
     /// Bilinear height at level-0 coordinates (`col`, `row`), clamped to the grid.
     fn at(&self, col: f64, row: f64) -> f64 {
         let off = (self.scale - 1.0) / 2.0;
@@ -99,7 +116,8 @@ impl Level {
         let (c0, r0) = (c.floor() as usize, r.floor() as usize);
         let (c1, r1) = ((c0 + 1).min(self.width - 1), (r0 + 1).min(self.height - 1));
         let (fc, fr) = (c - c0 as f64, r - r0 as f64);
-        let z = |c: usize, r: usize| f64::from(self.z[r * self.width + c]);
+        let h = self.heights();
+        let z = |c: usize, r: usize| f64::from(h[r * self.width + c]);
         let top = z(c0, r0) * (1.0 - fc) + z(c1, r0) * fc;
         let bottom = z(c0, r1) * (1.0 - fc) + z(c1, r1) * fc;
         top * (1.0 - fr) + bottom * fr
@@ -108,13 +126,14 @@ impl Level {
     /// The next coarser level (2×2 boxes; a last odd row or column alone).
     fn halve(&self) -> Level {
         let (w, h) = (self.width.div_ceil(2), self.height.div_ceil(2));
+        let src = self.heights();
         let mut z = Vec::with_capacity(w * h);
         for r in 0..h {
             for c in 0..w {
                 let (mut sum, mut n) = (0.0f64, 0.0f64);
                 for rr in (2 * r)..(2 * r + 2).min(self.height) {
                     for cc in (2 * c)..(2 * c + 2).min(self.width) {
-                        sum += f64::from(self.z[rr * self.width + cc]);
+                        sum += f64::from(src[rr * self.width + cc]);
                         n += 1.0;
                     }
                 }
@@ -124,7 +143,7 @@ impl Level {
         Level {
             width: w,
             height: h,
-            z,
+            z: Heights::Own(z),
             scale: self.scale * 2.0,
         }
     }
@@ -148,7 +167,8 @@ pub const MAX_RELIEF_ZOOM: u8 = 20;
 
 impl Relief {
     /// Prepares `grid` (no voids expected: they are drawn as their stored
-    /// value) and its box-filtered levels down to a few cells.
+    /// value; shared, not copied) and its box-filtered levels down to a few
+    /// cells.
     ///
     /// # Errors
     /// [`ReliefError::NotGeographic`] unless the grid is in longitude and
@@ -156,9 +176,8 @@ impl Relief {
     /// or an altitude outside (0, 90].
     ///
     /// # Runtime
-    /// `O(n)` for `n` samples; the levels take a third of the grid's memory
-    /// beyond a copy of its heights.
-    pub fn new(grid: &HeightGrid, opts: &ReliefOptions) -> Result<Self, ReliefError> {
+    /// `O(n)` for `n` samples; the levels take a third of the grid's memory.
+    pub fn new(grid: Arc<HeightGrid>, opts: &ReliefOptions) -> Result<Self, ReliefError> {
         let g = grid.georef();
         if !(g.known && g.crs.is_geographic()) {
             return Err(ReliefError::NotGeographic {
@@ -183,7 +202,7 @@ impl Relief {
         let mut levels = vec![Level {
             width: grid.width(),
             height: grid.height(),
-            z: grid.heights().to_vec(),
+            z: Heights::Grid(grid.clone()),
             scale: 1.0,
         }];
         while let Some(last) = levels.last().filter(|l| l.width.max(l.height) > 4) {
@@ -457,7 +476,8 @@ mod test {
 
     #[test]
     fn the_lit_side_is_brighter_and_outside_is_transparent() {
-        let r = Relief::new(&cone(257), &ReliefOptions::DEFAULT).unwrap_or_else(|e| panic!("{e}"));
+        let r = Relief::new(Arc::new(cone(257)), &ReliefOptions::DEFAULT)
+            .unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(r.bounds_deg(), [10.0, 0.0, 11.0, 1.0]);
         let z = r.max_zoom();
         assert_eq!(
@@ -485,14 +505,15 @@ mod test {
 
     #[test]
     fn flat_ground_shades_to_one_and_projected_grids_are_refused() {
-        let r = Relief::new(&cone(33), &ReliefOptions::DEFAULT).unwrap_or_else(|e| panic!("{e}"));
+        let r = Relief::new(Arc::new(cone(33)), &ReliefOptions::DEFAULT)
+            .unwrap_or_else(|e| panic!("{e}"));
         assert!((r.hillshade(&[5.0; 9], 30.0, 30.0) - 1.0).abs() < 1e-12);
         let mut g = cone(33);
         let mut geo = g.georef().clone();
         geo.crs = Crs::Epsg(32719);
         g.set_georef(geo);
         assert!(matches!(
-            Relief::new(&g, &ReliefOptions::DEFAULT),
+            Relief::new(Arc::new(g), &ReliefOptions::DEFAULT),
             Err(ReliefError::NotGeographic { .. })
         ));
     }
