@@ -941,6 +941,12 @@ pub struct TilesArgs {
     /// Gzip every tile (serve with Content-Encoding: gzip).
     #[arg(long)]
     pub gzip: bool,
+    /// Also write shaded-relief imagery beside the terrain: PNG tiles
+    /// OUT/imagery/{z}/{x}/{y}.png (hillshade over a hypsometric tint, the
+    /// same geographic tiling and TMS rows) and OUT/imagery/imagery.json,
+    /// as `cota serve` sends them at /imagery/. Whole-input runs only.
+    #[arg(long, conflicts_with_all = ["plan", "shard", "reduce"])]
+    pub imagery: bool,
     /// Redo tiles already in OUT, and replace read-only files there
     /// (refused otherwise).
     #[arg(long)]

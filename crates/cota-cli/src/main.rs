@@ -17,6 +17,7 @@ macro_rules! say {
 mod args;
 mod compare;
 mod hole;
+mod imagery;
 mod info;
 mod input;
 mod mesh;

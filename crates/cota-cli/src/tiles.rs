@@ -54,6 +54,9 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     let mut inp = input::load(&a.input)?;
     let voids = inp.grid.void_count();
     input::fill(&mut inp.grid, a.voids)?;
+    if a.imagery {
+        crate::imagery::write(&inp.grid, &a.output)?;
+    }
     let name = input::name(&inp.files);
     let lattice_opts = tiles_part::lattice_options(a);
     let spinner = progress::spinner("resampling");

@@ -63,6 +63,8 @@ function makeViewer(terrainProvider) {
 function dress(viewer, b, imagery) {
   const [lon, lat] = [(b[0] + b[2]) / 2, (b[1] + b[3]) / 2];
   const globe = viewer.scene.globe;
+  // Beyond the data: a slate grey, so the footprint stands out.
+  globe.baseColor = Cesium.Color.fromCssColorString('#66707a');
   globe.enableLighting = true;
   globe.dynamicAtmosphereLighting = false;
   viewer.scene.light = new Cesium.DirectionalLight({ direction: lightAt(lon, lat), intensity: 2.2 });
@@ -103,7 +105,7 @@ function extentM(b) {
 /** An oblique view from the south over the middle of bounds `b`. */
 function home(viewer, b) {
   const centre = Cesium.Cartesian3.fromDegrees((b[0] + b[2]) / 2, (b[1] + b[3]) / 2);
-  viewer.camera.lookAt(centre, new Cesium.HeadingPitchRange(0, Cesium.Math.toRadians(-40), 0.9 * extentM(b)));
+  viewer.camera.lookAt(centre, new Cesium.HeadingPitchRange(0, Cesium.Math.toRadians(-40), 0.6 * extentM(b)));
   viewer.camera.lookAtTransform(Cesium.Matrix4.IDENTITY);
 }
 

@@ -11,7 +11,12 @@
 //     a `cota tiles` output served with --tiles DIR, and tiles made on demand
 //     by `cota serve` itself: tiles load, no tile or console error, and
 //     sampleTerrainMostDetailed agrees with the DEM at DEM samples within the
-//     finest zoom's bound.
+//     finest zoom's bound;
+//  3. the CesiumJS page as a person sees it (issue 31): lit, normals
+//     requested, the server's shaded-relief imagery draped, the footprint
+//     outlined, the zoom-out bounded, the help shown; the luminance spread
+//     over the middle of the view against the page as it was (`?plain`: no
+//     light, no imagery), whose surface was an almost uniform green.
 // Usage: node test-browser/run.mjs [--docs DIR] [--cesium-only] (COTA_BIN: the cota binary,
 // default target/release/cota; CHROMIUM: default /usr/bin/chromium).
 // Writes target/viewer-tests/results.json and screenshots beside it.
@@ -59,6 +64,16 @@ function serve(args) {
     });
     p.on('exit', (code) => rej(new Error(`cota serve exited with ${code}: ${text}`)));
   });
+}
+
+/** Waits until the server has made its stream, tiles and imagery (made after it listens). */
+async function whenReady(url) {
+  for (const t0 = Date.now(); Date.now() - t0 < 180000;) {
+    const h = await (await fetch(`${url}/health`)).json();
+    if (![h.stream, h.tiles, h.imagery].includes('pending')) return h;
+    await new Promise((r) => setTimeout(r, 200));
+  }
+  throw new Error('the server did not get ready in 180 s');
 }
 
 async function stop(s) {
@@ -238,6 +253,7 @@ async function cesiumTest(browser, input, tiles, mode) {
     if (path.startsWith('/tiles/') && path.endsWith('.terrain')) served.push({ url: r.url(), status: r.status(), type: r.headers()['content-type'] });
   });
   try {
+    await whenReady(s.url);
     const layer = await (await fetch(`${s.url}/tiles/layer.json`)).json();
     const written = JSON.parse(readFileSync(join(tiles.dir, 'layer.json'), 'utf8'));
     check(`the ${mode} layer is the cota tiles layer`, JSON.stringify(layer.available) === JSON.stringify(written.available)
@@ -268,11 +284,55 @@ async function cesiumTest(browser, input, tiles, mode) {
     check(`CesiumJS heights agree with the DEM (${mode})`, pts.length > 300 && worst <= bound + 1e-3,
       `${pts.length} points at zoom ${layer.maxzoom}, largest |Cesium − DEM| ${worst.toFixed(3)} m, bound ${bound.toFixed(3)} m`);
     check(`no console errors on the CesiumJS page (${mode})`, errors.length === 0, errors.slice(0, 3).join(' | '));
+    if (mode === 'on demand') results.cesium_readable = await readable(browser, s.url);
     results[`cesium_${mode.replace(' ', '_')}`] = { tiles: served.length, ok: ok.length, tileErrors: r.tileErrors, points: pts.length, worst_m: worst, bound_m: bound };
   } finally {
     await page.close();
     await stop(s);
   }
+}
+
+/** Waits until the globe has every tile and image loaded on 3 checks running. */
+async function settle(page) {
+  await page.waitForFunction(() => window.cotaCesium && (window.cotaCesium.error || window.cotaCesium.ready), null, { timeout: 120000 });
+  const t0 = Date.now();
+  for (let n = 0; n < 3 && Date.now() - t0 < 120000;) {
+    n = (await page.evaluate(() => window.cotaCesium.viewer && window.cotaCesium.viewer.scene.globe.tilesLoaded)) ? n + 1 : 0;
+    await page.waitForTimeout(300);
+  }
+}
+
+/** The page as a person sees it, and the page as it was (`?plain`): luminance spread over the middle of the view. */
+async function readable(browser, url) {
+  const out1 = {};
+  for (const [name, query] of [['readable', ''], ['plain', '?plain']]) {
+    const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
+    const errors = collectErrors(page);
+    const images = [];
+    page.on('response', (r) => {
+      if (new URL(r.url()).pathname.startsWith('/imagery/')) images.push(r.status());
+    });
+    await page.goto(`${url}/cesium${query}`);
+    await settle(page);
+    const r = await page.evaluate(() => {
+      const c = window.cotaCesium;
+      const g = c.viewer.scene.globe;
+      return { error: c.error, px: c.pixels(), lighting: g.enableLighting, imagery: c.imagery, normals: c.terrainProvider.hasVertexNormals,
+        maxZoom: c.viewer.scene.screenSpaceCameraController.maximumZoomDistance, help: !document.getElementById('help').hidden,
+        outline: c.viewer.entities.values.length };
+    });
+    await page.screenshot({ path: join(out, `cesium-${name}.png`) });
+    out1[name] = { ...r, imageTiles: images.length, imageErrors: images.filter((s) => s !== 200).length, consoleErrors: errors.length };
+    await page.close();
+  }
+  const [a, b] = [out1.readable, out1.plain];
+  check('CesiumJS page: lit, normals, relief imagery, outline, help', !a.error && a.lighting && a.normals && a.imagery && a.outline >= 1 && a.help
+    && a.imageTiles > 0 && a.imageErrors === 0 && a.consoleErrors === 0,
+    `lighting ${a.lighting}, normals ${a.normals}, ${a.imageTiles} imagery tiles (${a.imageErrors} not 200), outline ${a.outline}, help ${a.help}`);
+  check('CesiumJS page: zoom-out bounded', a.maxZoom < 2.1e7, `${(a.maxZoom / 1000).toFixed(0)} km`);
+  check('CesiumJS page shows relief: luminance spread over the terrain', a.px.std > 12 && a.px.std > 3 * b.px.std,
+    `std ${a.px.std.toFixed(1)} (mean ${a.px.mean.toFixed(0)}) against ${b.px.std.toFixed(1)} (mean ${b.px.mean.toFixed(0)}) for the page as it was; screenshots cesium-readable.png, cesium-plain.png`);
+  return out1;
 }
 
 async function main() {
