@@ -275,18 +275,8 @@ impl Relief {
         let px = self.opts.tile_px as usize;
         let [west, _, _, north] = tile_bounds(z, x, y);
         let d = tile_deg(z) / px as f64;
-        let level = self.level_for(d);
-        // Heights at the pixels' centres with a one-pixel border.
         let side = px + 2;
-        let mut h = vec![0.0f64; side * side];
-        for j in 0..side {
-            let lat = north - (j as f64 - 0.5) * d;
-            for i in 0..side {
-                let lon = west + (i as f64 - 0.5) * d;
-                let (c, r) = self.col_row(lon, lat);
-                h[j * side + i] = level.at(c, r);
-            }
-        }
+        let h = self.heights_around(west, north, d, side);
         let lat_mid = north - tile_deg(z) / 2.0;
         let [mx, my] = metres_per_degree(lat_mid);
         let cell_m = self.step.0.abs() * mx;
@@ -325,6 +315,23 @@ impl Relief {
     /// (rows from the north) spaced `dx_m`, `dy_m` apart: 1 on flat ground.
     pub fn hillshade(&self, win: &[f64; 9], dx_m: f64, dy_m: f64) -> f64 {
         Shader::new(&self.opts, dx_m, dy_m, self.opts.exaggeration).shade(win)
+    }
+
+    /// Heights at the centres of `side`² pixels of `d` degrees, the first
+    /// one pixel west and north of (`west`, `north`): a tile's pixels with a
+    /// one-pixel border, from the level whose cells are about a pixel.
+    fn heights_around(&self, west: f64, north: f64, d: f64, side: usize) -> Vec<f64> {
+        let level = self.level_for(d);
+        let mut h = vec![0.0f64; side * side];
+        for j in 0..side {
+            let lat = north - (j as f64 - 0.5) * d;
+            for i in 0..side {
+                let lon = west + (i as f64 - 0.5) * d;
+                let (c, r) = self.col_row(lon, lat);
+                h[j * side + i] = level.at(c, r);
+            }
+        }
+        h
     }
 
     /// The level whose cells are about `pixel_deg` wide (not larger).
