@@ -30,9 +30,10 @@ const DEMAND_TILES: PyramidOptions = PyramidOptions::DEFAULT
     .with_extensions(TileExtensions::with(true, false, true))
     .with_gzip(true);
 
-/// What the background makes from: a `.cstream` file or a grid.
+/// What the background makes from: a `.cstream` (read and checked in the
+/// foreground) or a grid.
 enum Source {
-    Stream(PathBuf),
+    Stream(Box<StreamAsset>),
     Grid(Arc<HeightGrid>, String),
 }
 
@@ -50,10 +51,14 @@ fn stream_file(a: &ServeArgs) -> Option<PathBuf> {
 }
 
 /// Reads the input in the foreground (errors name the file before the
-/// server listens); a `.cstream` is only recognised here.
+/// server listens); a `.cstream` is checked by decoding it.
 fn source_of(a: &ServeArgs) -> anyhow::Result<Source> {
     if let Some(f) = stream_file(a) {
-        return Ok(Source::Stream(f));
+        let cap = cota_io::limits::max_file_bytes(&cota_io::ReadOptions::DEFAULT);
+        let bytes = cota_io::limits::read_file_capped(&f, cap)
+            .with_context(|| format!("reading {}", f.display()))?;
+        let s = StreamAsset::from_stream_bytes(bytes, &f.display().to_string())?;
+        return Ok(Source::Stream(Box::new(s)));
     }
     let input = load(&a.input)?;
     let mut grid = input.grid;
@@ -101,15 +106,11 @@ fn ms(t: Instant) -> f64 {
 fn make_stream(source: &Source) -> Result<StreamAsset, String> {
     let t = Instant::now();
     let s = match source {
-        Source::Stream(f) => {
-            let cap = cota_io::limits::max_file_bytes(&cota_io::ReadOptions::DEFAULT);
-            let bytes = cota_io::limits::read_file_capped(f, cap)
-                .map_err(|e| format!("reading {}: {e}", f.display()))?;
-            StreamAsset::from_stream_bytes(bytes, &f.display().to_string())
+        Source::Stream(s) => s.as_ref().clone(),
+        Source::Grid(grid, name) => {
+            StreamAsset::from_grid(grid, name).map_err(|e| e.to_string())?
         }
-        Source::Grid(grid, name) => StreamAsset::from_grid(grid, name),
-    }
-    .map_err(|e| e.to_string())?;
+    };
     let m = s.meta();
     println!(
         "stream      {} ({} x {}): {} bytes in {} steps, ready in {:.0} ms",
@@ -123,18 +124,17 @@ fn make_stream(source: &Source) -> Result<StreamAsset, String> {
     Ok(s)
 }
 
-/// The tile source: `--tiles DIR`, or tiles made on demand from `grid`
-/// (none for a stream, or a source that is not geographic: said, not fatal).
-fn make_tiles(
-    dir: Option<&Path>,
-    grid: Option<&HeightGrid>,
-) -> Result<Option<Arc<dyn TileSource>>, String> {
-    if let Some(dir) = dir {
-        let src =
-            DirTileSource::open(dir).map_err(|e| format!("--tiles {}: {e}", dir.display()))?;
-        println!("tiles       {}", dir.display());
-        return Ok(Some(Arc::new(src)));
-    }
+/// `--tiles DIR`, opened in the foreground (an unusable directory stops
+/// the start).
+fn open_tiles(dir: &Path) -> anyhow::Result<Arc<dyn TileSource>> {
+    let src = DirTileSource::open(dir).with_context(|| format!("--tiles {}", dir.display()))?;
+    println!("tiles       {}", dir.display());
+    Ok(Arc::new(src))
+}
+
+/// Tiles made on demand from `grid` (none for a stream, or a source that
+/// is not geographic: said, not fatal).
+fn make_tiles(grid: Option<&HeightGrid>) -> Result<Option<Arc<dyn TileSource>>, String> {
     let Some(grid) = grid else {
         println!("tiles       none (a stream holds no grid to tile; use --tiles DIR)");
         return Ok(None);
@@ -188,10 +188,11 @@ fn make_imagery(grid: Option<&Arc<HeightGrid>>) -> Option<Imagery> {
 }
 
 /// Makes, on one thread, the imagery (a fraction of a second), the stream,
-/// then the tiles' hierarchy, each set on `state` as soon as it is ready.
-/// One after the other: the stream's encoder and the tiler each take
-/// several times the grid's memory at their peak.
-fn start_background(state: &ServerState, source: Source, tiles_dir: Option<PathBuf>) {
+/// then (unless `--tiles DIR` gave them) the tiles' hierarchy, each set on
+/// `state` as soon as it is ready. One after the other: the stream's
+/// encoder and the tiler each take several times the grid's memory at
+/// their peak.
+fn start_background(state: &ServerState, source: Source, tiles_given: bool) {
     let state = state.clone();
     std::thread::spawn(move || {
         let grid = match &source {
@@ -199,20 +200,13 @@ fn start_background(state: &ServerState, source: Source, tiles_dir: Option<PathB
             Source::Stream(_) => None,
         };
         state.set_imagery(Ok(make_imagery(grid)));
-        let set_tiles = || {
-            let tiles = make_tiles(tiles_dir.as_deref(), grid.map(|g| g.as_ref()));
+        state.set_stream(make_stream(&source));
+        if !tiles_given {
+            let tiles = make_tiles(grid.map(|g| g.as_ref()));
             if let Err(e) = &tiles {
                 eprintln!("cota serve: {e}");
             }
             state.set_tiles(tiles);
-        };
-        // A tile directory opens at once: serve it before the stream.
-        if tiles_dir.is_some() {
-            set_tiles();
-            state.set_stream(make_stream(&source));
-        } else {
-            state.set_stream(make_stream(&source));
-            set_tiles();
         }
     });
 }
@@ -222,7 +216,10 @@ pub fn run(a: &ServeArgs) -> anyhow::Result<ExitCode> {
     let addrs = addresses(&a.addr)?;
     let source = source_of(a)?;
     let state = ServerState::starting(options(a));
-    start_background(&state, source, a.tiles.clone());
+    if let Some(dir) = &a.tiles {
+        state.set_tiles(Ok(Some(open_tiles(dir)?)));
+    }
+    start_background(&state, source, a.tiles.is_some());
     cota_server::run(&addrs, state, |bound| {
         let urls: Vec<String> = bound.iter().map(|b| format!("http://{b}/")).collect();
         println!(
