@@ -64,6 +64,10 @@ fn tiles_of(
         println!("tiles       none (a stream holds no grid to tile; use --tiles DIR)");
         return Ok(None);
     };
+    if matches!(a.voids, crate::args::Voids::Hole) {
+        println!("tiles       none: {}", crate::tiles::HOLES_REFUSED);
+        return Ok(None);
+    }
     let t = Instant::now();
     let spinner = crate::progress::spinner("preparing tiles");
     let source = DemandTileSource::new(

@@ -19,13 +19,16 @@ use cota_io::tiles::{
 };
 use serde_json::json;
 
-use crate::args::TilesArgs;
+use crate::args::{TilesArgs, Voids};
 use crate::{input, progress, tiles_part};
 
 /// Runs `cota tiles`.
 pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     if a.reduce {
         return reduce(a);
+    }
+    if matches!(a.voids, Voids::Hole) {
+        anyhow::bail!("{}", HOLES_REFUSED);
     }
     let opts = tiler_options(a);
     if let Some((i, n)) = a.shard {
@@ -84,6 +87,9 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     finish(a, &name, &prepared, &deviation, &report, times, json!(null));
     Ok(std::process::ExitCode::SUCCESS)
 }
+
+/// Why `--voids hole` makes no tiles.
+pub const HOLES_REFUSED: &str = "--voids hole: expected a void policy that gives every tile terrain (fill, idw or refuse), found hole; a terrain client draws a hole in a tile as a hole through the globe, so tiles fill voids (the default, --voids fill)";
 
 /// What `--check` measures the tiles against as drawn: the source's
 /// samples, its bilinear surface, and the ellipsoid farther than two

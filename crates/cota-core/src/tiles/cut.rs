@@ -17,8 +17,8 @@
 //! [`NORMAL_REACH_CELLS`], so two tiles that share a vertex give it the same
 //! normal and a shard's part holds what its normals read; straight up
 //! beyond the window, on the ellipsoid), and a 256×256 water
-//! mask (samples at or below 0 m: sea level in SRTM, and the 0 m beyond the
-//! source; a heuristic, not a coastline).
+//! mask (samples at or below 0 m in the data: sea level in SRTM; land
+//! beyond the data; a heuristic, not a coastline).
 
 use rustc_hash::FxHashMap as HashMap;
 
@@ -383,9 +383,13 @@ impl<'l> Prepared<'l> {
             .collect()
     }
 
-    /// The water mask: 256×256 nearest lattice samples, water at or below 0 m.
+    /// The water mask: 256×256 nearest lattice samples, water at or below
+    /// 0 m in the data ([`is_wet`]).
     fn water(&self, o: [u64; 2], cells: u64) -> WaterMask {
-        water_of(o, cells, |_, x, y| self.lattice.height_at(x, y) <= 0.0)
+        let f = self.lattice.frame();
+        water_of(o, cells, |_, x, y| {
+            is_wet(f, x, y, self.lattice.height_at(x, y))
+        })
     }
 }
 
@@ -511,6 +515,17 @@ pub(crate) fn normal_at(
     let n = [-dx, -dn, 1.0];
     let len = (n[0] * n[0] + n[1] * n[1] + 1.0).sqrt();
     n.map(|c| (c / len) as f32)
+}
+
+/// Whether the lattice sample `(x, y)` of height `h_m` is water in a water
+/// mask: at or below 0 m (sea level in SRTM), and in the data (its
+/// footprint and the cell beyond its edge). Beyond the data the terrain is
+/// the ellipsoid's 0 m, but nothing says it is sea: land.
+#[inline]
+pub(crate) fn is_wet(f: &super::lattice::LatticeFrame, x: u64, y: u64, h_m: f32) -> bool {
+    let [w, n, e, s] = f.footprint;
+    let (x, y) = (x as f64, y as f64);
+    h_m <= 0.0 && x >= w - 1.0 && x <= e + 1.0 && y >= n - 1.0 && y <= s + 1.0
 }
 
 /// The global lattice position of water-mask sample `(i, j)` (0..256) of

@@ -370,14 +370,14 @@ impl CoarseHierarchy {
             .collect()
     }
 
-    /// The water mask: the shards' samples, water on the 0 m beyond.
+    /// The water mask: the shards' samples, land beyond the window.
     fn water(&self, t: TileId, o: [u64; 2], cells: u64) -> Result<WaterMask, TilesError> {
         let [x0, y0, x1, y1] = self.frame.window;
         let grid = self.water.get(&t);
         let missing = Cell::new(false);
         let mask = water_of(o, cells, |k, x, y| {
             if x < x0 || x > x1 || y < y0 || y > y1 {
-                return true;
+                return false;
             }
             match grid.map(|g| g[k]) {
                 Some(v) if v != WATER_UNKNOWN => v == 255,

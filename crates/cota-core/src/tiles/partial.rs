@@ -30,7 +30,7 @@ use rustc_hash::FxHashMap as HashMap;
 use rayon::prelude::*;
 
 use super::cap::{own_rows, square_halves, square_tris, t_heights};
-use super::cut::{normal_at, water_sample, Prepared};
+use super::cut::{is_wet, normal_at, water_sample, Prepared};
 use super::drawn::{DrawnBound, ZoomRules};
 use super::error::TilesError;
 use super::lattice::{Lattice, SourcePart};
@@ -544,7 +544,7 @@ fn water_samples(
                 for i in 0..256u64 {
                     let [x, y] = water_sample(o, c, i, j);
                     if (owned[0]..=owned[2]).contains(&x) && (owned[1]..=owned[3]).contains(&y) {
-                        let wet = lat.height_at(x, y) <= 0.0;
+                        let wet = is_wet(lat.frame(), x, y, lat.height_at(x, y));
                         grid[(j * 256 + i) as usize] = if wet { 255 } else { 0 };
                         any = true;
                     }
