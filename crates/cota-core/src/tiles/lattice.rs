@@ -30,7 +30,8 @@
 use rayon::prelude::*;
 
 use super::error::TilesError;
-use super::fit::{fit, Placement, FIT_MARGIN};
+use super::fit::{fit, FIT_MARGIN};
+use super::samples::Samples;
 use super::scheme::{ErrorSchedule, GeographicScheme};
 use crate::grid::{Crs, GeoRef, HeightGrid, PixelIs, MAX_SAMPLES};
 
@@ -606,8 +607,15 @@ fn fitted(
         (grown[2] - grown[0] + 1) as usize,
         (grown[3] - grown[1] + 1) as usize,
     );
-    let at = placement(frame, source, grown);
-    let f = fit(&mut heights, [w, h], &at, source, frame.fit_m, region);
+    let at = Samples::new(frame, source, grown);
+    let f = fit(
+        &mut heights,
+        [w, h],
+        [grown[0], grown[1]],
+        &at,
+        frame.fit_m,
+        region,
+    );
     let [ox, oy] = [
         (region[0] - grown[0]) as usize,
         (region[1] - grown[1]) as usize,
@@ -622,42 +630,6 @@ fn fitted(
             .collect()
     };
     Ok((crop(&heights), f.residual_m))
-}
-
-/// Where the samples of `source` fall in the cells of `region`: the
-/// columns and rows (of the part) whose positions lie inside it.
-fn placement(frame: &LatticeFrame, source: SourcePart<'_>, region: Window) -> Placement {
-    let (g, d) = (&frame.source_georef, frame.scheme.cell_deg());
-    let [ox, oy] = source.offset;
-    let (w, h) = (
-        (region[2] - region[0]) as f64,
-        (region[3] - region[1]) as f64,
-    );
-    let cols = (0..source.grid.width())
-        .map(|c| {
-            let (lon, _) = g.sample_xy((ox + c) as f64, 0.0);
-            (c, (lon + 180.0) / d - region[0] as f64)
-        })
-        .filter(|p| (0.0..=w).contains(&p.1))
-        .collect::<Vec<_>>();
-    let rows = (0..source.grid.height())
-        .map(|r| {
-            let (_, lat) = g.sample_xy(0.0, (oy + r) as f64);
-            (r, (90.0 - lat) / d - region[1] as f64)
-        })
-        .filter(|p| (0.0..=h).contains(&p.1))
-        .collect::<Vec<_>>();
-    // In increasing position (grids whose rows run south, or columns west).
-    let by_position = |mut v: Vec<(usize, f64)>| {
-        v.sort_by(|a, b| a.1.total_cmp(&b.1));
-        v
-    };
-    let (cols, rows) = (by_position(cols), by_position(rows));
-    Placement {
-        cols,
-        rows,
-        origin: [region[0], region[1]],
-    }
 }
 
 /// The heights of `region`: bilinear inside the footprint, the edge value

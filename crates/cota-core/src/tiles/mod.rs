@@ -37,6 +37,7 @@ pub mod lattice;
 pub mod merge;
 pub mod partial;
 pub mod plan;
+pub mod samples;
 pub mod scheme;
 pub mod shard;
 pub mod source_error;

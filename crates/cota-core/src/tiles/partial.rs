@@ -35,8 +35,9 @@ use super::drawn::{DrawnBound, ZoomRules};
 use super::error::TilesError;
 use super::lattice::{Lattice, SourcePart};
 use super::plan::ZoomPlan;
+use super::samples::Samples;
 use super::scheme::TileId;
-use super::source_error::{triangle_error, Samples};
+use super::source_error::triangle_error;
 use crate::bitree::{clipped_span_error, round_up_f32};
 use crate::hierarchy::{Pt, Tri};
 
