@@ -366,6 +366,52 @@ pub fn summaries(a: &InputArgs) -> anyhow::Result<Vec<FileInfo>> {
     Ok(files)
 }
 
+/// Reads every input (or the bundled sample) and joins it into one input
+/// per kind of grid (CRS, pixel size): the files of each kind mosaicked, or
+/// each alone where they do not mosaic ([`cota_io::read::join_groups`]);
+/// what `cota tiles` takes as its sources. `--bbox` is refused with several.
+pub fn load_groups(a: &InputArgs) -> anyhow::Result<Vec<Input>> {
+    let t0 = Instant::now();
+    let opts = read_options(a)?;
+    check_options(a)?;
+    let region_opts = RegionOptions::DEFAULT
+        .with_read(opts)
+        .with_mosaic(mosaic_options(a))
+        .with_fill(None);
+    let mut dems = read_files(&a.files, &opts, false)?;
+    if let Some(crs) = a.src_crs.as_ref() {
+        for dem in &mut dems {
+            cota_io::crs::assign_src_crs(dem, crs)?;
+        }
+    }
+    let regions = cota_io::read::join_groups(dems, &region_opts)?;
+    if regions.len() > 1 && a.bbox.is_some() && a.zoom.is_none() {
+        anyhow::bail!("--bbox: expected inputs on one grid (one CRS, one resolution), found {} kinds of grid; crop each file first", regions.len());
+    }
+    let read_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let mut out = Vec::with_capacity(regions.len());
+    for region in regions {
+        warn_unpositioned(&region.files);
+        check_seams(a, region.seams.as_ref(), &region.files)?;
+        check_cell_size(&region.grid, &region.files)?;
+        let grid = match (&a.bbox, a.zoom) {
+            (Some(b), None) => {
+                crate::window::bbox(&region.grid, bbox4(b)?).with_context(|| name(&region.files))?
+            }
+            _ => region.grid,
+        };
+        out.push(Input {
+            grid,
+            files: region.files,
+            seams: region.seams,
+            hole_samples: region.hole_samples,
+            seam_tolerance_m: a.seam_tolerance_m,
+            read_ms,
+        });
+    }
+    Ok(out)
+}
+
 /// Reads every input (or the bundled sample) and mosaics them, then keeps
 /// the `--bbox` window (for inputs other than PMTiles archives).
 pub fn load(a: &InputArgs) -> anyhow::Result<Input> {

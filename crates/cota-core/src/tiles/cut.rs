@@ -28,7 +28,7 @@ use super::error::TilesError;
 use super::lattice::Lattice;
 use super::lattice::SourcePart;
 use super::plan::{children_in, plan_with, LatticeStats, TileRange, TilerOptions, ZoomPlan};
-use super::samples::Samples;
+use super::samples::{SampleSet, Samples};
 use super::scheme::{GeographicScheme, TileId};
 use super::source_error::{own_errors, BY_SAMPLE_BELOW};
 use crate::bitree::closure::source_closure;
@@ -70,8 +70,8 @@ pub struct TileMesh {
     pub normals_enu: Option<Vec<[f32; 3]>>,
     /// The water mask (on request).
     pub water_mask: Option<WaterMask>,
-    /// The tile's children that the pyramid makes, if any.
-    pub children: Option<TileRange>,
+    /// The tile's children that the pyramid makes, as rectangles.
+    pub children: Vec<TileRange>,
 }
 
 /// A lattice with its global hierarchy, ready to cut any tile.
@@ -140,6 +140,27 @@ impl<'l> Prepared<'l> {
         source: &HeightGrid,
         opts: &TilerOptions,
     ) -> Result<Self, TilesError> {
+        let whole = SourcePart {
+            grid: source,
+            offset: [0, 0],
+        };
+        Prepared::new_sampled(
+            lattice,
+            &Samples::new(lattice.frame(), whole, lattice.stored()),
+            opts,
+        )
+    }
+
+    /// [`Prepared::new`] from the source's samples as a set: what a lattice of
+    /// several sources ([`Lattice::resample_sources`]) is prepared from.
+    ///
+    /// # Errors
+    /// As [`Prepared::new`].
+    pub fn new_sampled(
+        lattice: &'l Lattice,
+        samples: &impl SampleSet,
+        opts: &TilerOptions,
+    ) -> Result<Self, TilesError> {
         if lattice.is_part() {
             return Err(TilesError::BadOptions(
                 "expected a lattice over its whole window, found a part (use Prepared::new_part)"
@@ -150,11 +171,7 @@ impl<'l> Prepared<'l> {
         let zooms = plan_with(lattice.frame(), &stats, opts)?;
         let tree = Bitree::build(lattice.grid())?;
         let cap = Cap::build(lattice, &tree);
-        let whole = SourcePart {
-            grid: source,
-            offset: [0, 0],
-        };
-        let src = source_codes(lattice, &tree, whole);
+        let src = source_codes(lattice, &tree, samples);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), &stats, &zooms);
         Ok(Prepared {
             lattice,
@@ -190,7 +207,8 @@ impl<'l> Prepared<'l> {
         stats: &LatticeStats,
     ) -> Result<Self, TilesError> {
         let tree = Bitree::build(lattice.grid())?;
-        let src = source_codes(lattice, &tree, source);
+        let samples = Samples::new(lattice.frame(), source, lattice.stored());
+        let src = source_codes(lattice, &tree, &samples);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), stats, &zooms);
         Ok(Prepared {
             lattice,
@@ -267,15 +285,45 @@ impl<'l> Prepared<'l> {
 
     /// Every tile of the pyramid, zoom by zoom.
     pub fn tiles(&self) -> impl Iterator<Item = TileId> + '_ {
-        self.zooms.iter().flat_map(|p| {
+        self.zooms.iter().flat_map(move |p| {
             let r = p.range;
-            (r.y0..=r.y1).flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z: p.zoom, x, y }))
+            (r.y0..=r.y1)
+                .flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z: p.zoom, x, y }))
+                .filter(move |&t| self.covers(t))
         })
     }
 
     /// Number of tiles in the pyramid.
     pub fn tile_count(&self) -> u64 {
-        self.zooms.iter().map(|p| p.range.count()).sum()
+        match self.lattice.coverage() {
+            None => self.zooms.iter().map(|p| p.range.count()).sum(),
+            Some(_) => self.tiles().count() as u64,
+        }
+    }
+
+    /// Whether the pyramid makes tile `t` (in its zoom's range): both roots
+    /// always, and a tile whose square meets the data's footprint with a
+    /// positive area ([`super::sources::Coverage`]; the range alone for a
+    /// single rectangular footprint).
+    pub fn covers(&self, t: TileId) -> bool {
+        let Some(cov) = self.lattice.coverage() else {
+            return true;
+        };
+        if t.z == 0 {
+            return true;
+        }
+        let s = self.lattice.scheme();
+        let (c, [x, y]) = (s.cells_at(t.z) as f64, s.tile_origin(t).map(|v| v as f64));
+        cov.meets([x, y, x + c, y + c])
+    }
+
+    /// The tiles of zoom `z` that the pyramid makes, as rectangles (rows of
+    /// runs; the zoom's range when every tile in it is made).
+    pub fn available(&self, z: u8) -> Vec<TileRange> {
+        let Some(p) = self.zoom(z) else {
+            return Vec::new();
+        };
+        covered_runs(p.range, |x, y| self.covers(TileId { z, x, y }))
     }
 
     /// The samples tile `t` is checked against: its square of the lattice.
@@ -303,7 +351,7 @@ impl<'l> Prepared<'l> {
     pub fn cut(&self, t: TileId, normals: bool, water: bool) -> Result<TileMesh, TilesError> {
         let plan = self
             .zoom(t.z)
-            .filter(|p| p.range.contains(t.x, t.y) && self.holds(t))
+            .filter(|p| p.range.contains(t.x, t.y) && self.holds(t) && self.covers(t))
             .ok_or(TilesError::NoSuchTile {
                 tile: t,
                 min_zoom: self.zooms.first().map_or(0, |p| p.zoom),
@@ -324,7 +372,9 @@ impl<'l> Prepared<'l> {
             mesh,
             max_error_m: plan.max_error_m,
             threshold_m: plan.threshold_m,
-            children: children_in(t, self.zoom(t.z + 1)),
+            children: children_in(t, self.zoom(t.z + 1))
+                .map(|r| covered_runs(r, |x, y| self.covers(TileId { z: t.z + 1, x, y })))
+                .unwrap_or_default(),
         })
     }
 
@@ -406,13 +456,12 @@ pub(crate) fn above_cap(e_m: f32, residual_m: f64, rule: &SplitRule) -> bool {
 /// Per stored point of `lattice` (whose bitree is `tree`): the code of its
 /// error against the source's samples in `source`, closed over its
 /// descendants (`bitree::closure::source_closure`).
-fn source_codes(lattice: &Lattice, tree: &Bitree<'_>, source: SourcePart<'_>) -> Vec<u16> {
+fn source_codes(lattice: &Lattice, tree: &Bitree<'_>, samples: &impl SampleSet) -> Vec<u16> {
     let g = lattice.grid();
-    let samples = Samples::new(lattice.frame(), source, lattice.stored());
     let top = lattice.scheme().cells_at(lattice.align_zoom());
     let height = |x: u64, y: u64| lattice.height_at(x, y);
     let own = own_errors(
-        &samples,
+        samples,
         lattice.origin(),
         [g.width(), g.height()],
         [2, top],
@@ -420,6 +469,41 @@ fn source_codes(lattice: &Lattice, tree: &Bitree<'_>, source: SourcePart<'_>) ->
         &height,
     );
     source_closure(tree.hierarchy(), &own)
+}
+
+/// The tiles of `range` for which `made(x, y)` holds, as rectangles: runs
+/// along each row, merged with the row below when they span the same
+/// columns.
+pub(crate) fn covered_runs(range: TileRange, made: impl Fn(u32, u32) -> bool) -> Vec<TileRange> {
+    let mut out: Vec<TileRange> = Vec::new();
+    for y in range.y0..=range.y1 {
+        let mut x = range.x0;
+        while x <= range.x1 {
+            if !made(x, y) {
+                x += 1;
+                continue;
+            }
+            let start = x;
+            while x < range.x1 && made(x + 1, y) {
+                x += 1;
+            }
+            let run = TileRange {
+                x0: start,
+                x1: x,
+                y0: y,
+                y1: y,
+            };
+            match out
+                .iter_mut()
+                .find(|r| r.y1 + 1 == y && r.x0 == start && r.x1 == x)
+            {
+                Some(r) => r.y1 = y,
+                None => out.push(run),
+            }
+            x += 1;
+        }
+    }
+    out
 }
 
 /// The leaves under the square with north-west corner `o` and side `cells`,

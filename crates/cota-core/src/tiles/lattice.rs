@@ -33,6 +33,7 @@ use super::error::TilesError;
 use super::fit::{fit, FIT_MARGIN};
 use super::samples::Samples;
 use super::scheme::{ErrorSchedule, GeographicScheme};
+use super::sources::Coverage;
 use crate::grid::{Crs, GeoRef, HeightGrid, PixelIs, MAX_SAMPLES};
 
 /// The alignment zoom is the coarsest whose window is at most this many
@@ -97,6 +98,9 @@ pub struct Lattice {
     grid: HeightGrid,
     origin: [u64; 2],
     residual_m: f64,
+    /// The data's footprints when they are not the frame's rectangle
+    /// (several sources, projected ones: [`super::sources`]).
+    coverage: Option<Coverage>,
 }
 
 /// The window of a footprint at one alignment zoom: `[x0, y0, x1, y1]`
@@ -293,6 +297,7 @@ impl Lattice {
             grid,
             origin: [region[0], region[1]],
             residual_m,
+            coverage: None,
         })
     }
 
@@ -300,6 +305,51 @@ impl Lattice {
     /// metres: what the lattice's own surface leaves of the source.
     pub fn residual_m(&self) -> f64 {
         self.residual_m
+    }
+
+    /// The lattice over the whole window of `frame` from its heights (see
+    /// [`super::sources`]), whose data lie in `coverage`.
+    pub(crate) fn from_heights(
+        frame: LatticeFrame,
+        heights: Vec<f32>,
+        residual_m: f64,
+        coverage: Coverage,
+    ) -> Result<Lattice, TilesError> {
+        let win = frame.window;
+        let (w, h) = (
+            (win[2] - win[0] + 1) as usize,
+            (win[3] - win[1] + 1) as usize,
+        );
+        let d = frame.scheme.cell_deg();
+        let georef = GeoRef {
+            crs: Crs::WGS84,
+            origin_x: frame.scheme.lon_of(win[0] as f64),
+            origin_y: frame.scheme.lat_of(win[1] as f64),
+            pixel_x: d,
+            pixel_y: -d,
+            pixel_is: PixelIs::Point,
+            known: true,
+        };
+        let grid = HeightGrid::new(w, h, heights, georef)
+            .map_err(|e| TilesError::BadOptions(e.to_string()))?;
+        Ok(Lattice {
+            origin: [win[0], win[1]],
+            frame,
+            grid,
+            residual_m,
+            coverage: Some(coverage),
+        })
+    }
+
+    /// The data's footprints, when they are not the frame's rectangle.
+    pub fn coverage(&self) -> Option<&Coverage> {
+        self.coverage.as_ref()
+    }
+
+    /// The lattice's unit-triangle surface at global lattice `(x, y)`.
+    pub fn unit_surface_at(&self, x: f64, y: f64) -> f64 {
+        let [ox, oy] = self.origin;
+        unit_surface(&self.grid, self.origin, x - ox as f64, y - oy as f64)
     }
 
     /// The frame (scheme, footprint, window, source mapping).
@@ -375,13 +425,20 @@ impl Lattice {
 /// The scheme for a source: its maximum zoom matched to the source's finer
 /// pixel side unless given.
 fn scheme_for(g: &GeoRef, opts: &LatticeOptions) -> Result<GeographicScheme, TilesError> {
+    scheme_for_pixel(g.pixel_x.abs().min(g.pixel_y.abs()), opts)
+}
+
+/// The scheme for a source whose finer pixel side is `pixel` degrees.
+pub(crate) fn scheme_for_pixel(
+    pixel: f64,
+    opts: &LatticeOptions,
+) -> Result<GeographicScheme, TilesError> {
     let cells = opts.tile_cells;
     if !cells.is_power_of_two() || !(2..=4096).contains(&cells) {
         return Err(TilesError::BadOptions(format!(
             "expected a tile size of 2 to 4096 lattice cells, a power of two, found {cells}"
         )));
     }
-    let pixel = g.pixel_x.abs().min(g.pixel_y.abs());
     if !(pixel.is_finite() && pixel > 0.0) {
         return Err(TilesError::BadOptions(format!(
             "expected a positive pixel size in degrees, found {pixel}"
@@ -456,7 +513,7 @@ fn window_at(s: &GeographicScheme, fp: [f64; 4], a: u8) -> Window {
 
 /// The alignment zoom and its window: the coarsest zoom whose window is at
 /// most [`WINDOW_GROWTH`] times the maximum zoom's.
-fn choose_window(s: &GeographicScheme, fp: [f64; 4]) -> (u8, Window) {
+pub(crate) fn choose_window(s: &GeographicScheme, fp: [f64; 4]) -> (u8, Window) {
     let area = |w: &Window| (w[2] - w[0] + 1) as f64 * (w[3] - w[1] + 1) as f64;
     let finest = window_at(s, fp, s.max_zoom);
     let limit = area(&finest) * WINDOW_GROWTH;

@@ -341,7 +341,9 @@ impl CoarseHierarchy {
             mesh,
             max_error_m: plan.max_error_m,
             threshold_m: plan.threshold_m,
-            children: children_in(t, self.zooms.iter().find(|p| p.zoom == t.z + 1)),
+            children: children_in(t, self.zooms.iter().find(|p| p.zoom == t.z + 1))
+                .into_iter()
+                .collect(),
         })
     }
 

@@ -6,6 +6,7 @@
 //! georeference, overlaps compared and combined, samples no tile covers left
 //! as voids), then, when [`RegionOptions::fill`] asks for it, [`fill_voids`].
 
+use cota_core::grid::mosaic::{layout, TileShape};
 use cota_core::{
     fill_voids, grid::voids::FillReport, mosaic, FillOptions, HeightGrid, MosaicOptions, SeamReport,
 };
@@ -88,6 +89,57 @@ pub struct Region {
     pub voids: usize,
     /// What the fill did; `None` when [`RegionOptions::fill`] is `None`.
     pub fill: Option<FillReport>,
+}
+
+/// Joins DEMs already read into one [`Region`] per group of DEMs on the same
+/// kind of grid (the same CRS, pixel size and pixel convention), each as
+/// [`join`] joins them; a group whose DEMs do not mosaic (not aligned, say)
+/// gives one region per DEM. Groups are in the order of their first DEM.
+/// What `cota tiles` takes when its inputs differ in CRS or resolution: each
+/// region is then one source of the tiling's lattice.
+///
+/// # Errors
+/// As [`join`], for a DEM alone that cannot be taken.
+pub fn join_groups(dems: Vec<Dem>, opts: &RegionOptions) -> Result<Vec<Region>, RegionError> {
+    let mut groups: Vec<(String, Vec<Dem>)> = Vec::new();
+    for d in dems {
+        let g = d.grid.georef();
+        let key = format!(
+            "{} {:x} {:x} {:?} {}",
+            g.crs,
+            g.pixel_x.to_bits(),
+            g.pixel_y.to_bits(),
+            g.pixel_is,
+            g.known
+        );
+        match groups.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, v)) => v.push(d),
+            None => groups.push((key, vec![d])),
+        }
+    }
+    let mut out = Vec::new();
+    for (_, group) in groups {
+        if group.len() == 1 {
+            out.push(join(group, opts)?);
+            continue;
+        }
+        let shapes: Vec<TileShape> = group
+            .iter()
+            .map(|d| TileShape {
+                width: d.grid.width(),
+                height: d.grid.height(),
+                georef: d.grid.georef().clone(),
+            })
+            .collect();
+        if layout(&shapes, &opts.mosaic).is_ok() {
+            out.push(join(group, opts)?);
+        } else {
+            for d in group {
+                out.push(join(vec![d], opts)?);
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// Joins DEMs already read (in the order given) into a [`Region`], as
