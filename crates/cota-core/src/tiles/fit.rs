@@ -15,12 +15,15 @@
 //! 0) is made to pass near every source sample `s`: with `s` in the unit
 //! triangle of corners `c_i` and barycentric weights `w_i`, the residual is
 //! `r(s) = h(s) − Σ w_i L(c_i)`. While `|r(s)| > τ` for some samples, each
-//! such sample asks its three corners for the least-norm correction that
-//! would zero it, `r(s) · w_i / Σ w_j²`; a round adds `ω = 0.7` times the
-//! sum of the requests to each corner (a damped Cimmino step of the
-//! Kaczmarz family, which converges for these local, nearly independent
-//! equations: the lattice has about 1.5 points per SRTM sample), for at
-//! most [`ROUNDS`] rounds. Then a tile within `thr` of the lattice is within
+//! such sample asks its corners for the least-norm correction that would
+//! zero it, `r(s) · w_i / Σ w_j²`, and a round moves each corner by the mean
+//! of its requests weighted by `w_i` (a simultaneous, component-averaged
+//! Kaczmarz step: a lone sample is honoured in one round, and several
+//! pulling one corner share it instead of adding up), for at most
+//! [`ROUNDS`] rounds. The fit runs where the lattice is at least as fine as
+//! the source (about 1.5 lattice points per SRTM sample at the default
+//! maximum zoom); on a coarser lattice a cell holds several samples it
+//! cannot all honour, and the lattice stays bilinear. Then a tile within `thr` of the lattice is within
 //! `thr + max |r|` of the source at every sample: the tile's plane minus `L`
 //! is linear on each unit triangle, so at `s` it is at most its value at the
 //! corners, which the lattice check bounds. What is left, per lattice point
@@ -51,8 +54,6 @@ use super::samples::SampleSet;
 
 /// The rounds of the fit.
 pub const ROUNDS: usize = 12;
-/// The damping of each round.
-const OMEGA: f64 = 0.7;
 /// Cells a part grows by to be fitted as the whole is.
 pub const FIT_MARGIN: u64 = 2 * ROUNDS as u64 + 4;
 
@@ -117,6 +118,7 @@ pub(crate) fn fit(
     };
     let mut r: Vec<f64> = (0..at.len()).map(|k| residual(heights, k)).collect();
     let mut corr = vec![0f64; w * h];
+    let mut weight = vec![0f64; w * h];
     for _ in 0..ROUNDS {
         let hot: Vec<usize> = (0..r.len()).filter(|&k| r[k].abs() > tau_m).collect();
         if hot.is_empty() {
@@ -126,17 +128,21 @@ pub(crate) fn fit(
         for &k in &hot {
             let (c, wt) = tri(k);
             let norm = wt.iter().map(|v| v * v).sum::<f64>();
-            let step = OMEGA * r[k] / norm;
             for i in 0..3 {
-                if corr[c[i]] == 0.0 {
+                if wt[i] <= 0.0 {
+                    continue;
+                }
+                if weight[c[i]] == 0.0 {
                     touched.push(c[i]);
                 }
-                corr[c[i]] += step * wt[i];
+                corr[c[i]] += r[k] * wt[i] * wt[i] / norm;
+                weight[c[i]] += wt[i];
             }
         }
         for &c in &touched {
-            heights[c] = (f64::from(heights[c]) + corr[c]) as f32;
+            heights[c] = (f64::from(heights[c]) + corr[c] / weight[c]) as f32;
             corr[c] = 0.0;
+            weight[c] = 0.0;
         }
         for k in neighbours(at, &touched, w, origin) {
             r[k] = residual(heights, k);

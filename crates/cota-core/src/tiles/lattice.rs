@@ -170,7 +170,8 @@ impl LatticeFrame {
         let scheme = scheme_for(g, opts)?;
         let footprint = footprint(g, size, &scheme)?;
         let (align_zoom, window) = choose_window(&scheme, footprint);
-        let fit_m = opts.error.max_error_m(scheme.max_zoom, scheme.max_zoom) / 2.0;
+        let pixel = g.pixel_x.abs().min(g.pixel_y.abs());
+        let fit_m = fit_tolerance_m(&scheme, pixel, opts);
         Ok(LatticeFrame {
             scheme,
             footprint,
@@ -547,6 +548,18 @@ fn zero_band(s: &GeographicScheme, win: Window, a: u8) -> [f64; 4] {
         inset(win[2], wmax, -1.0),
         inset(win[3], hmax, -1.0),
     ]
+}
+
+/// The fit's tolerance ([`super::fit`]): half the bound at the maximum zoom
+/// where the lattice is at least as fine as the source's `pixel_deg`
+/// (degrees); none (an infinite tolerance) on a coarser lattice, whose cells
+/// hold several samples that no surface through its points can honour.
+pub(crate) fn fit_tolerance_m(s: &GeographicScheme, pixel_deg: f64, opts: &LatticeOptions) -> f64 {
+    if s.cell_deg() > pixel_deg * (1.0 + 1e-9) {
+        f64::INFINITY
+    } else {
+        opts.error.max_error_m(s.max_zoom, s.max_zoom) / 2.0
+    }
 }
 
 /// Lattice cells over which the data's edge falls to the ellipsoid beyond

@@ -43,7 +43,8 @@ use rayon::prelude::*;
 use super::error::TilesError;
 use super::fit::fit;
 use super::lattice::{
-    choose_window, ramp_cells, scheme_for_pixel, Lattice, LatticeFrame, LatticeOptions,
+    choose_window, fit_tolerance_m, ramp_cells, scheme_for_pixel, Lattice, LatticeFrame,
+    LatticeOptions,
 };
 use super::samples::{Listed, SampleSet};
 use super::scheme::GeographicScheme;
@@ -180,7 +181,7 @@ impl Lattice {
             align_zoom,
             source_georef: first.grid.georef().clone(),
             source_size: [first.grid.width(), first.grid.height()],
-            fit_m: opts.error.max_error_m(scheme.max_zoom, scheme.max_zoom) / 2.0,
+            fit_m: fit_tolerance_m(&scheme, finest, opts),
         };
         let (w, h) = (window[2] - window[0] + 1, window[3] - window[1] + 1);
         if w.checked_mul(h).is_none_or(|n| n > MAX_SAMPLES) {
