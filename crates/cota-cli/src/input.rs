@@ -129,6 +129,17 @@ pub fn num(v: f64) -> String {
     }
 }
 
+/// A number for a report: three significant decimals at most, plainly.
+pub fn num_short(v: f64) -> String {
+    if v.abs() >= 100.0 {
+        format!("{v:.0}")
+    } else if v.abs() >= 1.0 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.3}")
+    }
+}
+
 /// Refuses non-finite and out-of-range reading options, by name.
 fn check_options(a: &InputArgs) -> anyhow::Result<()> {
     for (name, v) in [

@@ -82,6 +82,7 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     let prepared =
         Prepared::new(&lattice, &inp.grid, &opts).with_context(|| format!("tiling {name}"))?;
     drop(spinner);
+    warn_source_floor(&prepared);
     // With --check, the source stays to check every tile against it as drawn.
     let source = a.check.then_some(inp.grid);
     let prep_s = t_prep.elapsed().as_secs_f64();
@@ -150,6 +151,7 @@ fn run_sources(
     let t_prep = Instant::now();
     let prepared = Prepared::new_sampled(&r.lattice, &r.samples, opts)
         .with_context(|| format!("tiling {name}"))?;
+    warn_source_floor(&prepared);
     let prep_s = t_prep.elapsed().as_secs_f64();
     let against = a.check.then(|| against_sources(&sources, &r.lattice));
     let report = write(a, &prepared, None, against.as_ref())?;
@@ -193,6 +195,38 @@ fn against_sources<'a>(sources: &[Source<'a>], lattice: &Lattice) -> Against<'a>
         .unwrap_or_default();
     let margin = 2.0 * f64::from(s.tile_cells) * s.cell_deg();
     Against::new(grids, rects, margin)
+}
+
+/// Says, before the tiles are made, at which zooms the lattice cannot hold
+/// the source's own samples within the zoom's bound (a `--max-zoom` below
+/// the source's resolution), and what bound those tiles meet there.
+fn warn_source_floor(p: &Prepared<'_>) {
+    let short: Vec<String> = p
+        .zooms()
+        .iter()
+        .filter(|z| p.source_bound_m(z.zoom) > z.max_error_m)
+        .map(|z| {
+            format!(
+                "{} ({} m, not {} m)",
+                z.zoom,
+                input::num_short(p.source_bound_m(z.zoom)),
+                input::num_short(z.max_error_m)
+            )
+        })
+        .collect();
+    if short.is_empty() {
+        return;
+    }
+    let s = p.lattice().scheme();
+    eprintln!(
+        "cota: warning: the lattice ({}\" a cell at zoom {}) cannot hold the source's samples within the bound at zooms {}: \
+         its points cut the peaks and pits between them by up to {} m; tiles there meet the bound at the lattice's points and the figure given at the source's samples; \
+         leave --max-zoom out (the source's own resolution) to meet the bound everywhere",
+        input::num_short(s.cell_deg() * 3600.0),
+        s.max_zoom,
+        short.join(", "),
+        input::num_short(p.lattice().residual_m()),
+    );
 }
 
 /// Why `--voids hole` makes no tiles.

@@ -64,6 +64,10 @@ pub struct TileMesh {
     pub mesh: Mesh,
     /// The bound the tile meets after quantization, metres.
     pub max_error_m: f64,
+    /// The bound it meets at the source's own samples, as drawn: the same,
+    /// unless the lattice cannot hold the source (see
+    /// [`Prepared::source_bound_m`]), metres.
+    pub source_bound_m: f64,
     /// The threshold it was extracted at, metres.
     pub threshold_m: f64,
     /// Unit normals per vertex in east, north, up components (on request).
@@ -227,6 +231,21 @@ impl<'l> Prepared<'l> {
         &self.bound
     }
 
+    /// The bound zoom `z`'s tiles meet at the source's own samples, as
+    /// drawn: the zoom's bound `e_z`, or more where the lattice cannot hold
+    /// the source: a leaf of the finest level (a unit triangle, which cannot
+    /// split) is the lattice itself there, within the fitted lattice's
+    /// largest residual of the source, plus quantization and the drawn
+    /// triangle's own slack. That floor exceeds `e_z` only on a lattice
+    /// coarser than the source (a `--max-zoom` below the source's) or where
+    /// the fit could not bring a sample within half the finest bound.
+    pub fn source_bound_m(&self, z: u8) -> f64 {
+        self.zoom(z).map_or(0.0, |p| {
+            let floor = self.residual_m + p.margin_m + self.bound.finest_slack_m();
+            p.max_error_m.max(floor)
+        })
+    }
+
     /// True when this hierarchy cuts tile `t` exactly: always for a whole
     /// lattice; for a part, when `t` is at or finer than the alignment zoom
     /// and its square grown by half a tile (clipped to the window) is stored.
@@ -371,6 +390,7 @@ impl<'l> Prepared<'l> {
             water_mask: water.then(|| self.water(origin, cells)),
             mesh,
             max_error_m: plan.max_error_m,
+            source_bound_m: self.source_bound_m(t.z),
             threshold_m: plan.threshold_m,
             children: children_in(t, self.zoom(t.z + 1))
                 .map(|r| covered_runs(r, |x, y| self.covers(TileId { z: t.z + 1, x, y })))

@@ -340,6 +340,7 @@ impl CoarseHierarchy {
             water_mask,
             mesh,
             max_error_m: plan.max_error_m,
+            source_bound_m: plan.max_error_m.max(self.residual_m + plan.margin_m),
             threshold_m: plan.threshold_m,
             children: children_in(t, self.zooms.iter().find(|p| p.zoom == t.z + 1))
                 .into_iter()
