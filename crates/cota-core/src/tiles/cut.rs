@@ -89,7 +89,7 @@ pub struct TileMesh {
 ///     pixel_y: -0.01, pixel_is: PixelIs::Point, known: true };
 /// let source = HeightGrid::new(n, n, heights, georef).unwrap();
 /// let lattice = Lattice::resample(&source, &LatticeOptions::DEFAULT).unwrap();
-/// let prepared = Prepared::new(&lattice, &TilerOptions::DEFAULT).unwrap();
+/// let prepared = Prepared::new(&lattice, &source, &TilerOptions::DEFAULT).unwrap();
 /// let root = prepared.cut(TileId { z: 0, x: 1, y: 0 }, false, false).unwrap();
 /// assert!(root.mesh.triangle_count() >= 2);
 /// ```
