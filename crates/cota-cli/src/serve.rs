@@ -70,12 +70,7 @@ fn tiles_of(
     }
     let t = Instant::now();
     let spinner = crate::progress::spinner("preparing tiles");
-    let source = DemandTileSource::new(
-        grid,
-        &LatticeOptions::DEFAULT,
-        &TilerOptions::DEFAULT,
-        DEMAND_TILES,
-    );
+    let source = demand_source(grid);
     drop(spinner);
     match source {
         Ok(src) => {
@@ -94,6 +89,24 @@ fn tiles_of(
             Ok(None)
         }
         Err(e) => Err(e).context("preparing tiles on demand"),
+    }
+}
+
+/// Tiles on demand from `grid`: along its own axes when it is in WGS 84
+/// longitude/latitude, through its projection otherwise (a grid whose CRS
+/// cannot be placed on the Earth gets none: said, not fatal).
+fn demand_source(grid: &HeightGrid) -> Result<DemandTileSource, ServeError> {
+    let (lattice, tiler) = (&LatticeOptions::DEFAULT, &TilerOptions::DEFAULT);
+    let g = grid.georef();
+    let transform = cota_io::crs::transform_for_grid(g, grid.width(), grid.height());
+    match transform {
+        Ok(t) if !t.is_identity() => {
+            DemandTileSource::projected(grid, t.as_ref(), lattice, tiler, DEMAND_TILES)
+        }
+        Ok(_) => DemandTileSource::new(grid, lattice, tiler, DEMAND_TILES),
+        Err(e) => Err(ServeError::Tiling(TilesError::NotGeographic {
+            crs: format!("{} ({e})", g.crs),
+        })),
     }
 }
 
