@@ -202,3 +202,112 @@ fn write_every_other(hgt_zip: &std::path::Path, out: &std::path::Path) {
     }
     std::fs::write(out, text).unwrap();
 }
+
+/// Two 1° tiles the way Copernicus GLO-30 cuts them at 50° N: float32
+/// GeoTIFFs whose width shrinks with latitude (the northern one 1.5 times
+/// coarser east-west), made from two adjacent real SRTM tiles; with and
+/// without a shared edge row. They tile with no crack and no seam of NaN,
+/// every tile checked as drawn against both files' own samples, and the
+/// tiles over the seam exist; `cota mesh` joins them too.
+#[test]
+fn copernicus_style_tiles_mosaic_without_gaps() {
+    let (Some(s), Some(n)) = (
+        common::shared("srtm/N49E011.hgt.zip"),
+        common::shared("srtm/N50E011.hgt.zip"),
+    ) else {
+        return;
+    };
+    let (s, n) = (
+        cota_fixtures::read(&s).unwrap(),
+        cota_fixtures::read(&n).unwrap(),
+    );
+    for shared_edge in [false, true] {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("south.tif");
+        let b = dir.path().join("north.tif");
+        copernicus_like(&s, 49.0, 1200, shared_edge, &a);
+        copernicus_like(&n, 50.0, 800, shared_edge, &b);
+        let out = dir.path().join("t");
+        let r = cota(&[
+            "tiles",
+            a.to_str().unwrap(),
+            b.to_str().unwrap(),
+            "--max-zoom",
+            "10",
+            "--check",
+            "--json",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            r.status.success(),
+            "shared edge {shared_edge}: {}",
+            stderr(&r)
+        );
+        let v: serde_json::Value = serde_json::from_str(&stdout(&r)).unwrap();
+        assert!(v["check"].as_str().unwrap().starts_with("passed"), "{v}");
+        // The zoom-10 tile across 50° N at 11.5° E (x 1089, row 796 of 1024).
+        assert!(out.join("10/1089/796.terrain").is_file());
+        let glb = dir.path().join("m.glb");
+        let m = cota(&[
+            "mesh",
+            a.to_str().unwrap(),
+            b.to_str().unwrap(),
+            "--max-error",
+            "10",
+            "--check",
+            "-o",
+            glb.to_str().unwrap(),
+        ]);
+        assert!(m.status.success(), "{}", stderr(&m));
+        assert!(stdout(&m).contains("check       passed"), "{}", stdout(&m));
+    }
+}
+
+/// A 1° float32 GeoTIFF (EPSG:4326, pixel-is-area) whose south edge is at
+/// `south` degrees, `width` columns (the east-west spacing 1°/width), 3"
+/// north-south, from the SRTM tile `t` by bilinear interpolation; with
+/// `shared_edge` it holds 1201 rows whose outer rows lie on the tile's
+/// edges (what the next tile repeats), else 1200 rows between them.
+fn copernicus_like(
+    t: &cota_fixtures::Samples,
+    south: f64,
+    width: usize,
+    shared_edge: bool,
+    path: &std::path::Path,
+) {
+    let n = t.width;
+    let rows = if shared_edge { 1201 } else { 1200 };
+    let (dx, dy) = (1.0 / width as f64, 1.0 / 1200.0);
+    // Pixel centres: column i at 11 + (i + 0.5)·dx; row j at the north edge
+    // minus (j + 0.5)·dy, or minus j·dy with a shared edge.
+    let off = if shared_edge { 0.0 } else { 0.5 };
+    let bil = |x: f64, y: f64| {
+        let (c, r) = (
+            (x * (n - 1) as f64).clamp(0.0, (n - 1) as f64),
+            (y * (n - 1) as f64).clamp(0.0, (n - 1) as f64),
+        );
+        let (i, j) = ((c as usize).min(n - 2), (r as usize).min(n - 2));
+        let (fx, fy) = (c - i as f64, r - j as f64);
+        let z = |a: usize, b: usize| f64::from(t.heights[b * n + a]);
+        let top = z(i, j) + (z(i + 1, j) - z(i, j)) * fx;
+        let bottom = z(i, j + 1) + (z(i + 1, j + 1) - z(i, j + 1)) * fx;
+        (top + (bottom - top) * fy) as f32
+    };
+    let heights: Vec<f32> = (0..rows)
+        .flat_map(|j| (0..width).map(move |i| ((i as f64 + 0.5) * dx, (j as f64 + off) * dy)))
+        .map(|(x, y)| bil(x, y))
+        .collect();
+    let g = cota_fixtures::geotiff::GeoTiff {
+        width,
+        height: rows,
+        heights: &heights,
+        west: 11.0,
+        north: south + 1.0 + if shared_edge { dy / 2.0 } else { 0.0 },
+        pixel: dx,
+        pixel_y: dy,
+        crs: cota_fixtures::geotiff::GeoTiffCrs::Geographic(4326),
+        nodata: -9999.0,
+    };
+    cota_fixtures::geotiff::write_geotiff(path, &g).unwrap();
+}

@@ -86,8 +86,7 @@ impl DemandTileSource {
         let source = Source { grid, transform };
         let r = Lattice::resample_sources(&[source], lattice)?;
         let samples = r.samples;
-        let pyramid =
-            Pyramid::try_new(r.lattice, |l| Prepared::new_sampled(l, &samples, tiler))?;
+        let pyramid = Pyramid::try_new(r.lattice, |l| Prepared::new_sampled(l, &samples, tiler))?;
         Ok(Self::of(pyramid, options))
     }
 
