@@ -150,7 +150,12 @@ impl<'l> Prepared<'l> {
         };
         Prepared::new_sampled(
             lattice,
-            &Samples::new(lattice.frame(), whole, lattice.stored()),
+            &Samples::new(
+                &lattice.frame().source_georef,
+                lattice.frame().scheme.cell_deg(),
+                whole,
+                lattice.stored(),
+            ),
             opts,
         )
     }
@@ -211,7 +216,12 @@ impl<'l> Prepared<'l> {
         stats: &LatticeStats,
     ) -> Result<Self, TilesError> {
         let tree = Bitree::build(lattice.grid())?;
-        let samples = Samples::new(lattice.frame(), source, lattice.stored());
+        let samples = Samples::new(
+            &lattice.frame().source_georef,
+            lattice.frame().scheme.cell_deg(),
+            source,
+            lattice.stored(),
+        );
         let src = source_codes(lattice, &tree, &samples);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), stats, &zooms);
         Ok(Prepared {
@@ -322,7 +332,7 @@ impl<'l> Prepared<'l> {
 
     /// Whether the pyramid makes tile `t` (in its zoom's range): both roots
     /// always, and a tile whose square meets the data's footprint with a
-    /// positive area ([`super::sources::Coverage`]; the range alone for a
+    /// positive area ([`super::coverage::Coverage`]; the range alone for a
     /// single rectangular footprint).
     pub fn covers(&self, t: TileId) -> bool {
         let Some(cov) = self.lattice.coverage() else {

@@ -74,7 +74,7 @@ fn unit_triangle(x: f64, y: f64, w: usize, h: usize, even0: bool) -> ([usize; 3]
     let (fx, fy) = (x - i as f64, y - j as f64);
     let nw = j * w + i;
     let (ne, sw, se) = (nw + 1, nw + w, nw + w + 1);
-    let even = ((i + j) % 2 == 0) == even0;
+    let even = (i + j).is_multiple_of(2) == even0;
     if even {
         if fx >= fy {
             ([nw, ne, se], [1.0 - fx, fx - fy, fy])

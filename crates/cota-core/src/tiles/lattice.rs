@@ -29,11 +29,12 @@
 
 use rayon::prelude::*;
 
+use super::coverage::Coverage;
 use super::error::TilesError;
 use super::fit::{fit, FIT_MARGIN};
 use super::samples::Samples;
+pub use super::samples::SourcePart;
 use super::scheme::{ErrorSchedule, GeographicScheme};
-use super::sources::Coverage;
 use crate::grid::{Crs, GeoRef, HeightGrid, PixelIs, MAX_SAMPLES};
 
 /// The alignment zoom is the coarsest whose window is at most this many
@@ -203,16 +204,6 @@ impl LatticeFrame {
         let (r0, r1) = read_span(&rows)?;
         Some([c0, r0, c1, r1])
     }
-}
-
-/// A part of the whole source: `grid` holds the whole source's samples from
-/// column `offset[0]` and row `offset[1]` on.
-#[derive(Debug, Clone, Copy)]
-pub struct SourcePart<'a> {
-    /// The samples.
-    pub grid: &'a HeightGrid,
-    /// Where they sit in the whole source, `[column, row]`.
-    pub offset: [usize; 2],
 }
 
 impl Lattice {
@@ -677,7 +668,7 @@ fn fitted(
         (grown[2] - grown[0] + 1) as usize,
         (grown[3] - grown[1] + 1) as usize,
     );
-    let at = Samples::new(frame, source, grown);
+    let at = Samples::new(&frame.source_georef, frame.scheme.cell_deg(), source, grown);
     let f = fit(
         &mut heights,
         [w, h],

@@ -391,7 +391,12 @@ fn source_partials(
     let s = lat.scheme();
     let top = s.cells_at(lat.align_zoom());
     let [x0, y0, x1, y1] = lat.window();
-    let samples = Samples::new(lat.frame(), source, owned);
+    let samples = Samples::new(
+        &lat.frame().source_georef,
+        lat.frame().scheme.cell_deg(),
+        source,
+        owned,
+    );
     let mut own: HashMap<u64, f32> = HashMap::default();
     let mut size = 2 * t;
     while size <= top {

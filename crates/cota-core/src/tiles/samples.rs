@@ -18,7 +18,7 @@
 //! them follows, so that parts of a sharded run add in the same order as
 //! the whole.
 
-use super::lattice::{LatticeFrame, SourcePart};
+use crate::grid::{GeoRef, HeightGrid};
 
 /// A set of source samples on the lattice: positions in global lattice
 /// coordinates (fractional columns east, rows south) and heights.
@@ -45,6 +45,16 @@ pub trait SampleSet: Sync {
     }
 }
 
+/// A part of the whole source: `grid` holds the whole source's samples from
+/// column `offset[0]` and row `offset[1]` on.
+#[derive(Debug, Clone, Copy)]
+pub struct SourcePart<'a> {
+    /// The samples.
+    pub grid: &'a HeightGrid,
+    /// Where they sit in the whole source, `[column, row]`.
+    pub offset: [usize; 2],
+}
+
 /// The samples of a part of a geographic source, per column and per row.
 #[derive(Debug, Clone)]
 pub struct Samples<'a> {
@@ -59,10 +69,10 @@ pub struct Samples<'a> {
 }
 
 impl<'a> Samples<'a> {
-    /// The samples of `part` (a part of `frame`'s source) whose positions lie
-    /// in `region` (global `[x0, y0, x1, y1]`, inclusive).
-    pub fn new(frame: &LatticeFrame, part: SourcePart<'a>, region: [u64; 4]) -> Samples<'a> {
-        let (g, d) = (&frame.source_georef, frame.scheme.cell_deg());
+    /// The samples of `part` (a part of the source georeferenced by `g`,
+    /// on a lattice of `d` degrees a cell) whose positions lie in `region`
+    /// (global `[x0, y0, x1, y1]`, inclusive).
+    pub fn new(g: &GeoRef, d: f64, part: SourcePart<'a>, region: [u64; 4]) -> Samples<'a> {
         let [ox, oy] = part.offset;
         let inside = |v: f64, lo: u64, hi: u64| v >= lo as f64 && v <= hi as f64;
         let mut cols: Vec<(usize, f64)> = (0..part.grid.width())
