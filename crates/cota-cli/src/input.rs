@@ -8,7 +8,7 @@ use std::time::Instant;
 use anyhow::Context;
 use cota_core::grid::mosaic::{MosaicOptions, SeamPolicy, SeamReport};
 use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
-use cota_core::{Crs, HeightGrid};
+use cota_core::HeightGrid;
 use cota_io::{
     read_dem, read_dem_bytes, read_dem_from, read_dems_with_progress, ArrayName, Dem, PngEncoding,
     ReadOptions, Region, RegionOptions, TileRequest,
@@ -126,6 +126,17 @@ pub fn num(v: f64) -> String {
         format!("{v:e}")
     } else {
         format!("{v}")
+    }
+}
+
+/// A number for a report: three significant decimals at most, plainly.
+pub fn num_short(v: f64) -> String {
+    if v.abs() >= 100.0 {
+        format!("{v:.0}")
+    } else if v.abs() >= 1.0 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.3}")
     }
 }
 
@@ -288,25 +299,7 @@ pub fn is_dash(p: &Path) -> bool {
 }
 
 /// Reads the files (`-`: standard input, which must then be the only one;
-/// none: the bundled sample), gives them `--src-crs` (see
-/// [`cota_io::crs::assign_src_crs`]) and joins them into one region.
-fn read_inputs(
-    files: &[PathBuf],
-    opts: &ReadOptions,
-    region_opts: &RegionOptions,
-    in_turn: bool,
-    src_crs: Option<&Crs>,
-) -> anyhow::Result<Region> {
-    let mut dems = read_files(files, opts, in_turn)?;
-    if let Some(crs) = src_crs {
-        for dem in &mut dems {
-            cota_io::crs::assign_src_crs(dem, crs)?;
-        }
-    }
-    Ok(cota_io::read::join(dems, region_opts)?)
-}
-
-/// Reads the files as [`read_inputs`] says, each on its own: in parallel,
+/// none: the bundled sample), each on its own: in parallel,
 /// or (`in_turn`) one after the other on this thread.
 fn read_files(files: &[PathBuf], opts: &ReadOptions, in_turn: bool) -> anyhow::Result<Vec<Dem>> {
     match files {
@@ -366,6 +359,60 @@ pub fn summaries(a: &InputArgs) -> anyhow::Result<Vec<FileInfo>> {
     Ok(files)
 }
 
+/// Reads every input (or the bundled sample), gives them `--src-crs` (see
+/// [`cota_io::crs::assign_src_crs`]) and joins them into one region per
+/// kind of grid ([`cota_io::read::join_groups`]); voids stay NaN (each
+/// command applies its own policy, [`fill`]).
+fn read_groups(a: &InputArgs, in_turn: bool) -> anyhow::Result<(Vec<Region>, RegionOptions)> {
+    let opts = read_options(a)?;
+    check_options(a)?;
+    let region_opts = RegionOptions::DEFAULT
+        .with_read(opts)
+        .with_mosaic(mosaic_options(a))
+        .with_fill(None);
+    let mut dems = read_files(&a.files, &opts, in_turn)?;
+    if let Some(crs) = a.src_crs.as_ref() {
+        for dem in &mut dems {
+            cota_io::crs::assign_src_crs(dem, crs)?;
+        }
+    }
+    Ok((cota_io::read::join_groups(dems, &region_opts)?, region_opts))
+}
+
+/// Reads every input (or the bundled sample) and joins it into one input
+/// per kind of grid (CRS, pixel size): the files of each kind mosaicked, or
+/// each alone where they do not mosaic ([`cota_io::read::join_groups`]);
+/// what `cota tiles` takes as its sources. `--bbox` is refused with several.
+pub fn load_groups(a: &InputArgs) -> anyhow::Result<Vec<Input>> {
+    let t0 = Instant::now();
+    let (regions, _) = read_groups(a, false)?;
+    if regions.len() > 1 && a.bbox.is_some() && a.zoom.is_none() {
+        anyhow::bail!("--bbox: expected inputs on one grid (one CRS, one resolution), found {} kinds of grid; crop each file first", regions.len());
+    }
+    let read_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let mut out = Vec::with_capacity(regions.len());
+    for region in regions {
+        warn_unpositioned(&region.files);
+        check_seams(a, region.seams.as_ref(), &region.files)?;
+        check_cell_size(&region.grid, &region.files)?;
+        let grid = match (&a.bbox, a.zoom) {
+            (Some(b), None) => {
+                crate::window::bbox(&region.grid, bbox4(b)?).with_context(|| name(&region.files))?
+            }
+            _ => region.grid,
+        };
+        out.push(Input {
+            grid,
+            files: region.files,
+            seams: region.seams,
+            hole_samples: region.hole_samples,
+            seam_tolerance_m: a.seam_tolerance_m,
+            read_ms,
+        });
+    }
+    Ok(out)
+}
+
 /// Reads every input (or the bundled sample) and mosaics them, then keeps
 /// the `--bbox` window (for inputs other than PMTiles archives).
 pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
@@ -373,17 +420,28 @@ pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
 }
 
 /// [`load`], the files read in parallel or (`in_turn`) one after the other
-/// on this thread (see [`read_region_in_turn`]).
+/// on this thread (see [`read_region_in_turn`]). Inputs of several
+/// resolutions (one CRS) are joined on the finest one's grid, each coarser
+/// one resampled once ([`cota_io::read::resample_join`], its deviation at
+/// its own samples said on stderr).
 pub fn load_with(a: &InputArgs, in_turn: bool) -> anyhow::Result<Input> {
     let t0 = Instant::now();
-    let opts = read_options(a)?;
-    check_options(a)?;
-    // Voids stay NaN here: each command applies its own policy (`fill`).
-    let region_opts = RegionOptions::DEFAULT
-        .with_read(opts)
-        .with_mosaic(mosaic_options(a))
-        .with_fill(None);
-    let region = read_inputs(&a.files, &opts, &region_opts, in_turn, a.src_crs.as_ref())?;
+    let (mut groups, region_opts) = read_groups(a, in_turn)?;
+    let region = if groups.len() == 1 {
+        groups.swap_remove(0)
+    } else {
+        let (region, resampled) = cota_io::read::resample_join(groups, &region_opts)?;
+        for r in resampled {
+            eprintln!(
+                "cota: note: {} resampled onto the finest input's grid (pixel {} to {}): it lies within {} m of its own samples",
+                r.files,
+                num(r.pixel),
+                num(region.grid.georef().pixel_x.abs()),
+                num_short(r.max_deviation_m)
+            );
+        }
+        region
+    };
     warn_unpositioned(&region.files);
     check_seams(a, region.seams.as_ref(), &region.files)?;
     check_cell_size(&region.grid, &region.files)?;

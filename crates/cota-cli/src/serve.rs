@@ -134,18 +134,20 @@ fn open_tiles(dir: &Path) -> anyhow::Result<Arc<dyn TileSource>> {
 
 /// Tiles made on demand from `grid` (none for a stream, or a source that
 /// is not geographic: said, not fatal).
-fn make_tiles(grid: Option<&HeightGrid>) -> Result<Option<Arc<dyn TileSource>>, String> {
+fn make_tiles(
+    grid: Option<&HeightGrid>,
+    holes: bool,
+) -> Result<Option<Arc<dyn TileSource>>, String> {
     let Some(grid) = grid else {
         println!("tiles       none (a stream holds no grid to tile; use --tiles DIR)");
         return Ok(None);
     };
+    if holes {
+        println!("tiles       none: {}", crate::tiles::HOLES_REFUSED);
+        return Ok(None);
+    }
     let t = Instant::now();
-    let source = DemandTileSource::new(
-        grid,
-        &LatticeOptions::DEFAULT,
-        &TilerOptions::DEFAULT,
-        DEMAND_TILES,
-    );
+    let source = demand_source(grid);
     match source {
         Ok(src) => {
             let p = src.prepared();
@@ -192,7 +194,7 @@ fn make_imagery(grid: Option<&Arc<HeightGrid>>) -> Option<Imagery> {
 /// `state` as soon as it is ready. One after the other: the stream's
 /// encoder and the tiler each take several times the grid's memory at
 /// their peak.
-fn start_background(state: &ServerState, source: Source, tiles_given: bool) {
+fn start_background(state: &ServerState, source: Source, tiles_given: bool, holes: bool) {
     let state = state.clone();
     std::thread::spawn(move || {
         let grid = match &source {
@@ -202,13 +204,31 @@ fn start_background(state: &ServerState, source: Source, tiles_given: bool) {
         state.set_imagery(Ok(make_imagery(grid)));
         state.set_stream(make_stream(&source));
         if !tiles_given {
-            let tiles = make_tiles(grid.map(|g| g.as_ref()));
+            let tiles = make_tiles(grid.map(|g| g.as_ref()), holes);
             if let Err(e) = &tiles {
                 eprintln!("cota serve: {e}");
             }
             state.set_tiles(tiles);
         }
     });
+}
+
+/// Tiles on demand from `grid`: along its own axes when it is in WGS 84
+/// longitude/latitude, through its projection otherwise (a grid whose CRS
+/// cannot be placed on the Earth gets none: said, not fatal).
+fn demand_source(grid: &HeightGrid) -> Result<DemandTileSource, ServeError> {
+    let (lattice, tiler) = (&LatticeOptions::DEFAULT, &TilerOptions::DEFAULT);
+    let g = grid.georef();
+    let transform = cota_io::crs::transform_for_grid(g, grid.width(), grid.height());
+    match transform {
+        Ok(t) if !t.is_identity() => {
+            DemandTileSource::projected(grid, t.as_ref(), lattice, tiler, DEMAND_TILES)
+        }
+        Ok(_) => DemandTileSource::new(grid, lattice, tiler, DEMAND_TILES),
+        Err(e) => Err(ServeError::Tiling(TilesError::NotGeographic {
+            crs: format!("{} ({e})", g.crs),
+        })),
+    }
 }
 
 pub fn run(a: &ServeArgs) -> anyhow::Result<ExitCode> {
@@ -219,7 +239,8 @@ pub fn run(a: &ServeArgs) -> anyhow::Result<ExitCode> {
     if let Some(dir) = &a.tiles {
         state.set_tiles(Ok(Some(open_tiles(dir)?)));
     }
-    start_background(&state, source, a.tiles.is_some());
+    let holes = matches!(a.voids, crate::args::Voids::Hole);
+    start_background(&state, source, a.tiles.is_some(), holes);
     cota_server::run(&addrs, state, |bound| {
         let urls: Vec<String> = bound.iter().map(|b| format!("http://{b}/")).collect();
         println!(

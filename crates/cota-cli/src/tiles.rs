@@ -6,9 +6,10 @@ use std::time::Instant;
 
 use anyhow::Context;
 use cota_core::tiles::plan::{plan, plan_with};
+use cota_core::tiles::sources::deviation_of;
 use cota_core::tiles::{
-    resampling_deviation, shard_plan, BandCorners, Deviation, Lattice, Prepared, Shard, SourcePart,
-    TilerOptions, ZoomPlan,
+    resampling_deviation, shard_plan, BandCorners, Deviation, Lattice, Prepared, Shard, Source,
+    SourcePart, TilerOptions, ZoomPlan,
 };
 use cota_core::{HeightGrid, LonLat};
 use cota_io::tiles::drawn::{Against, SourceGrid};
@@ -19,13 +20,16 @@ use cota_io::tiles::{
 };
 use serde_json::json;
 
-use crate::args::TilesArgs;
+use crate::args::{TilesArgs, Voids};
 use crate::{input, progress, tiles_part};
 
 /// Runs `cota tiles`.
 pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     if a.reduce {
         return reduce(a);
+    }
+    if matches!(a.voids, Voids::Hole) {
+        anyhow::bail!("{}", HOLES_REFUSED);
     }
     let opts = tiler_options(a);
     if let Some((i, n)) = a.shard {
@@ -51,7 +55,10 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         }
     }
     let t0 = Instant::now();
-    let mut inp = input::load(&a.input)?;
+    let mut inp = match one_lonlat(input::load_groups(&a.input)?) {
+        Ok(one) => one,
+        Err(groups) => return run_sources(a, groups, &opts, t0),
+    };
     let voids = inp.grid.void_count();
     input::fill(&mut inp.grid, a.voids)?;
     if a.imagery {
@@ -78,6 +85,7 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     let prepared =
         Prepared::new(&lattice, &inp.grid, &opts).with_context(|| format!("tiling {name}"))?;
     drop(spinner);
+    warn_source_floor(&prepared);
     // With --check, the source stays to check every tile against it as drawn.
     let source = a.check.then_some(inp.grid);
     let prep_s = t_prep.elapsed().as_secs_f64();
@@ -87,6 +95,145 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     finish(a, &name, &prepared, &deviation, &report, times, json!(null));
     Ok(std::process::ExitCode::SUCCESS)
 }
+
+/// The one input when it is a single grid in WGS 84 longitude/latitude
+/// (the lattice then follows its axes, and shards can split it); the
+/// inputs otherwise.
+fn one_lonlat(mut groups: Vec<input::Input>) -> Result<input::Input, Vec<input::Input>> {
+    let lonlat = |g: &HeightGrid| {
+        g.georef().known
+            && g.georef().crs.is_geographic()
+            && cota_io::crs::transform_for(&g.georef().crs).is_ok_and(|t| t.is_identity())
+    };
+    match groups.as_slice() {
+        [one] if lonlat(&one.grid) => Ok(groups.swap_remove(0)),
+        _ => Err(groups),
+    }
+}
+
+/// `cota tiles` over inputs in other CRSs or of several resolutions: each
+/// input (the files of one kind of grid mosaicked) a source of the lattice
+/// ([`cota_core::tiles::sources`]), finest first.
+fn run_sources(
+    a: &TilesArgs,
+    mut groups: Vec<input::Input>,
+    opts: &TilerOptions,
+    t0: Instant,
+) -> anyhow::Result<std::process::ExitCode> {
+    if a.plan || a.shard.is_some() {
+        anyhow::bail!("--plan/--shard: expected one input in longitude/latitude (WGS 84) on one grid, found {} inputs of other CRSs or resolutions; tile them in one run without --shard", groups.len());
+    }
+    for g in &mut groups {
+        input::fill(&mut g.grid, a.voids)?;
+    }
+    let mins = |g: &input::Input| g.grid.cell_size_m()[0].min(g.grid.cell_size_m()[1]);
+    groups.sort_by(|p, q| mins(p).total_cmp(&mins(q)));
+    let transforms = groups
+        .iter()
+        .map(|g| {
+            let (r, n) = (g.grid.georef(), input::name(&g.files));
+            cota_io::crs::transform_for_grid(r, g.grid.width(), g.grid.height())
+                .with_context(|| format!("{n}: placing it on the Earth"))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let sources: Vec<Source<'_>> = groups
+        .iter()
+        .zip(&transforms)
+        .map(|(g, t)| Source {
+            grid: &g.grid,
+            transform: t.as_ref(),
+        })
+        .collect();
+    let files: Vec<input::FileInfo> = groups.iter().flat_map(|g| g.files.clone()).collect();
+    let name = input::name(&files);
+    let spinner = progress::spinner("resampling");
+    let r = Lattice::resample_sources(&sources, &tiles_part::lattice_options(a))
+        .with_context(|| format!("tiling {name}"))?;
+    let deviation = deviation_of(&r.lattice, &r.samples);
+    drop(spinner);
+    let t_prep = Instant::now();
+    let prepared = Prepared::new_sampled(&r.lattice, &r.samples, opts)
+        .with_context(|| format!("tiling {name}"))?;
+    warn_source_floor(&prepared);
+    let prep_s = t_prep.elapsed().as_secs_f64();
+    let against = a.check.then(|| against_sources(&sources, &r.lattice));
+    let report = write(a, &prepared, None, against.as_ref())?;
+    let times = [prep_s, t0.elapsed().as_secs_f64()];
+    finish(a, &name, &prepared, &deviation, &report, times, json!(null));
+    Ok(std::process::ExitCode::SUCCESS)
+}
+
+/// What `--check` measures tiles of several sources against: their
+/// samples, their bilinear surfaces, and the ellipsoid farther than two
+/// finest tiles from their footprints.
+fn against_sources<'a>(sources: &[Source<'a>], lattice: &Lattice) -> Against<'a> {
+    let s = lattice.scheme();
+    let grids = sources
+        .iter()
+        .map(|src| SourceGrid {
+            grid: src.grid,
+            transform: src.transform,
+        })
+        .collect();
+    let rects = lattice
+        .coverage()
+        .map(|c| {
+            c.polygons
+                .iter()
+                .map(|p| {
+                    let xs = p.iter().map(|q| q[0]);
+                    let ys = p.iter().map(|q| q[1]);
+                    let (x0, x1) = (
+                        xs.clone().fold(f64::INFINITY, f64::min),
+                        xs.fold(f64::NEG_INFINITY, f64::max),
+                    );
+                    let (y0, y1) = (
+                        ys.clone().fold(f64::INFINITY, f64::min),
+                        ys.fold(f64::NEG_INFINITY, f64::max),
+                    );
+                    [s.lon_of(x0), s.lat_of(y1), s.lon_of(x1), s.lat_of(y0)]
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let margin = 2.0 * f64::from(s.tile_cells) * s.cell_deg();
+    Against::new(grids, rects, margin)
+}
+
+/// Says, before the tiles are made, at which zooms the lattice cannot hold
+/// the source's own samples within the zoom's bound (a `--max-zoom` below
+/// the source's resolution), and what bound those tiles meet there.
+fn warn_source_floor(p: &Prepared<'_>) {
+    let short: Vec<String> = p
+        .zooms()
+        .iter()
+        .filter(|z| p.source_bound_m(z.zoom) > z.max_error_m)
+        .map(|z| {
+            format!(
+                "{} ({} m, not {} m)",
+                z.zoom,
+                input::num_short(p.source_bound_m(z.zoom)),
+                input::num_short(z.max_error_m)
+            )
+        })
+        .collect();
+    if short.is_empty() {
+        return;
+    }
+    let s = p.lattice().scheme();
+    eprintln!(
+        "cota: warning: the lattice ({}\" a cell at zoom {}) cannot hold the source's samples within the bound at zooms {}: \
+         its points cut the peaks and pits between them by up to {} m; tiles there meet the bound at the lattice's points and the figure given at the source's samples; \
+         leave --max-zoom out (the source's own resolution) to meet the bound everywhere",
+        input::num_short(s.cell_deg() * 3600.0),
+        s.max_zoom,
+        short.join(", "),
+        input::num_short(p.lattice().residual_m()),
+    );
+}
+
+/// Why `--voids hole` makes no tiles.
+pub const HOLES_REFUSED: &str = "--voids hole: expected a void policy that gives every tile terrain (fill, idw or refuse), found hole; a terrain client draws a hole in a tile as a hole through the globe, so tiles fill voids (the default, --voids fill)";
 
 /// What `--check` measures the tiles against as drawn: the source's
 /// samples, its bilinear surface, and the ellipsoid farther than two

@@ -57,6 +57,7 @@ impl Derived {
             west: self.west,
             north: self.north,
             pixel: self.pixel_m,
+            pixel_y: 0.0,
             crs: GeoTiffCrs::Projected(self.epsg),
             nodata: NODATA,
         }

@@ -40,8 +40,11 @@ pub struct GeoTiff<'a> {
     pub west: f64,
     /// CRS y of the north edge of the first row.
     pub north: f64,
-    /// Pixel size in CRS units, both directions.
+    /// Pixel size in CRS units along a row (east).
     pub pixel: f64,
+    /// Pixel size in CRS units down a column (south); 0: the same as
+    /// `pixel` (square pixels).
+    pub pixel_y: f64,
     /// The CRS.
     pub crs: GeoTiffCrs,
     /// The nodata value written for voids (GDAL_NODATA).
@@ -92,7 +95,14 @@ pub fn geotiff_bytes(g: &GeoTiff<'_>) -> io::Result<Vec<u8>> {
         .map_err(io::Error::other)?;
     let e = img.encoder();
     let tags: [(Tag, &[f64]); 2] = [
-        (Tag::ModelPixelScaleTag, &[g.pixel, g.pixel, 0.0]),
+        (
+            Tag::ModelPixelScaleTag,
+            &[
+                g.pixel,
+                if g.pixel_y > 0.0 { g.pixel_y } else { g.pixel },
+                0.0,
+            ],
+        ),
         (
             Tag::ModelTiepointTag,
             &[0.0, 0.0, 0.0, g.west, g.north, 0.0],
@@ -197,6 +207,7 @@ mod tests {
             west: 500_000.0,
             north: 4_000_000.0,
             pixel: 30.0,
+            pixel_y: 0.0,
             crs: GeoTiffCrs::Projected(32633),
             nodata: -9999.0,
         };

@@ -155,4 +155,16 @@ pub enum RegionError {
     /// own error is the [`source`](std::error::Error::source).
     #[error("void policy")]
     Fill(#[source] cota_core::grid::voids::VoidError),
+    /// Inputs in different CRSs cannot share one grid.
+    #[error("expected inputs in one CRS to join into one grid, found {first} ({first_crs}) and {other} ({other_crs}); cota tiles and cota serve's tiles take them (each resampled onto the tiling's lattice)")]
+    Crs {
+        /// A file of the first CRS.
+        first: String,
+        /// Its CRS.
+        first_crs: String,
+        /// A file of another.
+        other: String,
+        /// Its CRS.
+        other_crs: String,
+    },
 }

@@ -8,8 +8,7 @@ use std::path::{Path, PathBuf};
 
 use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
-    shard_plan, BandCorners, ErrorSchedule, Lattice, LatticeOptions, Prepared, SourcePart,
-    TilerOptions,
+    shard_plan, BandCorners, ErrorSchedule, Lattice, LatticeOptions, Prepared, TilerOptions,
 };
 use cota_core::{FillOptions, HeightGrid};
 use cota_io::tiles::{

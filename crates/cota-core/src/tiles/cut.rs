@@ -17,8 +17,8 @@
 //! [`NORMAL_REACH_CELLS`], so two tiles that share a vertex give it the same
 //! normal and a shard's part holds what its normals read; straight up
 //! beyond the window, on the ellipsoid), and a 256×256 water
-//! mask (samples at or below 0 m: sea level in SRTM, and the 0 m beyond the
-//! source; a heuristic, not a coastline).
+//! mask (samples at or below 0 m in the data: sea level in SRTM; land
+//! beyond the data; a heuristic, not a coastline).
 
 use rustc_hash::FxHashMap as HashMap;
 
@@ -28,8 +28,9 @@ use super::error::TilesError;
 use super::lattice::Lattice;
 use super::lattice::SourcePart;
 use super::plan::{children_in, plan_with, LatticeStats, TileRange, TilerOptions, ZoomPlan};
+use super::samples::{SampleSet, Samples};
 use super::scheme::{GeographicScheme, TileId};
-use super::source_error::{own_errors, Samples, BY_SAMPLE_BELOW};
+use super::source_error::{own_errors, BY_SAMPLE_BELOW};
 use crate::bitree::closure::source_closure;
 use crate::bitree::error_code::SplitRule;
 use crate::bitree::Bitree;
@@ -63,14 +64,18 @@ pub struct TileMesh {
     pub mesh: Mesh,
     /// The bound the tile meets after quantization, metres.
     pub max_error_m: f64,
+    /// The bound it meets at the source's own samples, as drawn: the same,
+    /// unless the lattice cannot hold the source (see
+    /// [`Prepared::source_bound_m`]), metres.
+    pub source_bound_m: f64,
     /// The threshold it was extracted at, metres.
     pub threshold_m: f64,
     /// Unit normals per vertex in east, north, up components (on request).
     pub normals_enu: Option<Vec<[f32; 3]>>,
     /// The water mask (on request).
     pub water_mask: Option<WaterMask>,
-    /// The tile's children that the pyramid makes, if any.
-    pub children: Option<TileRange>,
+    /// The tile's children that the pyramid makes, as rectangles.
+    pub children: Vec<TileRange>,
 }
 
 /// A lattice with its global hierarchy, ready to cut any tile.
@@ -84,7 +89,7 @@ pub struct TileMesh {
 ///     pixel_y: -0.01, pixel_is: PixelIs::Point, known: true };
 /// let source = HeightGrid::new(n, n, heights, georef).unwrap();
 /// let lattice = Lattice::resample(&source, &LatticeOptions::DEFAULT).unwrap();
-/// let prepared = Prepared::new(&lattice, &TilerOptions::DEFAULT).unwrap();
+/// let prepared = Prepared::new(&lattice, &source, &TilerOptions::DEFAULT).unwrap();
 /// let root = prepared.cut(TileId { z: 0, x: 1, y: 0 }, false, false).unwrap();
 /// assert!(root.mesh.triangle_count() >= 2);
 /// ```
@@ -139,6 +144,32 @@ impl<'l> Prepared<'l> {
         source: &HeightGrid,
         opts: &TilerOptions,
     ) -> Result<Self, TilesError> {
+        let whole = SourcePart {
+            grid: source,
+            offset: [0, 0],
+        };
+        Prepared::new_sampled(
+            lattice,
+            &Samples::new(
+                &lattice.frame().source_georef,
+                lattice.frame().scheme.cell_deg(),
+                whole,
+                lattice.stored(),
+            ),
+            opts,
+        )
+    }
+
+    /// [`Prepared::new`] from the source's samples as a set: what a lattice of
+    /// several sources ([`Lattice::resample_sources`]) is prepared from.
+    ///
+    /// # Errors
+    /// As [`Prepared::new`].
+    pub fn new_sampled(
+        lattice: &'l Lattice,
+        samples: &impl SampleSet,
+        opts: &TilerOptions,
+    ) -> Result<Self, TilesError> {
         if lattice.is_part() {
             return Err(TilesError::BadOptions(
                 "expected a lattice over its whole window, found a part (use Prepared::new_part)"
@@ -149,11 +180,7 @@ impl<'l> Prepared<'l> {
         let zooms = plan_with(lattice.frame(), &stats, opts)?;
         let tree = Bitree::build(lattice.grid())?;
         let cap = Cap::build(lattice, &tree);
-        let whole = SourcePart {
-            grid: source,
-            offset: [0, 0],
-        };
-        let src = source_codes(lattice, &tree, whole);
+        let src = source_codes(lattice, &tree, samples);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), &stats, &zooms);
         Ok(Prepared {
             lattice,
@@ -189,7 +216,13 @@ impl<'l> Prepared<'l> {
         stats: &LatticeStats,
     ) -> Result<Self, TilesError> {
         let tree = Bitree::build(lattice.grid())?;
-        let src = source_codes(lattice, &tree, source);
+        let samples = Samples::new(
+            &lattice.frame().source_georef,
+            lattice.frame().scheme.cell_deg(),
+            source,
+            lattice.stored(),
+        );
+        let src = source_codes(lattice, &tree, &samples);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), stats, &zooms);
         Ok(Prepared {
             lattice,
@@ -206,6 +239,21 @@ impl<'l> Prepared<'l> {
     /// The drawn bound its decisions keep ([`super::drawn`]).
     pub fn drawn_bound(&self) -> &DrawnBound {
         &self.bound
+    }
+
+    /// The bound zoom `z`'s tiles meet at the source's own samples, as
+    /// drawn: the zoom's bound `e_z`, or more where the lattice cannot hold
+    /// the source: a leaf of the finest level (a unit triangle, which cannot
+    /// split) is the lattice itself there, within the fitted lattice's
+    /// largest residual of the source, plus quantization and the drawn
+    /// triangle's own slack. That floor exceeds `e_z` only on a lattice
+    /// coarser than the source (a `--max-zoom` below the source's) or where
+    /// the fit could not bring a sample within half the finest bound.
+    pub fn source_bound_m(&self, z: u8) -> f64 {
+        self.zoom(z).map_or(0.0, |p| {
+            let floor = self.residual_m + p.margin_m + self.bound.finest_slack_m();
+            p.max_error_m.max(floor)
+        })
     }
 
     /// True when this hierarchy cuts tile `t` exactly: always for a whole
@@ -266,15 +314,45 @@ impl<'l> Prepared<'l> {
 
     /// Every tile of the pyramid, zoom by zoom.
     pub fn tiles(&self) -> impl Iterator<Item = TileId> + '_ {
-        self.zooms.iter().flat_map(|p| {
+        self.zooms.iter().flat_map(move |p| {
             let r = p.range;
-            (r.y0..=r.y1).flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z: p.zoom, x, y }))
+            (r.y0..=r.y1)
+                .flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z: p.zoom, x, y }))
+                .filter(move |&t| self.covers(t))
         })
     }
 
     /// Number of tiles in the pyramid.
     pub fn tile_count(&self) -> u64 {
-        self.zooms.iter().map(|p| p.range.count()).sum()
+        match self.lattice.coverage() {
+            None => self.zooms.iter().map(|p| p.range.count()).sum(),
+            Some(_) => self.tiles().count() as u64,
+        }
+    }
+
+    /// Whether the pyramid makes tile `t` (in its zoom's range): both roots
+    /// always, and a tile whose square meets the data's footprint with a
+    /// positive area ([`super::coverage::Coverage`]; the range alone for a
+    /// single rectangular footprint).
+    pub fn covers(&self, t: TileId) -> bool {
+        let Some(cov) = self.lattice.coverage() else {
+            return true;
+        };
+        if t.z == 0 {
+            return true;
+        }
+        let s = self.lattice.scheme();
+        let (c, [x, y]) = (s.cells_at(t.z) as f64, s.tile_origin(t).map(|v| v as f64));
+        cov.meets([x, y, x + c, y + c])
+    }
+
+    /// The tiles of zoom `z` that the pyramid makes, as rectangles (rows of
+    /// runs; the zoom's range when every tile in it is made).
+    pub fn available(&self, z: u8) -> Vec<TileRange> {
+        let Some(p) = self.zoom(z) else {
+            return Vec::new();
+        };
+        covered_runs(p.range, |x, y| self.covers(TileId { z, x, y }))
     }
 
     /// The samples tile `t` is checked against: its square of the lattice.
@@ -302,7 +380,7 @@ impl<'l> Prepared<'l> {
     pub fn cut(&self, t: TileId, normals: bool, water: bool) -> Result<TileMesh, TilesError> {
         let plan = self
             .zoom(t.z)
-            .filter(|p| p.range.contains(t.x, t.y) && self.holds(t))
+            .filter(|p| p.range.contains(t.x, t.y) && self.holds(t) && self.covers(t))
             .ok_or(TilesError::NoSuchTile {
                 tile: t,
                 min_zoom: self.zooms.first().map_or(0, |p| p.zoom),
@@ -322,8 +400,11 @@ impl<'l> Prepared<'l> {
             water_mask: water.then(|| self.water(origin, cells)),
             mesh,
             max_error_m: plan.max_error_m,
+            source_bound_m: self.source_bound_m(t.z),
             threshold_m: plan.threshold_m,
-            children: children_in(t, self.zoom(t.z + 1)),
+            children: children_in(t, self.zoom(t.z + 1))
+                .map(|r| covered_runs(r, |x, y| self.covers(TileId { z: t.z + 1, x, y })))
+                .unwrap_or_default(),
         })
     }
 
@@ -383,9 +464,13 @@ impl<'l> Prepared<'l> {
             .collect()
     }
 
-    /// The water mask: 256×256 nearest lattice samples, water at or below 0 m.
+    /// The water mask: 256×256 nearest lattice samples, water at or below
+    /// 0 m in the data ([`is_wet`]).
     fn water(&self, o: [u64; 2], cells: u64) -> WaterMask {
-        water_of(o, cells, |_, x, y| self.lattice.height_at(x, y) <= 0.0)
+        let f = self.lattice.frame();
+        water_of(o, cells, |_, x, y| {
+            is_wet(f, x, y, self.lattice.height_at(x, y))
+        })
     }
 }
 
@@ -401,13 +486,12 @@ pub(crate) fn above_cap(e_m: f32, residual_m: f64, rule: &SplitRule) -> bool {
 /// Per stored point of `lattice` (whose bitree is `tree`): the code of its
 /// error against the source's samples in `source`, closed over its
 /// descendants (`bitree::closure::source_closure`).
-fn source_codes(lattice: &Lattice, tree: &Bitree<'_>, source: SourcePart<'_>) -> Vec<u16> {
+fn source_codes(lattice: &Lattice, tree: &Bitree<'_>, samples: &impl SampleSet) -> Vec<u16> {
     let g = lattice.grid();
-    let samples = Samples::new(lattice.frame(), source, lattice.stored());
     let top = lattice.scheme().cells_at(lattice.align_zoom());
     let height = |x: u64, y: u64| lattice.height_at(x, y);
     let own = own_errors(
-        &samples,
+        samples,
         lattice.origin(),
         [g.width(), g.height()],
         [2, top],
@@ -415,6 +499,41 @@ fn source_codes(lattice: &Lattice, tree: &Bitree<'_>, source: SourcePart<'_>) ->
         &height,
     );
     source_closure(tree.hierarchy(), &own)
+}
+
+/// The tiles of `range` for which `made(x, y)` holds, as rectangles: runs
+/// along each row, merged with the row below when they span the same
+/// columns.
+pub(crate) fn covered_runs(range: TileRange, made: impl Fn(u32, u32) -> bool) -> Vec<TileRange> {
+    let mut out: Vec<TileRange> = Vec::new();
+    for y in range.y0..=range.y1 {
+        let mut x = range.x0;
+        while x <= range.x1 {
+            if !made(x, y) {
+                x += 1;
+                continue;
+            }
+            let start = x;
+            while x < range.x1 && made(x + 1, y) {
+                x += 1;
+            }
+            let run = TileRange {
+                x0: start,
+                x1: x,
+                y0: y,
+                y1: y,
+            };
+            match out
+                .iter_mut()
+                .find(|r| r.y1 + 1 == y && r.x0 == start && r.x1 == x)
+            {
+                Some(r) => r.y1 = y,
+                None => out.push(run),
+            }
+            x += 1;
+        }
+    }
+    out
 }
 
 /// The leaves under the square with north-west corner `o` and side `cells`,
@@ -511,6 +630,17 @@ pub(crate) fn normal_at(
     let n = [-dx, -dn, 1.0];
     let len = (n[0] * n[0] + n[1] * n[1] + 1.0).sqrt();
     n.map(|c| (c / len) as f32)
+}
+
+/// Whether the lattice sample `(x, y)` of height `h_m` is water in a water
+/// mask: at or below 0 m (sea level in SRTM), and in the data (its
+/// footprint and the cell beyond its edge). Beyond the data the terrain is
+/// the ellipsoid's 0 m, but nothing says it is sea: land.
+#[inline]
+pub(crate) fn is_wet(f: &super::lattice::LatticeFrame, x: u64, y: u64, h_m: f32) -> bool {
+    let [w, n, e, s] = f.footprint;
+    let (x, y) = (x as f64, y as f64);
+    h_m <= 0.0 && x >= w - 1.0 && x <= e + 1.0 && y >= n - 1.0 && y <= s + 1.0
 }
 
 /// The global lattice position of water-mask sample `(i, j)` (0..256) of

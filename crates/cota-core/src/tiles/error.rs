@@ -8,8 +8,10 @@ use super::scheme::TileId;
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum TilesError {
-    /// The source is not in a geographic CRS.
-    #[error("expected a source in a geographic CRS (longitude/latitude, e.g. EPSG:4326), found {crs}; reproject it first")]
+    /// The source is not in longitude/latitude (a projected source goes
+    /// through [`super::Lattice::resample_sources`] with its projection), or
+    /// its CRS cannot be placed on the Earth.
+    #[error("expected a source in longitude/latitude (EPSG:4326) or a CRS that can be placed on the Earth, found {crs}")]
     NotGeographic {
         /// The CRS found.
         crs: String,

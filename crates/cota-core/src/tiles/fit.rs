@@ -15,12 +15,15 @@
 //! 0) is made to pass near every source sample `s`: with `s` in the unit
 //! triangle of corners `c_i` and barycentric weights `w_i`, the residual is
 //! `r(s) = h(s) − Σ w_i L(c_i)`. While `|r(s)| > τ` for some samples, each
-//! such sample asks its three corners for the least-norm correction that
-//! would zero it, `r(s) · w_i / Σ w_j²`; a round adds `ω = 0.7` times the
-//! sum of the requests to each corner (a damped Cimmino step of the
-//! Kaczmarz family, which converges for these local, nearly independent
-//! equations: the lattice has about 1.5 points per SRTM sample), for at
-//! most [`ROUNDS`] rounds. Then a tile within `thr` of the lattice is within
+//! such sample asks its corners for the least-norm correction that would
+//! zero it, `r(s) · w_i / Σ w_j²`, and a round moves each corner by the mean
+//! of its requests weighted by `w_i` (a simultaneous, component-averaged
+//! Kaczmarz step: a lone sample is honoured in one round, and several
+//! pulling one corner share it instead of adding up), for at most
+//! [`ROUNDS`] rounds. The fit runs where the lattice is at least as fine as
+//! the source (about 1.5 lattice points per SRTM sample at the default
+//! maximum zoom); on a coarser lattice a cell holds several samples it
+//! cannot all honour, and the lattice stays bilinear. Then a tile within `thr` of the lattice is within
 //! `thr + max |r|` of the source at every sample: the tile's plane minus `L`
 //! is linear on each unit triangle, so at `s` it is at most its value at the
 //! corners, which the lattice check bounds. What is left, per lattice point
@@ -47,27 +50,12 @@
 //! One pass over the region's samples for the residuals, then per round
 //! only the samples beyond `τ` and those next to the corners they moved.
 
-use super::lattice::SourcePart;
+use super::samples::SampleSet;
 
 /// The rounds of the fit.
 pub const ROUNDS: usize = 12;
-/// The damping of each round.
-const OMEGA: f64 = 0.7;
 /// Cells a part grows by to be fitted as the whole is.
 pub const FIT_MARGIN: u64 = 2 * ROUNDS as u64 + 4;
-
-/// The source's samples as seen from a region of the lattice: their
-/// positions in the region's cells along each axis (separable: the source
-/// is geographic, its samples on an affine grid).
-pub(crate) struct Placement {
-    /// Per source column in range: the column (in the part) and its
-    /// position in region cells.
-    pub cols: Vec<(usize, f64)>,
-    /// Per source row in range: the row (in the part) and its position.
-    pub rows: Vec<(usize, f64)>,
-    /// Global lattice column and row of the region's sample (0, 0).
-    pub origin: [u64; 2],
-}
 
 /// What [`fit`] left.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -86,7 +74,7 @@ fn unit_triangle(x: f64, y: f64, w: usize, h: usize, even0: bool) -> ([usize; 3]
     let (fx, fy) = (x - i as f64, y - j as f64);
     let nw = j * w + i;
     let (ne, sw, se) = (nw + 1, nw + w, nw + w + 1);
-    let even = ((i + j) % 2 == 0) == even0;
+    let even = (i + j).is_multiple_of(2) == even0;
     if even {
         if fx >= fy {
             ([nw, ne, se], [1.0 - fx, fx - fy, fy])
@@ -101,37 +89,36 @@ fn unit_triangle(x: f64, y: f64, w: usize, h: usize, even0: bool) -> ([usize; 3]
 }
 
 /// Fits `heights` (a `w × h` region whose sample (0, 0) is global lattice
-/// `origin`) to the samples of `src` placed by `at` (see the module docs),
-/// down to residuals of `tau_m`; the residual is reported over the samples
-/// inside `inner` (global `[x0, y0, x1, y1]`).
+/// `origin`) to the samples `at` inside it (see the module docs), down to
+/// residuals of `tau_m`; the residual is reported over the samples inside
+/// `inner` (global `[x0, y0, x1, y1]`).
 pub(crate) fn fit(
     heights: &mut [f32],
     [w, h]: [usize; 2],
-    at: &Placement,
-    src: SourcePart<'_>,
+    origin: [u64; 2],
+    at: &impl SampleSet,
     tau_m: f64,
     inner: [u64; 4],
 ) -> Fitted {
-    if w < 2 || h < 2 || at.cols.is_empty() || at.rows.is_empty() {
+    if w < 2 || h < 2 || at.is_empty() {
         return Fitted::default();
     }
-    let even0 = (at.origin[0] + at.origin[1]).is_multiple_of(2);
-    let (nc, nr) = (at.cols.len(), at.rows.len());
-    let g = src.grid;
-    let hv = |k: usize| {
-        let (c, r) = (at.cols[k % nc].0, at.rows[k / nc].0);
-        f64::from(g.heights()[r * g.width() + c])
+    let even0 = (origin[0] + origin[1]).is_multiple_of(2);
+    let (ox, oy) = (origin[0] as f64, origin[1] as f64);
+    let tri = |k: usize| {
+        let [x, y, _] = at.sample(k);
+        unit_triangle(x - ox, y - oy, w, h, even0)
     };
-    let tri = |k: usize| unit_triangle(at.cols[k % nc].1, at.rows[k / nc].1, w, h, even0);
     let residual = |heights: &[f32], k: usize| {
         let (c, wt) = tri(k);
-        hv(k)
+        at.sample(k)[2]
             - (0..3)
                 .map(|i| wt[i] * f64::from(heights[c[i]]))
                 .sum::<f64>()
     };
-    let mut r: Vec<f64> = (0..nc * nr).map(|k| residual(heights, k)).collect();
+    let mut r: Vec<f64> = (0..at.len()).map(|k| residual(heights, k)).collect();
     let mut corr = vec![0f64; w * h];
+    let mut weight = vec![0f64; w * h];
     for _ in 0..ROUNDS {
         let hot: Vec<usize> = (0..r.len()).filter(|&k| r[k].abs() > tau_m).collect();
         if hot.is_empty() {
@@ -141,53 +128,46 @@ pub(crate) fn fit(
         for &k in &hot {
             let (c, wt) = tri(k);
             let norm = wt.iter().map(|v| v * v).sum::<f64>();
-            let step = OMEGA * r[k] / norm;
             for i in 0..3 {
-                if corr[c[i]] == 0.0 {
+                if wt[i] <= 0.0 {
+                    continue;
+                }
+                if weight[c[i]] == 0.0 {
                     touched.push(c[i]);
                 }
-                corr[c[i]] += step * wt[i];
+                corr[c[i]] += r[k] * wt[i] * wt[i] / norm;
+                weight[c[i]] += wt[i];
             }
         }
         for &c in &touched {
-            heights[c] = (f64::from(heights[c]) + corr[c]) as f32;
+            heights[c] = (f64::from(heights[c]) + corr[c] / weight[c]) as f32;
             corr[c] = 0.0;
+            weight[c] = 0.0;
         }
-        for k in neighbours(at, &touched, w) {
+        for k in neighbours(at, &touched, w, origin) {
             r[k] = residual(heights, k);
         }
     }
+    let inside = |v: f64, lo: u64, hi: u64| v >= lo as f64 && v <= hi as f64;
     let residual_m = (0..r.len())
         .filter(|&k| {
-            let (x, y) = (at.cols[k % nc].1, at.rows[k / nc].1);
-            let gx = at.origin[0] as f64 + x;
-            let gy = at.origin[1] as f64 + y;
-            gx >= inner[0] as f64
-                && gx <= inner[2] as f64
-                && gy >= inner[1] as f64
-                && gy <= inner[3] as f64
+            let [x, y, _] = at.sample(k);
+            inside(x, inner[0], inner[2]) && inside(y, inner[1], inner[3])
         })
         .map(|k| r[k].abs())
         .fold(0.0, f64::max);
     Fitted { residual_m }
 }
 
-/// The samples (indices into the placement's `cols × rows`) in the cells
-/// around the region points `touched` (a region of width `w`), each once.
-fn neighbours(at: &Placement, touched: &[usize], w: usize) -> Vec<usize> {
-    let nc = at.cols.len();
-    let range = |axis: &[(usize, f64)], lo: f64, hi: f64| {
-        let a = axis.partition_point(|p| p.1 < lo);
-        let b = axis.partition_point(|p| p.1 <= hi);
-        a..b
-    };
+/// The samples in the cells around the region points `touched` (a region
+/// of width `w` whose sample (0, 0) is global `origin`), each once, in
+/// increasing order.
+fn neighbours(at: &impl SampleSet, touched: &[usize], w: usize, origin: [u64; 2]) -> Vec<usize> {
     let mut out: Vec<usize> = Vec::new();
     for &c in touched {
-        let (x, y) = ((c % w) as f64, (c / w) as f64);
-        let cols = range(&at.cols, x - 1.0, x + 1.0);
-        for rr in range(&at.rows, y - 1.0, y + 1.0) {
-            out.extend(cols.clone().map(|cc| rr * nc + cc));
-        }
+        let x = (origin[0] + (c % w) as u64) as f64;
+        let y = (origin[1] + (c / w) as u64) as f64;
+        at.within([x - 1.0, y - 1.0, x + 1.0, y + 1.0], &mut out);
     }
     out.sort_unstable();
     out.dedup();
@@ -197,7 +177,7 @@ fn neighbours(at: &Placement, touched: &[usize], w: usize) -> Vec<usize> {
 #[cfg(test)]
 mod test {
     use super::*;
-    use crate::grid::{GeoRef, HeightGrid};
+    use crate::tiles::samples::Listed;
 
     #[test]
     fn unit_triangles_interpolate_their_corners() {
@@ -222,21 +202,16 @@ mod test {
         let n = 9;
         let mut v = vec![100f32; n * n];
         v[4 * n + 4] = 180.0;
-        let grid = HeightGrid::new(n, n, v, GeoRef::unreferenced(1.0)).unwrap();
         // Source samples 1.3 cells apart, offset by 0.45 of a cell.
         let pos = |k: usize| 0.45 + 1.3 * k as f64;
-        let at = Placement {
-            cols: (0..n).map(|k| (k, pos(k))).collect(),
-            rows: (0..n).map(|k| (k, pos(k))).collect(),
-            origin: [0, 0],
-        };
+        let at = Listed::new(
+            (0..n * n)
+                .map(|k| [pos(k % n), pos(k / n), f64::from(v[k])])
+                .collect(),
+        );
         let (w, h) = (13, 13);
         let mut heights = vec![100f32; w * h];
-        let part = SourcePart {
-            grid: &grid,
-            offset: [0, 0],
-        };
-        let f = fit(&mut heights, [w, h], &at, part, 0.5, [0, 0, 12, 12]);
+        let f = fit(&mut heights, [w, h], [0, 0], &at, 0.5, [0, 0, 12, 12]);
         assert!(f.residual_m <= 2.0, "{f:?}");
         assert!(heights.iter().any(|&z| z > 150.0));
     }

@@ -29,8 +29,11 @@
 
 use rayon::prelude::*;
 
+use super::coverage::Coverage;
 use super::error::TilesError;
-use super::fit::{fit, Placement, FIT_MARGIN};
+use super::fit::{fit, FIT_MARGIN};
+use super::samples::Samples;
+pub use super::samples::SourcePart;
 use super::scheme::{ErrorSchedule, GeographicScheme};
 use crate::grid::{Crs, GeoRef, HeightGrid, PixelIs, MAX_SAMPLES};
 
@@ -96,6 +99,9 @@ pub struct Lattice {
     grid: HeightGrid,
     origin: [u64; 2],
     residual_m: f64,
+    /// The data's footprints when they are not the frame's rectangle
+    /// (several sources, projected ones: [`super::sources`]).
+    coverage: Option<Coverage>,
 }
 
 /// The window of a footprint at one alignment zoom: `[x0, y0, x1, y1]`
@@ -165,7 +171,8 @@ impl LatticeFrame {
         let scheme = scheme_for(g, opts)?;
         let footprint = footprint(g, size, &scheme)?;
         let (align_zoom, window) = choose_window(&scheme, footprint);
-        let fit_m = opts.error.max_error_m(scheme.max_zoom, scheme.max_zoom) / 2.0;
+        let pixel = g.pixel_x.abs().min(g.pixel_y.abs());
+        let fit_m = fit_tolerance_m(&scheme, pixel, opts);
         Ok(LatticeFrame {
             scheme,
             footprint,
@@ -197,16 +204,6 @@ impl LatticeFrame {
         let (r0, r1) = read_span(&rows)?;
         Some([c0, r0, c1, r1])
     }
-}
-
-/// A part of the whole source: `grid` holds the whole source's samples from
-/// column `offset[0]` and row `offset[1]` on.
-#[derive(Debug, Clone, Copy)]
-pub struct SourcePart<'a> {
-    /// The samples.
-    pub grid: &'a HeightGrid,
-    /// Where they sit in the whole source, `[column, row]`.
-    pub offset: [usize; 2],
 }
 
 impl Lattice {
@@ -292,6 +289,7 @@ impl Lattice {
             grid,
             origin: [region[0], region[1]],
             residual_m,
+            coverage: None,
         })
     }
 
@@ -299,6 +297,51 @@ impl Lattice {
     /// metres: what the lattice's own surface leaves of the source.
     pub fn residual_m(&self) -> f64 {
         self.residual_m
+    }
+
+    /// The lattice over the whole window of `frame` from its heights (see
+    /// [`super::sources`]), whose data lie in `coverage`.
+    pub(crate) fn from_heights(
+        frame: LatticeFrame,
+        heights: Vec<f32>,
+        residual_m: f64,
+        coverage: Coverage,
+    ) -> Result<Lattice, TilesError> {
+        let win = frame.window;
+        let (w, h) = (
+            (win[2] - win[0] + 1) as usize,
+            (win[3] - win[1] + 1) as usize,
+        );
+        let d = frame.scheme.cell_deg();
+        let georef = GeoRef {
+            crs: Crs::WGS84,
+            origin_x: frame.scheme.lon_of(win[0] as f64),
+            origin_y: frame.scheme.lat_of(win[1] as f64),
+            pixel_x: d,
+            pixel_y: -d,
+            pixel_is: PixelIs::Point,
+            known: true,
+        };
+        let grid = HeightGrid::new(w, h, heights, georef)
+            .map_err(|e| TilesError::BadOptions(e.to_string()))?;
+        Ok(Lattice {
+            origin: [win[0], win[1]],
+            frame,
+            grid,
+            residual_m,
+            coverage: Some(coverage),
+        })
+    }
+
+    /// The data's footprints, when they are not the frame's rectangle.
+    pub fn coverage(&self) -> Option<&Coverage> {
+        self.coverage.as_ref()
+    }
+
+    /// The lattice's unit-triangle surface at global lattice `(x, y)`.
+    pub fn unit_surface_at(&self, x: f64, y: f64) -> f64 {
+        let [ox, oy] = self.origin;
+        unit_surface(&self.grid, self.origin, x - ox as f64, y - oy as f64)
     }
 
     /// The frame (scheme, footprint, window, source mapping).
@@ -374,13 +417,20 @@ impl Lattice {
 /// The scheme for a source: its maximum zoom matched to the source's finer
 /// pixel side unless given.
 fn scheme_for(g: &GeoRef, opts: &LatticeOptions) -> Result<GeographicScheme, TilesError> {
+    scheme_for_pixel(g.pixel_x.abs().min(g.pixel_y.abs()), opts)
+}
+
+/// The scheme for a source whose finer pixel side is `pixel` degrees.
+pub(crate) fn scheme_for_pixel(
+    pixel: f64,
+    opts: &LatticeOptions,
+) -> Result<GeographicScheme, TilesError> {
     let cells = opts.tile_cells;
     if !cells.is_power_of_two() || !(2..=4096).contains(&cells) {
         return Err(TilesError::BadOptions(format!(
             "expected a tile size of 2 to 4096 lattice cells, a power of two, found {cells}"
         )));
     }
-    let pixel = g.pixel_x.abs().min(g.pixel_y.abs());
     if !(pixel.is_finite() && pixel > 0.0) {
         return Err(TilesError::BadOptions(format!(
             "expected a positive pixel size in degrees, found {pixel}"
@@ -455,7 +505,7 @@ fn window_at(s: &GeographicScheme, fp: [f64; 4], a: u8) -> Window {
 
 /// The alignment zoom and its window: the coarsest zoom whose window is at
 /// most [`WINDOW_GROWTH`] times the maximum zoom's.
-fn choose_window(s: &GeographicScheme, fp: [f64; 4]) -> (u8, Window) {
+pub(crate) fn choose_window(s: &GeographicScheme, fp: [f64; 4]) -> (u8, Window) {
     let area = |w: &Window| (w[2] - w[0] + 1) as f64 * (w[3] - w[1] + 1) as f64;
     let finest = window_at(s, fp, s.max_zoom);
     let limit = area(&finest) * WINDOW_GROWTH;
@@ -489,6 +539,18 @@ fn zero_band(s: &GeographicScheme, win: Window, a: u8) -> [f64; 4] {
         inset(win[2], wmax, -1.0),
         inset(win[3], hmax, -1.0),
     ]
+}
+
+/// The fit's tolerance ([`super::fit`]): half the bound at the maximum zoom
+/// where the lattice is at least as fine as the source's `pixel_deg`
+/// (degrees); none (an infinite tolerance) on a coarser lattice, whose cells
+/// hold several samples that no surface through its points can honour.
+pub(crate) fn fit_tolerance_m(s: &GeographicScheme, pixel_deg: f64, opts: &LatticeOptions) -> f64 {
+    if s.cell_deg() > pixel_deg * (1.0 + 1e-9) {
+        f64::INFINITY
+    } else {
+        opts.error.max_error_m(s.max_zoom, s.max_zoom) / 2.0
+    }
 }
 
 /// Lattice cells over which the data's edge falls to the ellipsoid beyond
@@ -606,8 +668,15 @@ fn fitted(
         (grown[2] - grown[0] + 1) as usize,
         (grown[3] - grown[1] + 1) as usize,
     );
-    let at = placement(frame, source, grown);
-    let f = fit(&mut heights, [w, h], &at, source, frame.fit_m, region);
+    let at = Samples::new(&frame.source_georef, frame.scheme.cell_deg(), source, grown);
+    let f = fit(
+        &mut heights,
+        [w, h],
+        [grown[0], grown[1]],
+        &at,
+        frame.fit_m,
+        region,
+    );
     let [ox, oy] = [
         (region[0] - grown[0]) as usize,
         (region[1] - grown[1]) as usize,
@@ -622,42 +691,6 @@ fn fitted(
             .collect()
     };
     Ok((crop(&heights), f.residual_m))
-}
-
-/// Where the samples of `source` fall in the cells of `region`: the
-/// columns and rows (of the part) whose positions lie inside it.
-fn placement(frame: &LatticeFrame, source: SourcePart<'_>, region: Window) -> Placement {
-    let (g, d) = (&frame.source_georef, frame.scheme.cell_deg());
-    let [ox, oy] = source.offset;
-    let (w, h) = (
-        (region[2] - region[0]) as f64,
-        (region[3] - region[1]) as f64,
-    );
-    let cols = (0..source.grid.width())
-        .map(|c| {
-            let (lon, _) = g.sample_xy((ox + c) as f64, 0.0);
-            (c, (lon + 180.0) / d - region[0] as f64)
-        })
-        .filter(|p| (0.0..=w).contains(&p.1))
-        .collect::<Vec<_>>();
-    let rows = (0..source.grid.height())
-        .map(|r| {
-            let (_, lat) = g.sample_xy(0.0, (oy + r) as f64);
-            (r, (90.0 - lat) / d - region[1] as f64)
-        })
-        .filter(|p| (0.0..=h).contains(&p.1))
-        .collect::<Vec<_>>();
-    // In increasing position (grids whose rows run south, or columns west).
-    let by_position = |mut v: Vec<(usize, f64)>| {
-        v.sort_by(|a, b| a.1.total_cmp(&b.1));
-        v
-    };
-    let (cols, rows) = (by_position(cols), by_position(rows));
-    Placement {
-        cols,
-        rows,
-        origin: [region[0], region[1]],
-    }
 }
 
 /// The heights of `region`: bilinear inside the footprint, the edge value

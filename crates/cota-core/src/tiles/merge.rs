@@ -340,8 +340,11 @@ impl CoarseHierarchy {
             water_mask,
             mesh,
             max_error_m: plan.max_error_m,
+            source_bound_m: plan.max_error_m.max(self.residual_m + plan.margin_m),
             threshold_m: plan.threshold_m,
-            children: children_in(t, self.zooms.iter().find(|p| p.zoom == t.z + 1)),
+            children: children_in(t, self.zooms.iter().find(|p| p.zoom == t.z + 1))
+                .into_iter()
+                .collect(),
         })
     }
 
@@ -370,14 +373,14 @@ impl CoarseHierarchy {
             .collect()
     }
 
-    /// The water mask: the shards' samples, water on the 0 m beyond.
+    /// The water mask: the shards' samples, land beyond the window.
     fn water(&self, t: TileId, o: [u64; 2], cells: u64) -> Result<WaterMask, TilesError> {
         let [x0, y0, x1, y1] = self.frame.window;
         let grid = self.water.get(&t);
         let missing = Cell::new(false);
         let mask = water_of(o, cells, |k, x, y| {
             if x < x0 || x > x1 || y < y0 || y > y1 {
-                return true;
+                return false;
             }
             match grid.map(|g| g[k]) {
                 Some(v) if v != WATER_UNKNOWN => v == 255,

@@ -29,6 +29,7 @@
 //!    square (`cota-io`).
 
 pub mod cap;
+pub mod coverage;
 pub mod cut;
 pub mod drawn;
 mod error;
@@ -37,10 +38,13 @@ pub mod lattice;
 pub mod merge;
 pub mod partial;
 pub mod plan;
+pub mod samples;
 pub mod scheme;
 pub mod shard;
 pub mod source_error;
+pub mod sources;
 
+pub use coverage::Coverage;
 pub use cut::{Prepared, TileMesh, WaterMask, NORMAL_REACH_CELLS};
 pub use drawn::{DrawnBound, LevelStats};
 pub use error::TilesError;
@@ -52,6 +56,7 @@ pub use partial::{BandCorners, CoarsePartial, FinePoint, WATER_UNKNOWN};
 pub use plan::{coarse_level_stats_in, LatticeStats, PartStats, TileRange, TilerOptions, ZoomPlan};
 pub use scheme::{ErrorSchedule, GeographicScheme, TileId};
 pub use shard::{band_zoom, owned_region, part_region, shard_plan, Shard};
+pub use sources::{Resampled, Source};
 
 /// The largest `u`, `v` or height value of quantized-mesh-1.0.
 pub const QUANTIZED_MAX: u32 = 32767;

@@ -30,13 +30,14 @@ use rustc_hash::FxHashMap as HashMap;
 use rayon::prelude::*;
 
 use super::cap::{own_rows, square_halves, square_tris, t_heights};
-use super::cut::{normal_at, water_sample, Prepared};
+use super::cut::{is_wet, normal_at, water_sample, Prepared};
 use super::drawn::{DrawnBound, ZoomRules};
 use super::error::TilesError;
 use super::lattice::{Lattice, SourcePart};
 use super::plan::ZoomPlan;
+use super::samples::Samples;
 use super::scheme::TileId;
-use super::source_error::{triangle_error, Samples};
+use super::source_error::triangle_error;
 use crate::bitree::{clipped_span_error, round_up_f32};
 use crate::hierarchy::{Pt, Tri};
 
@@ -390,7 +391,12 @@ fn source_partials(
     let s = lat.scheme();
     let top = s.cells_at(lat.align_zoom());
     let [x0, y0, x1, y1] = lat.window();
-    let samples = Samples::new(lat.frame(), source, owned);
+    let samples = Samples::new(
+        &lat.frame().source_georef,
+        lat.frame().scheme.cell_deg(),
+        source,
+        owned,
+    );
     let mut own: HashMap<u64, f32> = HashMap::default();
     let mut size = 2 * t;
     while size <= top {
@@ -544,7 +550,7 @@ fn water_samples(
                 for i in 0..256u64 {
                     let [x, y] = water_sample(o, c, i, j);
                     if (owned[0]..=owned[2]).contains(&x) && (owned[1]..=owned[3]).contains(&y) {
-                        let wet = lat.height_at(x, y) <= 0.0;
+                        let wet = is_wet(lat.frame(), x, y, lat.height_at(x, y));
                         grid[(j * 256 + i) as usize] = if wet { 255 } else { 0 };
                         any = true;
                     }

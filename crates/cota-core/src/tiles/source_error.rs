@@ -22,51 +22,11 @@
 
 use rayon::prelude::*;
 
-use super::lattice::{LatticeFrame, SourcePart};
+use super::samples::{SampleSet, Samples};
 use crate::bitree::error_code::encode_up;
 use crate::bitree::round_up_f32;
 use crate::hierarchy::{Pt, Tri};
 use crate::mesh::raster::Plane;
-
-/// The source's samples placed on the global lattice: per column and per row
-/// (of the part) its position, in increasing order.
-#[derive(Debug, Clone)]
-pub struct Samples<'a> {
-    /// The part of the source.
-    pub part: SourcePart<'a>,
-    /// Per column in range: `(column of the part, global lattice x)`.
-    pub cols: Vec<(usize, f64)>,
-    /// Per row in range: `(row of the part, global lattice y)`.
-    pub rows: Vec<(usize, f64)>,
-}
-
-impl<'a> Samples<'a> {
-    /// The samples of `part` (a part of `frame`'s source) whose positions lie
-    /// in `region` (global `[x0, y0, x1, y1]`, inclusive).
-    pub fn new(frame: &LatticeFrame, part: SourcePart<'a>, region: [u64; 4]) -> Samples<'a> {
-        let (g, d) = (&frame.source_georef, frame.scheme.cell_deg());
-        let [ox, oy] = part.offset;
-        let inside = |v: f64, lo: u64, hi: u64| v >= lo as f64 && v <= hi as f64;
-        let mut cols: Vec<(usize, f64)> = (0..part.grid.width())
-            .map(|c| (c, (g.sample_xy((ox + c) as f64, 0.0).0 + 180.0) / d))
-            .filter(|p| inside(p.1, region[0], region[2]))
-            .collect();
-        let mut rows: Vec<(usize, f64)> = (0..part.grid.height())
-            .map(|r| (r, (90.0 - g.sample_xy(0.0, (oy + r) as f64).1) / d))
-            .filter(|p| inside(p.1, region[1], region[3]))
-            .collect();
-        cols.sort_by(|a, b| a.1.total_cmp(&b.1));
-        rows.sort_by(|a, b| a.1.total_cmp(&b.1));
-        Samples { part, cols, rows }
-    }
-
-    /// The height of the sample at placement column `i`, row `j`.
-    #[inline]
-    fn height(&self, i: usize, j: usize) -> f64 {
-        let g = self.part.grid;
-        f64::from(g.heights()[self.rows[j].0 * g.width() + self.cols[i].0])
-    }
-}
 
 /// The largest |plane − h| over the samples of `s` inside triangle `t`
 /// (corner heights `z`) and inside `clip` (global, inclusive), rounded up
@@ -139,7 +99,7 @@ fn span_at(p: &[Pt; 3], y: f64) -> Option<(f64, f64)> {
 /// spans of samples ([`triangle_error`], as the reduce of a sharded run
 /// computes them: `by_sample_below` must not exceed its band squares).
 pub fn own_errors(
-    s: &Samples<'_>,
+    s: &impl SampleSet,
     origin: [u64; 2],
     [w, h]: [usize; 2],
     sizes: [u64; 2],
@@ -156,17 +116,21 @@ pub fn own_errors(
         |m: Pt| (u64::from(m[1]) - origin[1]) as usize * w + (u64::from(m[0]) - origin[0]) as usize;
     let first = sizes[0].max(2).next_power_of_two();
     let last = sizes[1].min(w.max(h) as u64);
-    let split = by_sample_below.clamp(first, last.max(first));
+    // Only a separable set has row spans; any other goes sample by sample.
+    let below = if s.separable().is_some() {
+        by_sample_below
+    } else {
+        2 * last
+    };
+    let split = below.clamp(first, last.max(first));
     let small: Vec<u64> = pow2(first, split / 2).collect();
-    let t0 = std::time::Instant::now();
     let mut out = by_sample(s, region, &small, height, &at, w * h);
-    if std::env::var("COTA_TIMING").is_ok() {
-        eprintln!("by_sample {:?}", t0.elapsed());
-    }
-    for size in pow2(split, last) {
-        for (m, code) in level_errors(s, region, size, height) {
-            let i = at(m);
-            out[i] = out[i].max(code);
+    if let Some(axes) = s.separable() {
+        for size in pow2(split, last) {
+            for (m, code) in level_errors(axes, region, size, height) {
+                let i = at(m);
+                out[i] = out[i].max(code);
+            }
         }
     }
     out
@@ -188,7 +152,7 @@ fn pow2(a: u64, b: u64) -> impl Iterator<Item = u64> {
 /// agree there). The sizes' split points are distinct points, so each size
 /// is one task with its own array, merged at the end.
 fn by_sample(
-    s: &Samples<'_>,
+    s: &impl SampleSet,
     region: [u64; 4],
     sizes: &[u64],
     height: &(impl Fn(u64, u64) -> f32 + Sync),
@@ -244,7 +208,7 @@ impl SizeCodes {
 /// against the closed-form planes of the half and the side triangle of its
 /// square that hold it.
 fn size_codes(
-    s: &Samples<'_>,
+    s: &impl SampleSet,
     region: [u64; 4],
     size: u64,
     height: &(impl Fn(u64, u64) -> f32 + Sync),
@@ -257,49 +221,39 @@ fn size_codes(
     let mut codes = [0, 1, 2].map(|_| vec![0u16; dims[0] * dims[1]]);
     let sz = size as f64;
     let h = |x: u64, y: u64| f64::from(height(x, y));
-    for (j, &(_, y)) in s.rows.iter().enumerate() {
-        let sj = (y / sz).floor();
-        if sj < 0.0 {
+    for k in 0..s.len() {
+        let [x, y, hs] = s.sample(k);
+        let (si, sj) = ((x / sz).floor(), (y / sz).floor());
+        if si < 0.0 || sj < 0.0 {
             continue;
         }
-        let (sj, fy) = (sj as u64, y / sz - sj);
-        let y0 = sj * size;
-        if y0 < region[1] || y0 + size > region[3] {
+        let (fx, fy) = (x / sz - si, y / sz - sj);
+        let (si, sj) = (si as u64, sj as u64);
+        let (x0, y0) = (si * size, sj * size);
+        if x0 < region[0] || x0 + size > region[2] || y0 < region[1] || y0 + size > region[3] {
             continue;
         }
-        for (i, &(_, x)) in s.cols.iter().enumerate() {
-            let si = (x / sz).floor();
-            if si < 0.0 {
-                continue;
-            }
-            let (si, fx) = (si as u64, x / sz - si);
-            let x0 = si * size;
-            if x0 < region[0] || x0 + size > region[2] {
-                continue;
-            }
-            let corners = [
-                h(x0, y0),
-                h(x0 + size, y0),
-                h(x0, y0 + size),
-                h(x0 + size, y0 + size),
-                h(x0 + size / 2, y0 + size / 2),
-            ];
-            let (a, b) = square_planes(corners, (si + sj).is_multiple_of(2), fx, fy);
-            let hs = s.height(i, j);
-            let k = (sj - first[1]) as usize * dims[0] + (si - first[0]) as usize;
-            let code = |z: f64| encode_up(round_up_f32((z - hs).abs()));
-            codes[0][k] = codes[0][k].max(code(a));
-            // The side triangle's split point: north (this square's), west
-            // (this square's), south (the next row's north), east (the next
-            // column's west).
-            let (arr, kk) = match b.1 {
-                Side::North => (1, k),
-                Side::West => (2, k),
-                Side::South => (1, k + dims[0]),
-                Side::East => (2, k + 1),
-            };
-            codes[arr][kk] = codes[arr][kk].max(code(b.0));
-        }
+        let corners = [
+            h(x0, y0),
+            h(x0 + size, y0),
+            h(x0, y0 + size),
+            h(x0 + size, y0 + size),
+            h(x0 + size / 2, y0 + size / 2),
+        ];
+        let (a, b) = square_planes(corners, (si + sj).is_multiple_of(2), fx, fy);
+        let i = (sj - first[1]) as usize * dims[0] + (si - first[0]) as usize;
+        let code = |z: f64| encode_up(round_up_f32((z - hs).abs()));
+        codes[0][i] = codes[0][i].max(code(a));
+        // The side triangle's split point: north (this square's), west
+        // (this square's), south (the next row's north), east (the next
+        // column's west).
+        let (arr, ii) = match b.1 {
+            Side::North => (1, i),
+            Side::West => (2, i),
+            Side::South => (1, i + dims[0]),
+            Side::East => (2, i + 1),
+        };
+        codes[arr][ii] = codes[arr][ii].max(code(b.0));
     }
     SizeCodes { first, dims, codes }
 }
@@ -383,6 +337,7 @@ fn level_errors(
 mod test {
     use super::*;
     use crate::grid::{Crs, GeoRef, HeightGrid, PixelIs};
+    use crate::tiles::lattice::{LatticeFrame, SourcePart};
     use crate::tiles::{LatticeOptions, TileId};
 
     #[test]
@@ -418,7 +373,12 @@ mod test {
             grid: &grid,
             offset: [0, 0],
         };
-        let s = Samples::new(&frame, part, frame.window);
+        let s = Samples::new(
+            &frame.source_georef,
+            frame.scheme.cell_deg(),
+            part,
+            frame.window,
+        );
         assert_eq!((s.cols.len(), s.rows.len()), (n, n));
         let (x, y) = (s.cols[5].1, s.rows[5].1);
         let (x0, y0) = ((x as u32) - 3, (y as u32) - 3);

@@ -35,7 +35,7 @@ use rayon::prelude::*;
 
 /// The band count of a TIFF, for the imagery reader (`crate::image`).
 pub(crate) use geotiff::band_count as tiff_band_count;
-pub use region::{join, Region, RegionOptions};
+pub use region::{join, join_groups, resample_join, Region, RegionOptions, Resampled};
 /// What the first bytes of a file look like, for messages.
 pub(crate) use sniff::describe_bytes as describe;
 

@@ -15,12 +15,13 @@ pub fn layer_json(prep: &Prepared<'_>, ext: &TileExtensions) -> Value {
     let s = lat.scheme();
     let fp = lat.footprint();
     let available: Vec<Value> = (0..=s.max_zoom)
-        .map(|z| match prep.zoom(z) {
-            Some(p) => json!([{
-                "startX": p.range.x0, "startY": p.range.y0,
-                "endX": p.range.x1, "endY": p.range.y1
-            }]),
-            None => json!([]),
+        .map(|z| {
+            let rects: Vec<Value> = prep
+                .available(z)
+                .iter()
+                .map(|r| json!({"startX": r.x0, "startY": r.y0, "endX": r.x1, "endY": r.y1}))
+                .collect();
+            Value::Array(rects)
         })
         .collect();
     let errors: Vec<Value> = prep

@@ -10,7 +10,8 @@
 //! ```
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
-//! use cota_core::{Crs, GeoRef, HeightGrid, PixelIs};
+//! use cota_core::{Crs, GeoRef, HeightGrid, LonLat, PixelIs};
+//! use cota_io::tiles::drawn::{Against, SourceGrid};
 //! use cota_io::tiles::{write_pyramid, PyramidOptions};
 //! let n = 61;
 //! let heights = (0..n * n).map(|i| 300.0 + ((i % n) as f32 * 0.2).sin() * 40.0).collect();
@@ -18,9 +19,14 @@
 //!     pixel_y: -0.01, pixel_is: PixelIs::Point, known: true };
 //! let source = HeightGrid::new(n, n, heights, georef)?;
 //! let lattice = Lattice::resample(&source, &LatticeOptions::DEFAULT)?;
-//! let prepared = Prepared::new(&lattice, &TilerOptions::DEFAULT)?;
+//! let prepared = Prepared::new(&lattice, &source, &TilerOptions::DEFAULT)?;
+//! // Every tile checked as drawn (flat ECEF triangles) against the source's
+//! // samples, and against the ellipsoid farther than 0.5° from its footprint.
+//! let grid = SourceGrid { grid: &source, transform: &LonLat };
+//! let against = Against::new(vec![grid], vec![[10.0, 0.4, 10.6, 1.0]], 0.5);
 //! let out = tempfile::tempdir()?;
-//! let report = write_pyramid(&prepared, out.path(), &PyramidOptions::DEFAULT, &|_| {})?;
+//! let opts = PyramidOptions::DEFAULT;
+//! let report = write_pyramid(&prepared, out.path(), &opts, Some(&against), &|_| {})?;
 //! assert_eq!(report.written(), prepared.tile_count());
 //! assert!(out.path().join("layer.json").is_file());
 //! # Ok(())

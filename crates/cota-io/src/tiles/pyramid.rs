@@ -279,14 +279,14 @@ fn check_drawn(
     let seed =
         (u64::from(tile.tile.z) << 48) ^ (u64::from(tile.tile.x) << 24) ^ u64::from(tile.tile.y);
     let random = check_random(&drawn, 4, seed, &*against.reference);
-    let bound = tile.max_error_m;
+    let (bound, at_source) = (tile.max_error_m, tile.source_bound_m);
     // Rounding slack relative to the heights and the Earth's radius.
-    let slack = 1e-6 * bound.max(1.0) + 1e-6;
-    if at_samples.max_error_m > bound + slack {
+    let slack = 1e-6 * at_source.max(1.0) + 1e-6;
+    if at_samples.max_error_m > at_source + slack {
         return Err(PyramidError::Drawn {
             tile: tile.tile,
             got_m: at_samples.max_error_m,
-            bound_m: bound,
+            bound_m: at_source,
             lon: at_samples.at[0],
             lat: at_samples.at[1],
         });
@@ -335,6 +335,9 @@ pub struct ZoomReport {
     pub max_error_m: f64,
     /// The margin left for quantization, metres.
     pub margin_m: f64,
+    /// The bound its tiles meet at the source's own samples, as drawn (the
+    /// zoom's bound unless the lattice cannot hold the source), metres.
+    pub source_bound_m: f64,
     /// The largest error measured over its written tiles at their
     /// lattice's samples, metres; NaN when they were not checked
     /// ([`PyramidOptions::check`] off).
@@ -550,6 +553,7 @@ pub(crate) fn fold(prep: &Prepared<'_>, outcomes: &[Outcome]) -> Vec<ZoomReport>
                 zoom: p.zoom,
                 max_error_m: p.max_error_m,
                 margin_m: p.margin_m,
+                source_bound_m: prep.source_bound_m(p.zoom),
                 ..ZoomReport::default()
             };
             for o in outcomes.iter().filter(|o| o.zoom == p.zoom) {

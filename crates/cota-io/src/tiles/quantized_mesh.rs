@@ -126,10 +126,15 @@ impl TileExtensions {
 /// children's availability (`available[0]` is the next zoom).
 pub fn metadata_json(tile: &TileMesh) -> String {
     let mut v = serde_json::json!({ "geometricerror": tile.max_error_m });
-    if let Some(c) = tile.children {
-        v["available"] = serde_json::json!([[{
-            "startX": c.x0, "startY": c.y0, "endX": c.x1, "endY": c.y1
-        }]]);
+    if !tile.children.is_empty() {
+        let rects: Vec<serde_json::Value> = tile
+            .children
+            .iter()
+            .map(
+                |c| serde_json::json!({"startX": c.x0, "startY": c.y0, "endX": c.x1, "endY": c.y1}),
+            )
+            .collect();
+        v["available"] = serde_json::json!([rects]);
     }
     v.to_string()
 }

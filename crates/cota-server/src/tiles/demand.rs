@@ -15,8 +15,8 @@
 //! cache.
 
 use axum::body::Bytes;
-use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
-use cota_core::HeightGrid;
+use cota_core::tiles::{Lattice, LatticeOptions, Prepared, Source, TilerOptions};
+use cota_core::{GeoTransform, HeightGrid};
 use cota_io::tiles::{layer_json, make_tile, PyramidOptions};
 
 use super::{check_in_world, etag_of, Tile, TileId, TileSource};
@@ -59,12 +59,37 @@ impl DemandTileSource {
     ) -> Result<Self> {
         let lattice = Lattice::resample(grid, lattice)?;
         let pyramid = Pyramid::try_new(lattice, |l| Prepared::new(l, grid, tiler))?;
+        Ok(Self::of(pyramid, options))
+    }
+
+    /// [`DemandTileSource::new`] for a grid in any CRS that `transform` takes
+    /// to WGS 84 longitude/latitude (a projected DEM): resampled once onto
+    /// the lattice through it ([`cota_core::tiles::sources`]).
+    ///
+    /// # Errors
+    /// As [`DemandTileSource::new`].
+    pub fn projected(
+        grid: &HeightGrid,
+        transform: &dyn GeoTransform,
+        lattice: &LatticeOptions,
+        tiler: &TilerOptions,
+        options: PyramidOptions,
+    ) -> Result<Self> {
+        let source = Source { grid, transform };
+        let r = Lattice::resample_sources(&[source], lattice)?;
+        let samples = r.samples;
+        let pyramid = Pyramid::try_new(r.lattice, |l| Prepared::new_sampled(l, &samples, tiler))?;
+        Ok(Self::of(pyramid, options))
+    }
+
+    /// The source over a prepared pyramid.
+    fn of(pyramid: Pyramid, options: PyramidOptions) -> Self {
         let layer = layer_json(pyramid.borrow_dependent(), &options.extensions);
-        Ok(DemandTileSource {
+        DemandTileSource {
             layer: Bytes::from(format!("{layer:#}\n")),
             pyramid,
             options,
-        })
+        }
     }
 
     /// The prepared hierarchy the tiles are cut from.

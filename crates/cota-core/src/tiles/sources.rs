@@ -1,0 +1,403 @@
+//! Several DEMs, in any CRS and at any resolution, on one lattice: what
+//! `cota tiles` and `cota serve` do with projected inputs (most lidar and
+//! national DEMs), with inputs of different resolutions side by side
+//! (paper 001's mosaic of DEMs of different sizes), and with tiles whose
+//! samples do not line up (Copernicus-style 1° tiles whose width shrinks
+//! with latitude, with or without a shared edge).
+//!
+//! Paper `001_49f2c365e8c41172.txt` joins DEMs of different sizes and
+//! resolutions into one region without cracks; here every input is
+//! resampled **once**, onto the tiling's geographic lattice, through its own
+//! map to WGS 84 longitude/latitude ([`crate::grid::GeoTransform`]; the
+//! projections themselves live in `cota-io`).
+//!
+//! # Heights
+//! At each lattice point (a longitude and latitude), the sources in their
+//! given order (finest first):
+//! 1. the first whose sample-centre rectangle holds the point gives its
+//!    bilinear surface there (so where sources overlap, the finest wins);
+//! 2. else, where the point lies within half a pixel of one or more
+//!    sources' rectangles (the gap between tiles without a shared edge, or
+//!    between sources that merely abut), their surfaces clamped to their
+//!    rectangles, weighted by the inverse of the distance to each: across
+//!    a gap between two tiles, the linear interpolation of their edges, so
+//!    no crack and no seam of NaN;
+//! 3. else (beyond the data) the nearest source's edge, held for one
+//!    lattice cell, falling to 0 m over [`super::lattice::ramp_cells`]
+//!    cells: the ellipsoid, as for a single source.
+//!
+//! # Samples
+//! Every source sample counts (the fit, the errors against the source, the
+//! checks) except where an earlier source (finer) covers it: there the
+//! tiles follow the finer DEM, and the coarser one's samples would only
+//! measure the two DEMs' disagreement.
+//!
+//! # Coverage
+//! Each source's footprint is its sample-centre rectangle's boundary,
+//! taken through its map (densified: a projected rectangle is curved on
+//! the lattice); a tile is made when its square meets one with a positive
+//! area ([`Coverage`]).
+
+use rayon::prelude::*;
+
+use super::coverage::Coverage;
+use super::error::TilesError;
+use super::fit::fit;
+use super::lattice::{
+    choose_window, fit_tolerance_m, ramp_cells, scheme_for_pixel, Lattice, LatticeFrame,
+    LatticeOptions,
+};
+use super::samples::{Listed, SampleSet};
+use super::scheme::GeographicScheme;
+use crate::grid::{GeoRef, GeoTransform, HeightGrid, MAX_SAMPLES};
+
+/// One input DEM placed on the Earth.
+#[derive(Debug, Clone, Copy)]
+pub struct Source<'a> {
+    /// Its samples (no voids: fill them first).
+    pub grid: &'a HeightGrid,
+    /// Its CRS's map to WGS 84 longitude/latitude.
+    pub transform: &'a dyn GeoTransform,
+}
+
+/// Points along a side of a footprint's boundary.
+const SIDE_POINTS: usize = 64;
+
+/// A source with what the resampling needs of it.
+struct Placed<'a> {
+    src: Source<'a>,
+    /// Its footprint on the lattice (global lattice coordinates), closed.
+    polygon: Vec<[f64; 2]>,
+    /// Its footprint's bounding box grown by the ramp, `[x0, y0, x1, y1]`.
+    reach: [f64; 4],
+    /// A pixel's ground size in lattice cells (the smaller side).
+    pixel_cells: f64,
+}
+
+/// The lattice of several sources (its frame's source fields describe the
+/// first source; its coverage, their footprints) and their samples.
+#[derive(Debug)]
+pub struct Resampled {
+    /// The lattice.
+    pub lattice: Lattice,
+    /// The sources' samples that count (see the module docs).
+    pub samples: Listed,
+}
+
+impl Lattice {
+    /// Resamples `sources` (finest first, no voids) onto the tiling's
+    /// lattice (see the module docs), fitted to their samples
+    /// ([`super::fit`]).
+    ///
+    /// # Errors
+    /// [`TilesError::BadOptions`] for no source or a source the map cannot
+    /// place, [`TilesError::OutsideWorld`], [`TilesError::TooLarge`],
+    /// [`TilesError::Voids`].
+    pub fn resample_sources(
+        sources: &[Source<'_>],
+        opts: &LatticeOptions,
+    ) -> Result<Resampled, TilesError> {
+        let Some(first) = sources.first() else {
+            return Err(TilesError::BadOptions(
+                "expected at least one source, found none".into(),
+            ));
+        };
+        for s in sources {
+            if let Some((col, row)) = s.grid.first_void() {
+                return Err(TilesError::Voids { col, row });
+            }
+        }
+        let pixel_deg = sources
+            .iter()
+            .map(pixel_deg)
+            .collect::<Result<Vec<f64>, TilesError>>()?;
+        let finest = pixel_deg.iter().copied().fold(f64::INFINITY, f64::min);
+        let scheme = scheme_for_pixel(finest, opts)?;
+        let placed = sources
+            .iter()
+            .zip(&pixel_deg)
+            .map(|(s, &p)| place(*s, p, &scheme))
+            .collect::<Result<Vec<Placed<'_>>, TilesError>>()?;
+        let fp = bounds(&placed, &scheme)?;
+        let (align_zoom, window) = choose_window(&scheme, fp);
+        let frame = LatticeFrame {
+            scheme,
+            footprint: fp,
+            window,
+            align_zoom,
+            source_georef: first.grid.georef().clone(),
+            source_size: [first.grid.width(), first.grid.height()],
+            fit_m: fit_tolerance_m(&scheme, finest, opts),
+        };
+        let (w, h) = (window[2] - window[0] + 1, window[3] - window[1] + 1);
+        if w.checked_mul(h).is_none_or(|n| n > MAX_SAMPLES) {
+            return Err(TilesError::TooLarge {
+                width: w,
+                height: h,
+            });
+        }
+        let mut heights = fill(&placed, &frame);
+        let samples = Listed::new(sample_positions(&placed, &scheme));
+        let fitted = fit(
+            &mut heights,
+            [w as usize, h as usize],
+            [window[0], window[1]],
+            &samples,
+            frame.fit_m,
+            window,
+        );
+        let coverage = Coverage {
+            polygons: placed.into_iter().map(|p| p.polygon).collect(),
+        };
+        let lattice = Lattice::from_heights(frame, heights, fitted.residual_m, coverage)?;
+        Ok(Resampled { lattice, samples })
+    }
+}
+
+/// A pixel's ground size, in degrees of latitude (the smaller of its two
+/// sides, at the grid's centre).
+fn pixel_deg(s: &Source<'_>) -> Result<f64, TilesError> {
+    let g = s.grid.georef();
+    let (c, r) = (s.grid.width() as f64 / 2.0, s.grid.height() as f64 / 2.0);
+    let at = |dc: f64, dr: f64| {
+        let (x, y) = g.sample_xy(c + dc, r + dr);
+        s.transform.to_lonlat(x, y)
+    };
+    let (Some(o), Some(e), Some(n)) = (at(0.0, 0.0), at(1.0, 0.0), at(0.0, 1.0)) else {
+        return Err(unplaced(g));
+    };
+    let [mx, my] = crate::grid::metres_per_degree(o[1]);
+    let side = |p: [f64; 2]| ((p[0] - o[0]) * mx).hypot((p[1] - o[1]) * my) / my;
+    let d = side(e).min(side(n));
+    if d.is_finite() && d > 0.0 {
+        Ok(d)
+    } else {
+        Err(unplaced(g))
+    }
+}
+
+fn unplaced(g: &GeoRef) -> TilesError {
+    TilesError::BadOptions(format!(
+        "expected a source its CRS ({}) can place on the Earth, found positions it cannot take to longitude/latitude",
+        g.crs
+    ))
+}
+
+/// The source's footprint on the lattice and its reach.
+fn place<'a>(
+    s: Source<'a>,
+    pixel_deg: f64,
+    scheme: &GeographicScheme,
+) -> Result<Placed<'a>, TilesError> {
+    let g = s.grid.georef();
+    let (w, h) = (s.grid.width() as f64 - 1.0, s.grid.height() as f64 - 1.0);
+    let d = scheme.cell_deg();
+    let n = SIDE_POINTS as f64;
+    let ring = (0..SIDE_POINTS)
+        .map(|k| (k as f64 / n * w, 0.0))
+        .chain((0..SIDE_POINTS).map(|k| (w, k as f64 / n * h)))
+        .chain((0..SIDE_POINTS).map(|k| (w - k as f64 / n * w, h)))
+        .chain((0..SIDE_POINTS).map(|k| (0.0, h - k as f64 / n * h)));
+    let mut polygon = Vec::with_capacity(4 * SIDE_POINTS);
+    for (c, r) in ring {
+        let (x, y) = g.sample_xy(c, r);
+        let [lon, lat] = s.transform.to_lonlat(x, y).ok_or_else(|| unplaced(g))?;
+        polygon.push([(lon + 180.0) / d, (90.0 - lat) / d]);
+    }
+    let pixel_cells = pixel_deg / d;
+    let grow = 2.0 + ramp_cells(scheme) + pixel_cells;
+    let mut reach = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for p in &polygon {
+        reach = [
+            reach[0].min(p[0]),
+            reach[1].min(p[1]),
+            reach[2].max(p[0]),
+            reach[3].max(p[1]),
+        ];
+    }
+    reach = [
+        reach[0] - grow,
+        reach[1] - grow,
+        reach[2] + grow,
+        reach[3] + grow,
+    ];
+    Ok(Placed {
+        src: s,
+        polygon,
+        reach,
+        pixel_cells,
+    })
+}
+
+/// The data's bounding box on the lattice, `[west col, north row, east col,
+/// south row]`, inside the world.
+fn bounds(placed: &[Placed<'_>], scheme: &GeographicScheme) -> Result<[f64; 4], TilesError> {
+    let mut fp = [
+        f64::INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NEG_INFINITY,
+    ];
+    for p in placed.iter().flat_map(|p| &p.polygon) {
+        fp = [
+            fp[0].min(p[0]),
+            fp[1].min(p[1]),
+            fp[2].max(p[0]),
+            fp[3].max(p[1]),
+        ];
+    }
+    let (wmax, hmax) = (2.0 * scheme.root_cells() as f64, scheme.root_cells() as f64);
+    let eps = 1e-9 * wmax;
+    if fp[0] < -eps || fp[1] < -eps || fp[2] > wmax + eps || fp[3] > hmax + eps {
+        let d = scheme.cell_deg();
+        return Err(TilesError::OutsideWorld {
+            west: fp[0] * d - 180.0,
+            south: 90.0 - fp[3] * d,
+            east: fp[2] * d - 180.0,
+            north: 90.0 - fp[1] * d,
+        });
+    }
+    Ok([
+        fp[0].max(0.0),
+        fp[1].max(0.0),
+        fp[2].min(wmax),
+        fp[3].min(hmax),
+    ])
+}
+
+/// The heights of the window (see the module docs), in parallel over rows.
+fn fill(placed: &[Placed<'_>], frame: &LatticeFrame) -> Vec<f32> {
+    let win = frame.window;
+    let s = &frame.scheme;
+    let w = (win[2] - win[0] + 1) as usize;
+    let h = (win[3] - win[1] + 1) as usize;
+    let ramp = ramp_cells(s);
+    let mut out = vec![0f32; w * h];
+    out.par_chunks_mut(w).enumerate().for_each(|(j, line)| {
+        let y = (win[1] + j as u64) as f64;
+        for (i, o) in line.iter_mut().enumerate() {
+            let x = (win[0] + i as u64) as f64;
+            *o = height_at(placed, s, x, y, ramp) as f32;
+        }
+    });
+    out
+}
+
+/// The height at global lattice `(x, y)`.
+fn height_at(placed: &[Placed<'_>], s: &GeographicScheme, x: f64, y: f64, ramp: f64) -> f64 {
+    let (lon, lat) = (s.lon_of(x), s.lat_of(y));
+    let (mut sum, mut weight) = (0.0, 0.0);
+    let mut nearest = (f64::INFINITY, 0.0);
+    for p in placed {
+        let r = p.reach;
+        if x < r[0] || x > r[2] || y < r[1] || y > r[3] {
+            continue;
+        }
+        let Some((d, v)) = clamped(p.src, lon, lat) else {
+            continue;
+        };
+        if d <= 0.0 {
+            return v;
+        }
+        if d <= 0.5 {
+            sum += v / d;
+            weight += 1.0 / d;
+        }
+        let cells = d * p.pixel_cells;
+        if cells < nearest.0 {
+            nearest = (cells, v);
+        }
+    }
+    if weight > 0.0 {
+        return sum / weight;
+    }
+    let (cells, v) = nearest;
+    // The edge held one cell beyond the data, then down to 0 m.
+    v * (1.0 - (cells - 1.0) / ramp).clamp(0.0, 1.0)
+}
+
+/// How far (in the source's pixels) WGS 84 `(lon, lat)` lies beyond the
+/// source's sample-centre rectangle, and its bilinear surface at the
+/// nearest point of the rectangle; `None` where its map cannot take the
+/// point.
+fn clamped(s: Source<'_>, lon: f64, lat: f64) -> Option<(f64, f64)> {
+    let [x, y] = s.transform.from_lonlat(lon, lat)?;
+    let g = s.grid.georef();
+    let (x0, y0) = g.sample_xy(0.0, 0.0);
+    let (c, r) = ((x - x0) / g.pixel_x, (y - y0) / g.pixel_y);
+    let (w, h) = (s.grid.width() as f64 - 1.0, s.grid.height() as f64 - 1.0);
+    if !(c.is_finite() && r.is_finite()) {
+        return None;
+    }
+    let beyond = |v: f64, n: f64| (-v).max(v - n).max(0.0);
+    let d = beyond(c, w).max(beyond(r, h));
+    Some((d, bilinear(s.grid, c.clamp(0.0, w), r.clamp(0.0, h))))
+}
+
+/// The bilinear surface of `g` at fractional column `c`, row `r` (inside).
+fn bilinear(g: &HeightGrid, c: f64, r: f64) -> f64 {
+    let (i, j) = (
+        (c as usize).min(g.width() - 2),
+        (r as usize).min(g.height() - 2),
+    );
+    let (fx, fy) = (c - i as f64, r - j as f64);
+    let z = |a: usize, b: usize| f64::from(g.get(a, b));
+    let top = z(i, j) + (z(i + 1, j) - z(i, j)) * fx;
+    let bottom = z(i, j + 1) + (z(i + 1, j + 1) - z(i, j + 1)) * fx;
+    top + (bottom - top) * fy
+}
+
+/// Every sample that counts (see the module docs) as `[x, y, height_m]` on
+/// the lattice, the sources in order, each row-major.
+fn sample_positions(placed: &[Placed<'_>], scheme: &GeographicScheme) -> Vec<[f64; 3]> {
+    let d = scheme.cell_deg();
+    let per_source: Vec<Vec<[f64; 3]>> = placed
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let g = p.src.grid;
+            let geo = g.georef();
+            (0..g.height())
+                .into_par_iter()
+                .flat_map_iter(|r| {
+                    (0..g.width()).filter_map(move |c| {
+                        let (x, y) = geo.sample_xy(c as f64, r as f64);
+                        let [lon, lat] = p.src.transform.to_lonlat(x, y)?;
+                        let covered = placed[..k]
+                            .iter()
+                            .any(|q| clamped(q.src, lon, lat).is_some_and(|(d, _)| d <= 0.0));
+                        (!covered)
+                            .then(|| [(lon + 180.0) / d, (90.0 - lat) / d, f64::from(g.get(c, r))])
+                    })
+                })
+                .collect()
+        })
+        .collect();
+    per_source.into_iter().flatten().collect()
+}
+
+/// The largest and the root mean square |lattice − sample| over `samples`
+/// (the lattice's unit-triangle surface at each sample).
+pub fn deviation_of(lattice: &Lattice, samples: &impl SampleSet) -> super::lattice::Deviation {
+    let (max, sum, n) = (0..samples.len())
+        .into_par_iter()
+        .map(|k| {
+            let [x, y, h] = samples.sample(k);
+            let d = lattice.unit_surface_at(x, y) - h;
+            (d.abs(), d * d, 1usize)
+        })
+        .reduce(
+            || (0.0, 0.0, 0),
+            |a, b| (a.0.max(b.0), a.1 + b.1, a.2 + b.2),
+        );
+    super::lattice::Deviation {
+        max_m: max,
+        rms_m: if n > 0 { (sum / n as f64).sqrt() } else { 0.0 },
+        samples: n,
+    }
+}
