@@ -75,7 +75,7 @@ pub enum ServeError {
         reason: String,
     },
     /// The listening socket cannot be opened.
-    #[error("cannot listen on {addr}: {source}")]
+    #[error("cannot listen on {addr}")]
     Bind {
         /// The address asked for.
         addr: String,
