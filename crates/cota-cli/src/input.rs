@@ -420,7 +420,7 @@ pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
 }
 
 /// [`load`], the files read in parallel or (`in_turn`) one after the other
-/// on this thread (see [`read_region_in_turn`]). Inputs of several
+/// on this thread (a sharded tiling part, which bounds its memory so). Inputs of several
 /// resolutions (one CRS) are joined on the finest one's grid, each coarser
 /// one resampled once ([`cota_io::read::resample_join`], its deviation at
 /// its own samples said on stderr).

@@ -311,3 +311,83 @@ fn copernicus_like(
     };
     cota_fixtures::geotiff::write_geotiff(path, &g).unwrap();
 }
+
+/// A small ESRI ASCII grid (gentle relief) at `xll`, `yll`, `cell` units a
+/// pixel, 40 × 40 samples.
+fn small_asc(path: &std::path::Path, xll: f64, yll: f64, cell: f64) {
+    let mut s = format!(
+        "ncols 40\nnrows 40\nxllcorner {xll}\nyllcorner {yll}\ncellsize {cell}\nNODATA_value -9999\n"
+    );
+    for r in 0..40 {
+        let row: Vec<String> = (0..40)
+            .map(|c| format!("{:.1}", 100.0 + 10.0 * (r as f64 * 0.1).sin() + c as f64))
+            .collect();
+        s += &row.join(" ");
+        s.push('\n');
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+#[test]
+fn antimeridian_and_poles_are_refused_before_any_tile() {
+    let dir = tempfile::tempdir().unwrap();
+    // (file, CRS, x, y, cell, what the message must say)
+    let cases = [
+        (
+            "lonlat.asc",
+            "EPSG:4326",
+            179.8,
+            -17.0,
+            0.01,
+            "crosses ±180°",
+        ),
+        (
+            "utm60.asc",
+            "EPSG:32760",
+            800000.0,
+            8100000.0,
+            1000.0,
+            "crosses ±180°",
+        ),
+        (
+            "polar.asc",
+            "EPSG:3413",
+            -20000.0,
+            -20000.0,
+            1000.0,
+            "north pole",
+        ),
+        (
+            "beyond.asc",
+            "EPSG:4326",
+            10.0,
+            89.8,
+            0.01,
+            "latitudes -90..90",
+        ),
+    ];
+    for (name, crs, x, y, cell, says) in cases {
+        let f = dir.path().join(name);
+        small_asc(&f, x, y, cell);
+        let out = dir.path().join(format!("out-{name}"));
+        let r = cota(&[
+            "tiles",
+            f.to_str().unwrap(),
+            "--src-crs",
+            crs,
+            "--max-zoom",
+            "8",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let e = stderr(&r);
+        assert!(
+            !r.status.success() && e.contains(says) && e.contains(name),
+            "{name}: {e}"
+        );
+        assert!(
+            !out.join("layer.json").exists(),
+            "{name}: a pyramid was written"
+        );
+    }
+}

@@ -26,8 +26,24 @@ pub enum TilesError {
         /// Row of the first void.
         row: usize,
     },
+    /// The source's footprint crosses the antimeridian (±180°, an edge of
+    /// the geographic tiling).
+    #[error("expected a source on one side of the antimeridian, found one whose footprint crosses ±180° (longitudes {west:.4}..{east:.4}); tiles across the antimeridian are not made: crop the input to one side of 180°")]
+    AcrossAntimeridian {
+        /// Western edge, degrees (beyond 180° when given so).
+        west: f64,
+        /// Eastern edge, degrees.
+        east: f64,
+    },
+    /// The source's footprint encloses a pole, which the geographic tiling
+    /// cannot hold (its top and bottom rows are the poles themselves).
+    #[error("expected a source that does not enclose a pole, found one whose footprint goes round the {pole} pole; crop the input to keep the pole outside it")]
+    AroundPole {
+        /// "north" or "south".
+        pole: &'static str,
+    },
     /// The source lies partly outside ±180° × ±90°.
-    #[error("expected a source within longitudes -180..180 and latitudes -90..90, found {west}..{east}, {south}..{north}")]
+    #[error("expected a source within longitudes -180..180 and latitudes -90..90, found {west:.4}..{east:.4}, {south:.4}..{north:.4}")]
     OutsideWorld {
         /// Western edge, degrees.
         west: f64,

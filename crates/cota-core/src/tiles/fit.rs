@@ -26,12 +26,12 @@
 //! cannot all honour, and the lattice stays bilinear. Then a tile within `thr` of the lattice is within
 //! `thr + max |r|` of the source at every sample: the tile's plane minus `L`
 //! is linear on each unit triangle, so at `s` it is at most its value at the
-//! corners, which the lattice check bounds. What is left, per lattice point
-//! the largest residual of the samples in the four cells around it
-//! ([`Fitted::near_m`]), enters each split point's threshold through its
-//! monotone closure over the hierarchy (`bitree::closure`): a triangle of
-//! lattice error `e` whose closure holds residuals up to `ρ` is within
-//! `e + ρ` of every source sample it covers.
+//! corners, which the lattice check bounds. The tiles' decisions do not
+//! rely on the residuals alone: each split point also carries its error
+//! against the source's samples themselves ([`super::source_error`]),
+//! so a sample the fit could not honour is still within the bound; the
+//! largest residual bounds only the coarse levels above the window (the
+//! cap), where the source errors are not measured.
 //!
 //! The tolerance `τ` is half the bound at the maximum zoom: only the samples
 //! the finest tiles could not honour are fitted (peaks and pits between

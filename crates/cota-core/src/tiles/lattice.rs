@@ -465,7 +465,11 @@ fn footprint(
     let (west, east) = (xa.min(xb), xa.max(xb));
     let (south, north) = (ya.min(yb), ya.max(yb));
     let eps = 1e-9;
-    if west < -180.0 - eps || east > 180.0 + eps || south < -90.0 - eps || north > 90.0 + eps {
+    let lat_ok = south >= -90.0 - eps && north <= 90.0 + eps;
+    if lat_ok && (west < -180.0 - eps || east > 180.0 + eps) && east - west <= 360.0 {
+        return Err(TilesError::AcrossAntimeridian { west, east });
+    }
+    if west < -180.0 - eps || east > 180.0 + eps || !lat_ok {
         return Err(TilesError::OutsideWorld {
             west,
             south,

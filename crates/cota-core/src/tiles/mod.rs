@@ -1,32 +1,46 @@
 //! Terrain tile pyramids cut from one global hierarchy: every tile of every
 //! zoom is a subtree of the same bitree, so same-zoom neighbours share their
-//! border vertices by construction and every tile meets its zoom's error
-//! bound at every sample of the lattice it was cut from.
+//! border vertices by construction, and every tile is within its zoom's
+//! bound `e_z` **as the client draws it** (flat triangles between the
+//! vertices' ECEF positions on WGS 84) of the **source's own samples**.
 //!
 //! Papers `000_ebf7e3a88dffd361.txt` (the bitree, its diamonds) and
-//! `001_49f2c365e8c41172.txt` (one hierarchy over a mosaic of SRTM tiles);
-//! the output format is Cesium's quantized-mesh-1.0 (CesiumGS/quantized-mesh)
-//! on the geographic TMS of its specification, written by `cota-io`.
+//! `001_49f2c365e8c41172.txt` (one hierarchy over a mosaic of DEMs of
+//! different sizes and resolutions); the output format is Cesium's
+//! quantized-mesh-1.0 (CesiumGS/quantized-mesh) on the geographic TMS of its
+//! specification, written by `cota-io`.
 //!
-//! 1. [`Lattice::resample`]: the source, bilinearly resampled once onto the
-//!    tiling's lattice at the maximum zoom, over a window of whole tiles
-//!    around its footprint, 0 m beyond ([`lattice`]);
-//! 2. [`Prepared::new`]: one [`crate::Bitree`] over that window, whose squares
-//!    are the tiles of every zoom from the window's alignment zoom on, and
-//!    the coarse levels above it ([`cap`]); the error bound `e_z` per zoom
-//!    ([`ErrorSchedule`]) and the threshold `e_z − margin_z` that leaves room
-//!    for the format's quantization ([`plan`]);
-//! 3. [`Prepared::cut`]: one tile, the subtree of its square, split where the
-//!    global error exceeds the threshold ([`cut`]). The triangles larger than
-//!    the tile are split by construction (the tile's two halves are its
-//!    roots); a split point on a tile's border decides alike in both tiles
-//!    that share it, and its ancestors in each tile split too (errors grow up
-//!    the tree), so there is no T-junction across a border;
+//! 1. [`Lattice::resample`] (one geographic source) or
+//!    [`Lattice::resample_sources`] (several, any CRS through a
+//!    [`crate::grid::GeoTransform`], any resolution: [`sources`]): the data
+//!    resampled once onto the tiling's lattice at the maximum zoom, over a
+//!    window of whole tiles around its footprint, the ellipsoid (0 m) beyond
+//!    it after a short ramp ([`lattice`]); where the lattice is at least as
+//!    fine as the source, its points are then fitted to the source's samples
+//!    ([`fit`]) so that the lattice's unit triangles pass within `e_Z/2` of
+//!    them;
+//! 2. [`Prepared::new`] / [`Prepared::new_sampled`]: one [`crate::Bitree`]
+//!    over that window, whose squares are the tiles of every zoom from the
+//!    window's alignment zoom on, and the coarse levels above it ([`cap`]);
+//!    per zoom the bound `e_z` ([`ErrorSchedule`]), the format's
+//!    quantization margin ([`plan`]) and the as-drawn curvature term per
+//!    level ([`drawn`]); per split point its error against the source's
+//!    samples in its triangles ([`source_error`], [`samples`]), carried up
+//!    the hierarchy by the closure of `crate::bitree::closure`;
+//! 3. [`Prepared::cut`]: one tile, the subtree of its square, split where
+//!    the lattice error plus the curvature term, or the source error,
+//!    exceeds the zoom's threshold ([`cut`]). The triangles larger than the
+//!    tile are split by construction (the tile's two halves are its roots);
+//!    a split point on a tile's border decides alike in both tiles that
+//!    share it, and its ancestors in each tile split too (errors grow up the
+//!    tree), so there is no T-junction across a border. Tiles are made only
+//!    where their square meets the data's footprint ([`coverage`]);
 //! 4. sharded: the tiles coarser than the band zoom from the shards' partial
 //!    maxima ([`partial`]), merged by a reducer ([`merge`]) exactly;
 //! 5. the tile is encoded, decoded independently and checked with
 //!    [`crate::mesh::check::check_placed_mesh`] at every lattice sample of its
-//!    square (`cota-io`).
+//!    square, and as drawn in ECEF at every source sample and at random
+//!    points (`cota-io`'s `tiles::drawn`).
 
 pub mod cap;
 pub mod coverage;

@@ -204,6 +204,7 @@ fn place<'a>(
         let [lon, lat] = s.transform.to_lonlat(x, y).ok_or_else(|| unplaced(g))?;
         polygon.push([(lon + 180.0) / d, (90.0 - lat) / d]);
     }
+    across_antimeridian(&polygon, d)?;
     let pixel_cells = pixel_deg / d;
     let grow = 2.0 + ramp_cells(scheme) + pixel_cells;
     let mut reach = [
@@ -231,6 +232,47 @@ fn place<'a>(
         polygon,
         reach,
         pixel_cells,
+    })
+}
+
+/// Refuses a footprint whose boundary jumps across ±180° (two consecutive
+/// points of the densified ring more than half the world apart in
+/// longitude): it crosses the antimeridian or encloses a pole.
+fn across_antimeridian(polygon: &[[f64; 2]], d: f64) -> Result<(), TilesError> {
+    let half = 180.0 / d;
+    let jumps = (0..polygon.len())
+        .any(|k| (polygon[k][0] - polygon[(k + 1) % polygon.len()][0]).abs() > half);
+    if !jumps {
+        return Ok(());
+    }
+    // The ring's winding in longitude: ±360° when it goes round a pole.
+    let winding: f64 = (0..polygon.len())
+        .map(|k| {
+            let dx = polygon[(k + 1) % polygon.len()][0] - polygon[k][0];
+            dx - 2.0 * half * (dx / (2.0 * half)).round()
+        })
+        .sum();
+    if winding.abs() > half {
+        let north = polygon.iter().map(|p| p[1]).sum::<f64>() < half / 2.0 * polygon.len() as f64;
+        let pole = if north { "north" } else { "south" };
+        return Err(TilesError::AroundPole { pole });
+    }
+    // West and east as a user reads them: the eastern part's longitudes
+    // past 180°.
+    let lon = |x: f64| x * d - 180.0;
+    let west = polygon
+        .iter()
+        .map(|p| lon(p[0]))
+        .filter(|l| *l > 0.0)
+        .fold(180.0, f64::min);
+    let east = polygon
+        .iter()
+        .map(|p| lon(p[0]))
+        .filter(|l| *l <= 0.0)
+        .fold(-180.0, f64::max);
+    Err(TilesError::AcrossAntimeridian {
+        west,
+        east: east + 360.0,
     })
 }
 
