@@ -911,7 +911,9 @@ pub struct PairArgs {
 pub struct TilesArgs {
     #[command(flatten)]
     pub input: InputArgs,
-    /// Output directory: OUT/layer.json and OUT/{z}/{x}/{y}.terrain.
+    /// Output directory: OUT/layer.json and OUT/{z}/{x}/{y}.terrain; or, for
+    /// a name ending in .mbtiles, one MBTiles archive of the same tiles
+    /// (built as OUT.partial, renamed when complete).
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     /// Coarsest zoom written (0: the two root tiles).
@@ -999,8 +1001,9 @@ pub struct ServeArgs {
     #[command(flatten)]
     pub input: InputArgs,
     /// A tile directory written by `cota tiles` (layer.json and
-    /// {z}/{x}/{y}.terrain), served at /tiles/. Without it, tiles are made
-    /// on demand from the input (geographic inputs only) and kept.
+    /// {z}/{x}/{y}.terrain), or an .mbtiles archive it wrote, served at
+    /// /tiles/. Without it, tiles are made on demand from the input and
+    /// kept.
     #[arg(long, value_name = "DIR")]
     pub tiles: Option<PathBuf>,
     /// Address and port to listen on: an IP address (`127.0.0.1:8080`,

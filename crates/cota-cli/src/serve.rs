@@ -17,8 +17,8 @@ use cota_core::HeightGrid;
 use cota_io::stream_file::MAGIC;
 use cota_io::tiles::{PyramidOptions, TileExtensions};
 use cota_server::{
-    DemandTileSource, DirTileSource, Imagery, ServeError, ServeOptions, ServerState, StreamAsset,
-    TileSource,
+    DemandTileSource, DirTileSource, Imagery, MbtilesTileSource, ServeError, ServeOptions,
+    ServerState, StreamAsset, TileSource,
 };
 
 use crate::args::ServeArgs;
@@ -124,12 +124,17 @@ fn make_stream(source: &Source) -> Result<StreamAsset, String> {
     Ok(s)
 }
 
-/// `--tiles DIR`, opened in the foreground (an unusable directory stops
-/// the start).
+/// `--tiles DIR` (or an `.mbtiles` archive), opened in the foreground (an
+/// unusable one stops the start).
 fn open_tiles(dir: &Path) -> anyhow::Result<Arc<dyn TileSource>> {
-    let src = DirTileSource::open(dir).with_context(|| format!("--tiles {}", dir.display()))?;
+    let ctx = || format!("--tiles {}", dir.display());
+    let src: Arc<dyn TileSource> = if cota_io::tiles::is_mbtiles(dir) {
+        Arc::new(MbtilesTileSource::open(dir).with_context(ctx)?)
+    } else {
+        Arc::new(DirTileSource::open(dir).with_context(ctx)?)
+    };
     println!("tiles       {}", dir.display());
-    Ok(Arc::new(src))
+    Ok(src)
 }
 
 /// Tiles made on demand from `grid` (none for a stream, or a source that

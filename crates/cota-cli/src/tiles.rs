@@ -14,9 +14,9 @@ use cota_core::tiles::{
 use cota_core::{HeightGrid, LonLat};
 use cota_io::tiles::drawn::{Against, SourceGrid};
 use cota_io::tiles::{
-    plan_layout_path, plan_part_path, read_shard_frame, reduce_shards, shard_frame_path,
-    write_plan, write_pyramid, write_shard, PyramidOptions, PyramidReport, ShardFrame,
-    TileExtensions,
+    is_mbtiles, plan_layout_path, plan_part_path, read_shard_frame, reduce_shards,
+    shard_frame_path, write_mbtiles, write_plan, write_pyramid, write_shard, PyramidOptions,
+    PyramidReport, ShardFrame, TileExtensions,
 };
 use serde_json::json;
 
@@ -30,6 +30,12 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     }
     if matches!(a.voids, Voids::Hole) {
         anyhow::bail!("{}", HOLES_REFUSED);
+    }
+    if is_mbtiles(&a.output) && (a.plan || a.shard.is_some() || a.imagery) {
+        anyhow::bail!(
+            "{}: expected a directory for --plan, --shard and --imagery, found an .mbtiles archive; write the archive in one run",
+            a.output.display()
+        );
     }
     let opts = tiler_options(a);
     if let Some((i, n)) = a.shard {
@@ -467,6 +473,11 @@ fn write(
         Some(s) => write_shard(prepared, &a.output, &pyramid, s, frame, &|n| {
             pb.set_position(n)
         }),
+        None if is_mbtiles(&a.output) => {
+            write_mbtiles(prepared, &a.output, &pyramid, against, &|n| {
+                pb.set_position(n)
+            })
+        }
         None => write_pyramid(prepared, &a.output, &pyramid, against, &|n| {
             pb.set_position(n)
         }),

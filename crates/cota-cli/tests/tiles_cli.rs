@@ -391,3 +391,36 @@ fn antimeridian_and_poles_are_refused_before_any_tile() {
         );
     }
 }
+
+#[test]
+fn mbtiles_archive_output_checked_and_refused_for_shards() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t.mbtiles");
+    let o = out.to_str().unwrap();
+    let r = cota(&[
+        "tiles",
+        "--max-zoom",
+        "8",
+        "--check",
+        "--gzip",
+        "--json",
+        "-o",
+        o,
+    ]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&r)).unwrap();
+    assert!(v["check"].as_str().unwrap().starts_with("passed"), "{v}");
+    let tiles = v["tiles"].as_u64().unwrap();
+    let a = cota_io::tiles::MbtilesReader::open(&out).unwrap();
+    assert_eq!(a.tile_ids().unwrap().len() as u64, tiles);
+    assert!(a.layer_json().unwrap().contains("quantized-mesh-1.0"));
+    let again = cota(&["tiles", "--max-zoom", "8", "--gzip", "--json", "-o", o]);
+    let v: serde_json::Value = serde_json::from_str(&stdout(&again)).unwrap();
+    assert_eq!(v["skipped"].as_u64(), Some(tiles), "{v}");
+    let plan = cota(&["tiles", "--plan", "--shards", "2", "-o", o]);
+    assert!(
+        !plan.status.success() && stderr(&plan).contains("t.mbtiles"),
+        "{}",
+        stderr(&plan)
+    );
+}

@@ -11,7 +11,7 @@
 //! * `/meta.json`: size, cell size, steps (end offsets, stated errors).
 //! * `/tiles/layer.json` (and `/layer.json`), `/tiles/{z}/{x}/{y}.terrain`:
 //!   quantized-mesh tiles from a [`TileSource`]: a `cota tiles` directory
-//!   ([`DirTileSource`]) or tiles made on demand from the in-memory
+//!   ([`DirTileSource`]), an MBTiles archive ([`MbtilesTileSource`]) or tiles made on demand from the in-memory
 //!   hierarchy ([`DemandTileSource`]); see [`tiles`] for the URL layout.
 //! * `/imagery.json`, `/imagery/{z}/{x}/{y}.png`: shaded-relief imagery
 //!   drawn from the DEM ([`Imagery`]), in the terrain tiles' geographic tiling.
@@ -67,7 +67,7 @@ pub use listen::DRAIN_S;
 pub use options::ServeOptions;
 pub use routes::{router, MAX_URI_BYTES};
 pub use stream::{StreamAsset, StreamMeta};
-pub use tiles::{DemandTileSource, DirTileSource, Tile, TileId, TileSource};
+pub use tiles::{DemandTileSource, DirTileSource, MbtilesTileSource, Tile, TileId, TileSource};
 
 use later::Later;
 use work::Work;

@@ -1,6 +1,7 @@
 //! Cesium quantized-mesh-1.0 terrain pyramids: the encoder, an independent
 //! decoder, `layer.json`, and the writer of a whole pyramid as a directory
-//! tree `OUT/layer.json` + `OUT/{z}/{x}/{y}.terrain`.
+//! tree `OUT/layer.json` + `OUT/{z}/{x}/{y}.terrain` or as one MBTiles
+//! archive ([`mbtiles`]).
 //!
 //! The tiles themselves are cut by [`cota_core::tiles`]; this module turns
 //! them into bytes, decodes the bytes back, checks the decoded tile against
@@ -39,6 +40,7 @@ pub mod drawn;
 pub mod ellipsoid;
 pub mod frame;
 pub mod layer;
+pub mod mbtiles;
 pub mod part;
 pub mod plan_frame;
 pub mod plan_parts;
@@ -57,6 +59,7 @@ pub use frame::{
     write_shard_frame, ShardFrame,
 };
 pub use layer::layer_json;
+pub use mbtiles::{is_mbtiles, write_mbtiles, MbtilesReader};
 pub use part::{
     file_extents, frame_of, load_part, read_part_files, read_part_files_in_turn, Part, PartError,
 };

@@ -97,6 +97,14 @@ pub enum PyramidError {
         /// What was expected and found.
         message: String,
     },
+    /// An MBTiles archive could not be read or written (SQLite's words).
+    #[error("{path}: {message}")]
+    Archive {
+        /// The archive.
+        path: PathBuf,
+        /// What SQLite said, or what was expected and found.
+        message: String,
+    },
     /// The output holds tiles made with other settings.
     #[error("{path} was made with other settings (found {found}, expected {expected}); use --force to redo every tile, or another directory")]
     Changed {
@@ -511,28 +519,40 @@ pub(crate) fn write_tiles(
         .map(|&t| {
             let path = tile_path(out, t);
             let o = if !opts.force && path.is_file() {
-                Outcome {
-                    zoom: t.z,
-                    ..Outcome::default()
-                }
+                Outcome::skipped(t)
             } else {
                 let m = make_tile(prep, t, opts, source)?;
                 write_file_atomically(&path, &m.bytes, opts.force)?;
-                Outcome {
-                    zoom: t.z,
-                    written: true,
-                    bytes: m.bytes.len() as u64,
-                    triangles: m.triangles as u64,
-                    vertices: m.vertices as u64,
-                    measured: m.measured_error_m,
-                    drawn: m.drawn_error_m,
-                    between: m.between_m,
-                }
+                Outcome::made(t, &m)
             };
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
             Ok(o)
         })
         .collect()
+}
+
+impl Outcome {
+    /// A tile already in the output.
+    pub(crate) fn skipped(t: TileId) -> Outcome {
+        Outcome {
+            zoom: t.z,
+            ..Outcome::default()
+        }
+    }
+
+    /// A tile made and written.
+    pub(crate) fn made(t: TileId, m: &MadeTile) -> Outcome {
+        Outcome {
+            zoom: t.z,
+            written: true,
+            bytes: m.bytes.len() as u64,
+            triangles: m.triangles as u64,
+            vertices: m.vertices as u64,
+            measured: m.measured_error_m,
+            drawn: m.drawn_error_m,
+            between: m.between_m,
+        }
+    }
 }
 
 /// The larger of two measures; NaN (not measured) when either is.

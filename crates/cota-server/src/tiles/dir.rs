@@ -36,10 +36,52 @@ struct TileRange {
 #[derive(Debug)]
 pub struct DirTileSource {
     root: PathBuf,
-    layer: Bytes,
+    index: LayerIndex,
+}
+
+/// A `layer.json` served as it is, and what decides which tiles it has.
+#[derive(Debug)]
+pub(crate) struct LayerIndex {
+    pub(crate) layer: Bytes,
     max_zoom: u32,
     geographic: bool,
     available: Option<Vec<Vec<TileRange>>>,
+}
+
+impl LayerIndex {
+    /// Parses and checks `text`, the `layer.json` found at `path`.
+    pub(crate) fn parse(path: &Path, text: Vec<u8>) -> Result<Self> {
+        let v: Value = serde_json::from_slice(&text)
+            .map_err(|e| bad_set(path, "a JSON object", &format!("invalid JSON ({e})")))?;
+        let (max_zoom, geographic, available) = parse_layer(path, &v)?;
+        Ok(LayerIndex {
+            layer: Bytes::from(text),
+            max_zoom,
+            geographic,
+            available,
+        })
+    }
+
+    /// Checks that `id` lies in the pyramid and in the layer.
+    pub(crate) fn check(&self, id: TileId) -> Result<()> {
+        check_in_world(id, self.geographic)?;
+        let listed = match &self.available {
+            None => id.z <= self.max_zoom,
+            Some(levels) => levels.get(id.z as usize).is_some_and(|rs| {
+                rs.iter().any(|r| {
+                    (r.start_x..=r.end_x).contains(&id.x) && (r.start_y..=r.end_y).contains(&id.y)
+                })
+            }),
+        };
+        if listed {
+            Ok(())
+        } else {
+            Err(ServeError::NotFound(format!(
+                "tile {}/{}/{} is not in the layer",
+                id.z, id.x, id.y
+            )))
+        }
+    }
 }
 
 impl DirTileSource {
@@ -66,41 +108,12 @@ impl DirTileSource {
             }
             r => r.map_err(io(&layer_path))?,
         };
-        let v: Value = serde_json::from_slice(&text)
-            .map_err(|e| bad_set(&layer_path, "a JSON object", &format!("invalid JSON ({e})")))?;
-        let parsed = parse_layer(&layer_path, &v)?;
-        Ok(DirTileSource {
-            root,
-            layer: Bytes::from(text),
-            max_zoom: parsed.0,
-            geographic: parsed.1,
-            available: parsed.2,
-        })
-    }
-
-    /// Checks that `id` lies in the pyramid and in the layer.
-    fn check(&self, id: TileId) -> Result<()> {
-        check_in_world(id, self.geographic)?;
-        let listed = match &self.available {
-            None => id.z <= self.max_zoom,
-            Some(levels) => levels.get(id.z as usize).is_some_and(|rs| {
-                rs.iter().any(|r| {
-                    (r.start_x..=r.end_x).contains(&id.x) && (r.start_y..=r.end_y).contains(&id.y)
-                })
-            }),
-        };
-        if listed {
-            Ok(())
-        } else {
-            Err(ServeError::NotFound(format!(
-                "tile {}/{}/{} is not in the layer",
-                id.z, id.x, id.y
-            )))
-        }
+        let index = LayerIndex::parse(&layer_path, text)?;
+        Ok(DirTileSource { root, index })
     }
 }
 
-fn bad_set(path: &Path, expected: &str, found: &str) -> ServeError {
+pub(crate) fn bad_set(path: &Path, expected: &str, found: &str) -> ServeError {
     ServeError::BadTileSet {
         path: path.to_path_buf(),
         expected: expected.into(),
@@ -188,15 +201,15 @@ fn parse_available(path: &Path, a: &Value) -> Result<Vec<Vec<TileRange>>> {
 
 impl TileSource for DirTileSource {
     fn layer_json(&self) -> &Bytes {
-        &self.layer
+        &self.index.layer
     }
 
     fn has(&self, id: TileId) -> Result<()> {
-        self.check(id)
+        self.index.check(id)
     }
 
     fn tile(&self, id: TileId) -> Result<Tile> {
-        self.check(id)?;
+        self.index.check(id)?;
         self.read(id)
     }
 }

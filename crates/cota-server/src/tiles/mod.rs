@@ -21,6 +21,7 @@
 
 mod demand;
 mod dir;
+mod mbtiles;
 
 use axum::body::Bytes;
 use serde_json::Value;
@@ -29,6 +30,7 @@ use crate::error::{Result, ServeError};
 
 pub use demand::DemandTileSource;
 pub use dir::DirTileSource;
+pub use mbtiles::MbtilesTileSource;
 
 /// Largest tile file served.
 pub const MAX_TILE_BYTES: u64 = 16 << 20;
