@@ -28,11 +28,12 @@ use super::error::TilesError;
 use super::lattice::Lattice;
 use super::lattice::SourcePart;
 use super::plan::{children_in, plan_with, LatticeStats, TileRange, TilerOptions, ZoomPlan};
+use super::relevant::Relevant;
 use super::samples::{SampleSet, Samples};
 use super::scheme::{GeographicScheme, TileId};
-use super::source_error::{own_errors, BY_SAMPLE_BELOW};
+use super::source_error::{own_errors, Skip, BY_SAMPLE_BELOW};
 use crate::bitree::closure::source_closure;
-use crate::bitree::error_code::SplitRule;
+use crate::bitree::error_code::{decode, SplitRule};
 use crate::bitree::Bitree;
 use crate::grid::metres_per_degree;
 use crate::grid::HeightGrid;
@@ -180,8 +181,8 @@ impl<'l> Prepared<'l> {
         let zooms = plan_with(lattice.frame(), &stats, opts)?;
         let tree = Bitree::build(lattice.grid())?;
         let cap = Cap::build(lattice, &tree);
-        let src = source_codes(lattice, &tree, samples);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), &stats, &zooms);
+        let src = source_codes(lattice, &tree, samples, &rules);
         Ok(Prepared {
             lattice,
             tree,
@@ -222,8 +223,8 @@ impl<'l> Prepared<'l> {
             source,
             lattice.stored(),
         );
-        let src = source_codes(lattice, &tree, &samples);
         let (bound, rules) = rules_of(lattice.scheme(), lattice.window(), stats, &zooms);
+        let src = source_codes(lattice, &tree, &samples, &rules);
         Ok(Prepared {
             lattice,
             tree,
@@ -485,18 +486,48 @@ pub(crate) fn above_cap(e_m: f32, residual_m: f64, rule: &SplitRule) -> bool {
 
 /// Per stored point of `lattice` (whose bitree is `tree`): the code of its
 /// error against the source's samples in `source`, closed over its
-/// descendants (`bitree::closure::source_closure`).
-fn source_codes(lattice: &Lattice, tree: &Bitree<'_>, samples: &impl SampleSet) -> Vec<u16> {
+/// descendants (`bitree::closure::source_closure`); 0 where it decides
+/// nothing under any of `rules` (not measured where the lattice error and
+/// the residuals prove it: [`super::relevant`]).
+fn source_codes(
+    lattice: &Lattice,
+    tree: &Bitree<'_>,
+    samples: &impl SampleSet,
+    rules: &[ZoomRules],
+) -> Vec<u16> {
     let g = lattice.grid();
+    let (w, h) = (g.width(), g.height());
     let top = lattice.scheme().cells_at(lattice.align_zoom());
     let height = |x: u64, y: u64| lattice.height_at(x, y);
+    let [ox, oy] = lattice.origin();
+    let region = [ox, oy, ox + w as u64 - 1, oy + h as u64 - 1];
+    let floor = rules
+        .iter()
+        .map(ZoomRules::min_floor)
+        .min()
+        .unwrap_or(u16::MAX);
+    let surface = |x: f64, y: f64| lattice.unit_surface_at(x, y);
+    let relevant = Relevant::new(samples, region, top, f64::from(decode(floor)), &surface);
+    let lattice_m = |m: Pt| {
+        let (x, y) = (u64::from(m[0]), u64::from(m[1]));
+        if x < region[0] || x > region[2] || y < region[1] || y > region[3] {
+            return f64::INFINITY;
+        }
+        f64::from(tree.error_bound_m((y - oy) as usize * w + (x - ox) as usize))
+    };
+    let skip = Skip {
+        relevant: &relevant,
+        lattice_m: &lattice_m,
+        floor,
+    };
     let own = own_errors(
         samples,
         lattice.origin(),
-        [g.width(), g.height()],
+        [w, h],
         [2, top],
         BY_SAMPLE_BELOW.min(u64::from(lattice.scheme().tile_cells)),
         &height,
+        Some(&skip),
     );
     source_closure(tree.hierarchy(), &own)
 }

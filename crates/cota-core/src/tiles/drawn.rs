@@ -389,6 +389,21 @@ pub struct ZoomRules {
 }
 
 impl ZoomRules {
+    /// The smallest floor code of the zoom's rules (`u16::MAX` when every
+    /// level always splits): a source error whose code is at most this
+    /// decides nothing ([`super::relevant`]).
+    pub fn min_floor(&self) -> u16 {
+        self.levels
+            .iter()
+            .flatten()
+            .filter_map(|r| match r {
+                LevelRule::Always => None,
+                LevelRule::Above(rule) => Some(rule.floor),
+            })
+            .min()
+            .unwrap_or(u16::MAX)
+    }
+
     /// The rule of triangle `t` (`window`: the lattice's, inclusive).
     #[inline]
     pub fn of(&self, t: &Tri, window: [u64; 4]) -> LevelRule {

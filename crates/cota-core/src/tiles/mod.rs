@@ -52,6 +52,7 @@ pub mod lattice;
 pub mod merge;
 pub mod partial;
 pub mod plan;
+pub mod relevant;
 pub mod samples;
 pub mod scheme;
 pub mod shard;

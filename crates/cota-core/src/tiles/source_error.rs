@@ -22,6 +22,7 @@
 
 use rayon::prelude::*;
 
+use super::relevant::Relevant;
 use super::samples::{SampleSet, Samples};
 use crate::bitree::error_code::encode_up;
 use crate::bitree::round_up_f32;
@@ -105,6 +106,7 @@ pub fn own_errors(
     sizes: [u64; 2],
     by_sample_below: u64,
     height: &(impl Fn(u64, u64) -> f32 + Sync),
+    skip: Option<&Skip<'_>>,
 ) -> Vec<u16> {
     let region = [
         origin[0],
@@ -124,16 +126,40 @@ pub fn own_errors(
     };
     let split = below.clamp(first, last.max(first));
     let small: Vec<u64> = pow2(first, split / 2).collect();
-    let mut out = by_sample(s, region, &small, height, &at, w * h);
+    let mut out = by_sample(s, region, &small, height, &at, w * h, skip);
     if let Some(axes) = s.separable() {
         for size in pow2(split, last) {
-            for (m, code) in level_errors(axes, region, size, height) {
+            for (m, code) in level_errors(axes, region, size, height, skip) {
                 let i = at(m);
                 out[i] = out[i].max(code);
             }
         }
     }
+    if let Some(k) = skip {
+        // Measured or not, an error that decides nothing is stored as 0, so
+        // the codes do not depend on which squares were skipped.
+        out.iter_mut()
+            .filter(|c| **c <= k.floor)
+            .for_each(|c| *c = 0);
+    }
     out
+}
+
+/// What lets [`own_errors`] skip the squares whose source errors decide
+/// nothing ([`super::relevant`]).
+pub struct Skip<'a> {
+    /// The residuals per square.
+    pub relevant: &'a Relevant,
+    /// An upper bound of the lattice error of a split point, metres.
+    pub lattice_m: &'a (dyn Fn(Pt) -> f64 + Sync),
+    /// The smallest floor code of every rule: codes at most this are 0.
+    pub floor: u16,
+}
+
+impl Skip<'_> {
+    fn needed(&self, size: u64, i: u64, j: u64) -> bool {
+        self.relevant.needed(size, i, j, &self.lattice_m)
+    }
 }
 
 /// Squares smaller than this many cells (and than a maximum-zoom tile):
@@ -158,10 +184,11 @@ fn by_sample(
     height: &(impl Fn(u64, u64) -> f32 + Sync),
     at: &(impl Fn(Pt) -> usize + Sync),
     n: usize,
+    skip: Option<&Skip<'_>>,
 ) -> Vec<u16> {
     let per_size: Vec<(u64, SizeCodes)> = sizes
         .par_iter()
-        .map(|&size| (size, size_codes(s, region, size, height)))
+        .map(|&size| (size, size_codes(s, region, size, height, skip)))
         .collect();
     let mut codes = vec![0u16; n];
     for (size, c) in per_size {
@@ -212,12 +239,22 @@ fn size_codes(
     region: [u64; 4],
     size: u64,
     height: &(impl Fn(u64, u64) -> f32 + Sync),
+    skip: Option<&Skip<'_>>,
 ) -> SizeCodes {
     let first = [region[0].div_ceil(size), region[1].div_ceil(size)];
     let dims = [
         ((region[2] / size + 2).saturating_sub(first[0])) as usize,
         ((region[3] / size + 2).saturating_sub(first[1])) as usize,
     ];
+    let needed: Option<Vec<bool>> = skip.map(|k| {
+        (0..dims[0] * dims[1])
+            .into_par_iter()
+            .map(|q| {
+                let (i, j) = ((q % dims[0]) as u64, (q / dims[0]) as u64);
+                k.needed(size, first[0] + i, first[1] + j)
+            })
+            .collect()
+    });
     let mut codes = [0, 1, 2].map(|_| vec![0u16; dims[0] * dims[1]]);
     let sz = size as f64;
     let h = |x: u64, y: u64| f64::from(height(x, y));
@@ -233,6 +270,10 @@ fn size_codes(
         if x0 < region[0] || x0 + size > region[2] || y0 < region[1] || y0 + size > region[3] {
             continue;
         }
+        let i = (sj - first[1]) as usize * dims[0] + (si - first[0]) as usize;
+        if needed.as_ref().is_some_and(|n| !n[i]) {
+            continue;
+        }
         let corners = [
             h(x0, y0),
             h(x0 + size, y0),
@@ -241,7 +282,6 @@ fn size_codes(
             h(x0 + size / 2, y0 + size / 2),
         ];
         let (a, b) = square_planes(corners, (si + sj).is_multiple_of(2), fx, fy);
-        let i = (sj - first[1]) as usize * dims[0] + (si - first[0]) as usize;
         let code = |z: f64| encode_up(round_up_f32((z - hs).abs()));
         codes[0][i] = codes[0][i].max(code(a));
         // The side triangle's split point: north (this square's), west
@@ -312,6 +352,7 @@ fn level_errors(
     region: [u64; 4],
     size: u64,
     height: &(impl Fn(u64, u64) -> f32 + Sync),
+    skip: Option<&Skip<'_>>,
 ) -> Vec<(Pt, u16)> {
     let (i0, i1) = (region[0].div_ceil(size), (region[2] + 1) / size);
     let (j0, j1) = (region[1].div_ceil(size), (region[3] + 1) / size);
@@ -321,14 +362,16 @@ fn level_errors(
     (j0..j1)
         .into_par_iter()
         .flat_map_iter(|j| {
-            (i0..i1).flat_map(move |i| {
-                let (sides, halves) = super::cap::square_tris(i, j, size);
-                sides.into_iter().chain(halves).map(move |t| {
-                    let z = [t.a, t.b, t.c]
-                        .map(|q| f64::from(height(u64::from(q[0]), u64::from(q[1]))));
-                    (t.mid(), encode_up(triangle_error(&t, z, s, region)))
+            (i0..i1)
+                .filter(move |&i| skip.is_none_or(|k| k.needed(size, i, j)))
+                .flat_map(move |i| {
+                    let (sides, halves) = super::cap::square_tris(i, j, size);
+                    sides.into_iter().chain(halves).map(move |t| {
+                        let z = [t.a, t.b, t.c]
+                            .map(|q| f64::from(height(u64::from(q[0]), u64::from(q[1]))));
+                        (t.mid(), encode_up(triangle_error(&t, z, s, region)))
+                    })
                 })
-            })
         })
         .collect()
 }
