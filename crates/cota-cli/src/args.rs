@@ -42,7 +42,7 @@ pub enum Command {
 pub struct InputArgs {
     /// DEM files: SRTM .hgt/.hgt.zip, GeoTIFF, PNG or WebP terrain tiles
     /// (placed by Web-Mercator bounds when named z/x/y.ext), PMTiles archives
-    /// (with --zoom and --bbox), NumPy .npy/.npz, USGS .dem, ESRI .asc.
+    /// (with --input-zoom and --bbox), NumPy .npy/.npz, USGS .dem, ESRI .asc.
     /// Several adjacent tiles are mosaicked. With none, the bundled sample
     /// S29W072.hgt.zip is used. `-` reads one DEM from standard input (its
     /// format detected from the content; a raw .hgt by its size), within
@@ -84,10 +84,16 @@ pub struct InputArgs {
     #[arg(long, value_name = "NAME")]
     pub array: Option<String>,
     /// PMTiles archives: the zoom level of the tiles to read (with --bbox).
-    #[arg(long, value_name = "Z", requires = "bbox")]
+    /// `--zoom` is its former name, still accepted with a warning.
+    #[arg(
+        long = "input-zoom",
+        alias = "zoom",
+        value_name = "Z",
+        requires = "bbox"
+    )]
     pub zoom: Option<u8>,
     /// The box to read (west, south, east, north). PMTiles archives (with
-    /// --zoom): in degrees, every tile of --zoom touching it is read and
+    /// --input-zoom): in degrees, every tile of that zoom touching it is read and
     /// mosaicked. Other inputs: only the samples whose centres lie in it are
     /// kept (after mosaicking), in the input's CRS units: degrees of
     /// longitude and latitude for SRTM and geographic rasters, the
@@ -96,7 +102,7 @@ pub struct InputArgs {
         long,
         value_name = "W,S,E,N",
         value_delimiter = ',',
-        allow_negative_numbers = true
+        allow_hyphen_values = true
     )]
     pub bbox: Option<Vec<f64>>,
     /// Where adjacent tiles overlap and disagree: their mean, or the first file's value.
@@ -432,10 +438,10 @@ pub struct RefineArgs {
     pub tolerance: Option<f64>,
     /// Observer position in metres, local frame (x east, y north, z up, origin
     /// at the south-west sample). Required by view, paper001 and paper003.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_negative_numbers = true)]
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
     pub observer: Option<[f64; 3]>,
     /// View direction (view) or direction of motion (paper003).
-    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_direction, allow_negative_numbers = true, default_value = "0,1,0")]
+    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_direction, allow_hyphen_values = true, default_value = "0,1,0")]
     pub look: [f64; 3],
     /// Vertical field of view in degrees (view).
     #[arg(
@@ -462,7 +468,7 @@ pub struct RefineArgs {
     )]
     pub max_error_px: f64,
     /// Direction towards the light (light).
-    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_direction, allow_negative_numbers = true, default_value = "1,1,1")]
+    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_direction, allow_hyphen_values = true, default_value = "1,1,1")]
     pub light: [f64; 3],
     /// Weight of pure curvature in [0, 1] (light): accept when K·(alpha + (1 − alpha)·I) <= T.
     #[arg(
@@ -792,6 +798,10 @@ pub struct StreamDecodeArgs {
     /// Stop at the first step whose stated max error is at most M metres.
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
     pub max_error: Option<f64>,
+    /// Refuse a cut stream (a partial download). Without it, the complete
+    /// steps of a cut stream are decoded and a warning says what is missing.
+    #[arg(long)]
+    pub strict: bool,
     /// Output mesh: .obj, .ply, .stl or .glb (written atomically). Without it
     /// only the report is printed. `-` writes to standard output (with
     /// --format; not atomic; binary formats refused on a terminal), and the
@@ -866,6 +876,11 @@ pub struct PairArgs {
     /// The whole GLB must fit in this many bytes.
     #[arg(long, value_name = "N")]
     pub budget_bytes: u64,
+    /// Largest grid the DEM may declare, in samples; larger files are
+    /// refused before anything is allocated. Default: from the machine's
+    /// memory (16 bytes per sample, at most 2^30).
+    #[arg(long, value_name = "N")]
+    pub max_samples: Option<u64>,
     /// Weight of the mesh's distortion D(M) (m2).
     #[arg(long, value_name = "A", default_value_t = 1.0)]
     pub alpha: f64,

@@ -77,7 +77,7 @@ fn archives(files: &[PathBuf], json: bool) -> anyhow::Result<ExitCode> {
         println!("  zooms       {}..{}", s.min_zoom, s.max_zoom);
         println!("  bounds      {w},{so},{e},{n} (W,S,E,N degrees)");
         println!("  tiles       {}", s.addressed_tiles);
-        println!("  read with   --zoom Z --bbox W,S,E,N");
+        println!("  read with   --input-zoom Z --bbox W,S,E,N");
     }
     if json {
         println!(

@@ -82,6 +82,7 @@ pub fn fill(grid: &mut HeightGrid, voids: Voids) -> anyhow::Result<FillReport> {
 }
 
 fn read_options(a: &InputArgs) -> anyhow::Result<ReadOptions> {
+    warn_old_zoom_flag();
     let enc = a.encoding.map(|e| match e {
         Encoding::TerrainRgb => PngEncoding::TerrainRgb,
         Encoding::Terrarium => PngEncoding::Terrarium,
@@ -196,6 +197,17 @@ pub fn assumed_cell_m(files: &[FileInfo]) -> Option<f64> {
 }
 
 /// Warns (stderr) for each SRTM tile whose name gave no position.
+/// `--zoom` (the PMTiles input's zoom) is `--input-zoom` now: `cota tiles`
+/// has zooms of its own (`--min-zoom`, `--max-zoom`).
+fn warn_old_zoom_flag() {
+    if std::env::args().any(|s| s == "--zoom" || s.starts_with("--zoom=")) {
+        eprintln!(
+            "cota: warning: --zoom is deprecated: it is the PMTiles input's zoom, now --input-zoom \
+             (the output's zooms are --min-zoom/--max-zoom)"
+        );
+    }
+}
+
 fn warn_unpositioned(files: &[FileInfo]) {
     for f in files {
         let srtm = matches!(

@@ -67,14 +67,17 @@ fn read_pair(
     dem: &Path,
     image: &Path,
     a: &ImageArgs,
+    max_samples: Option<u64>,
 ) -> anyhow::Result<(HeightGrid, RgbImage, Value)> {
+    let mut opts = cota_io::RegionOptions::DEFAULT;
+    opts.read = opts.read.with_max_samples(max_samples);
     let region = if is_dash(dem) {
         let name = Path::new(crate::input::STDIN_NAME);
         let stdin = std::io::stdin().lock();
-        let one = cota_io::read_dem_from(stdin, name, &cota_io::ReadOptions::DEFAULT)?;
-        cota_io::read::join(vec![one], &cota_io::RegionOptions::DEFAULT)?
+        let one = cota_io::read_dem_from(stdin, name, &opts.read)?;
+        cota_io::read::join(vec![one], &opts)?
     } else {
-        cota_io::read_region(&[dem], &cota_io::RegionOptions::DEFAULT)?
+        cota_io::read_region(&[dem], &opts)?
     };
     let grid = region.grid;
     let (texture, about) = drape_image(&grid, image, a)?;
@@ -175,7 +178,7 @@ pub fn run(a: &PairArgs) -> anyhow::Result<ExitCode> {
     validate(a)?;
     let t0 = Instant::now();
     let spinner = crate::progress::spinner("reading");
-    let (grid, texture, about) = read_pair(&a.dem, &a.image, &a.image_args)?;
+    let (grid, texture, about) = read_pair(&a.dem, &a.image, &a.image_args, a.max_samples)?;
     drop(spinner);
     let read_ms = ms(t0);
     let t = Instant::now();

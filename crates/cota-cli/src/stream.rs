@@ -256,11 +256,13 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
     let limit = StreamLimit::ALL
         .with_max_bytes(a.max_bytes)
         .with_max_error_m(a.max_error)
-        .with_max_samples(a.max_samples);
+        .with_max_samples(a.max_samples)
+        .with_partial(!a.strict);
     let d = {
         let _spinner = crate::progress::spinner("decoding");
         decode_input(&a.input, &limit)?
     };
+    warn_truncated(&a.input, &d);
     let h = d.decoder.header().clone();
     let mesh = d.decoder.mesh();
     let heights = d
@@ -307,6 +309,7 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
         "bytes_per_triangle": ratio(used, mesh.triangle_count()),
         "bytes_per_point": ratio(used, mesh.vertex_count()),
         "steps": steps,
+        "truncated": d.truncated.as_ref().map(|t| t.error.to_string()),
         "output": a.output.as_ref().map(|p| p.display().to_string()),
     });
     let text = match a.json {
@@ -315,6 +318,21 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
     };
     crate::output::print_report(a.output.as_deref(), &text);
     Ok(ExitCode::SUCCESS)
+}
+
+/// Says what a cut stream lacks (decoded up to its last complete step).
+fn warn_truncated(input: &Path, d: &cota_io::stream_file::DecodedStream) {
+    if let Some(t) = &d.truncated {
+        let have = d.decoder.steps().len();
+        eprintln!(
+            "cota: warning: {}: {}; decoded its {have} complete step(s) of the {} the head announces, \
+             {} missing (--strict refuses a cut stream)",
+            input.display(),
+            t.error,
+            t.announced_steps,
+            (t.announced_steps as usize).saturating_sub(have)
+        );
+    }
 }
 
 /// The text report of `cota stream decode`: the steps used, the mesh.

@@ -34,7 +34,7 @@ pub fn frame_key(a: &TilesArgs) -> String {
 
 /// Where each file's samples lie in the mosaic; empty when a shard must read
 /// every file: a single file, voids to fill, samples no file covers, or a
-/// `--bbox` or `--zoom` crop.
+/// `--bbox` or `--input-zoom` crop.
 pub fn file_extents(a: &TilesArgs, inp: &input::Input, voids: usize) -> Vec<(String, [usize; 4])> {
     let crop = a.input.bbox.is_some() || a.input.zoom.is_some();
     if voids > 0 || inp.hole_samples > 0 || crop {

@@ -1,5 +1,5 @@
 //! The CLI on the new input formats: a Terrarium WebP tile meshed and
-//! checked, a PMTiles archive listed by `cota info` and read by `--zoom`
+//! checked, a PMTiles archive listed by `cota info` and read by `--input-zoom` (and the deprecated `--zoom`)
 //! and `--bbox`, an `.npz` with `--array`, a USGS `.dem`; and their refusals
 //! (a one-line error naming the file, nothing written).
 #![allow(clippy::unwrap_used, clippy::panic)]
@@ -102,7 +102,7 @@ fn pmtiles_info_and_mesh() {
     let text = ok(&[
         "mesh",
         s(&archive),
-        "--zoom",
+        "--input-zoom",
         "10",
         bbox,
         "--max-error",
@@ -123,7 +123,7 @@ fn pmtiles_info_and_mesh() {
         &["mesh", s(&archive), "-o", s(&out)],
         "terrain.pmtiles",
         &out,
-        &["--zoom"],
+        &["--input-zoom"],
     );
     let far = "--bbox=10,10,11,11";
     refused(

@@ -81,7 +81,7 @@ fn truncated_and_corrupted_files_name_the_file() {
     let bytes = std::fs::read(&cs).unwrap();
     let cut = dir.path().join("cut.cstream");
     std::fs::write(&cut, &bytes[..bytes.len() - 5]).unwrap();
-    let o = cota(&["stream", "decode", cut.to_str().unwrap()]);
+    let o = cota(&["stream", "decode", cut.to_str().unwrap(), "--strict"]);
     assert!(!o.status.success());
     let e = stderr(&o);
     assert!(e.contains("cut.cstream") && e.contains("truncated"), "{e}");

@@ -30,7 +30,9 @@
 //! payload    len bytes (core step: stated max error f32 + range-coded block)
 //! ```
 //! A file holds exactly the announced number of steps: fewer (even cut at a
-//! frame boundary) is reported as truncated, and so is a partial frame.
+//! frame boundary) is reported as truncated, and so is a partial frame —
+//! an error by default, or, with [`StreamLimit::partial`] (a partial
+//! download), the complete steps decoded and the cut reported beside them.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -597,6 +599,11 @@ pub struct StreamLimit {
     /// Refuse a head announcing more grid samples than this. Default: `None`,
     /// the machine's budget ([`crate::limits::default_max_samples`]).
     pub max_samples: Option<u64>,
+    /// Keep the complete steps of a stream that ends inside a step frame or
+    /// before its last announced step (a partial download), reporting what
+    /// is missing in [`DecodedStream::truncated`], instead of refusing it.
+    /// The head and step 0 must be whole. Default: `false` (refuse).
+    pub partial: bool,
 }
 
 impl StreamLimit {
@@ -605,7 +612,14 @@ impl StreamLimit {
         max_bytes: None,
         max_error_m: None,
         max_samples: None,
+        partial: false,
     };
+
+    /// Sets [`StreamLimit::partial`].
+    pub const fn with_partial(mut self, partial: bool) -> Self {
+        self.partial = partial;
+        self
+    }
 
     /// Sets [`StreamLimit::max_bytes`].
     pub const fn with_max_bytes(mut self, n: Option<u64>) -> Self {
@@ -637,6 +651,18 @@ pub struct DecodedStream {
     pub steps: Vec<StepFrame>,
     /// Size of the whole file in bytes.
     pub file_bytes: u64,
+    /// With [`StreamLimit::partial`], what a cut stream lacks: the error a
+    /// whole stream would have been refused with. `None` when whole.
+    pub truncated: Option<Truncation>,
+}
+
+/// What a cut stream lacks ([`DecodedStream::truncated`]).
+#[derive(Debug, Clone)]
+pub struct Truncation {
+    /// The refusal it replaces ([`StreamFileError::Truncated`]).
+    pub error: StreamFileError,
+    /// The steps the head announces.
+    pub announced_steps: u32,
 }
 
 /// Reads `path` and decodes it up to `limit`, one frame at a time: bytes past
@@ -743,13 +769,25 @@ fn decode_stream_from(
             break;
         }
     }
+    let mut truncated = None;
     if !stopped {
-        rd.finish()?;
+        match rd.finish() {
+            Ok(()) => {}
+            Err(e) if limit.partial && rd.decoder().is_some() && !steps.is_empty() => {
+                truncated = Some(Truncation {
+                    error: e,
+                    announced_steps: rd.announced,
+                });
+            }
+            Err(e) => return Err(e.into()),
+        }
     }
     if count_rest {
         read += std::io::copy(&mut r, &mut std::io::sink())?;
     }
-    finish_decoded(rd, steps, limit, read).map_err(Into::into)
+    let mut d = finish_decoded(rd, steps, limit, read)?;
+    d.truncated = truncated;
+    Ok(d)
 }
 
 /// Appends bytes from `r` to `buf` until it holds `len` bytes or the input
@@ -797,6 +835,7 @@ fn finish_decoded(
         georef,
         steps,
         file_bytes: read,
+        truncated: None,
     })
 }
 

@@ -347,10 +347,14 @@ pub fn plan_with(
         )));
     }
     if !opts.error.is_valid() {
-        return Err(TilesError::BadOptions(format!(
-            "expected a positive, finite error factor or bound, found {:?}",
-            opts.error
-        )));
+        return Err(TilesError::BadOptions(match opts.error {
+            ErrorSchedule::Cesium { factor } => {
+                format!("expected a positive, finite error factor, found {factor}")
+            }
+            ErrorSchedule::AtMaxZoom { max_error_m } => format!(
+                "expected a positive, finite error bound at the maximum zoom, found {max_error_m} m"
+            ),
+        }));
     }
     let (lo, hi) = (stats.lo_m, stats.hi_m);
     let range_m = f64::from(hi.max(0.0)) - f64::from(lo.min(0.0));

@@ -185,7 +185,7 @@ pub(crate) fn decode<R: Read + Seek>(
     let req = opts.tiles.ok_or_else(|| ReadErrorKind::Unsupported {
         what: "reading a whole PMTiles archive".into(),
         detail: format!(
-            "choose the tiles with --zoom Z --bbox W,S,E,N (zooms {}..{}, bounds {:?})",
+            "choose the tiles with --input-zoom Z --bbox W,S,E,N (zooms {}..{}, bounds {:?})",
             h.zooms.0, h.zooms.1, h.bounds
         ),
     })?;
@@ -246,7 +246,7 @@ fn requested_tiles(h: &Header, zoom: u8, bbox: [f64; 4]) -> Result<Vec<TileId>, 
     if zoom < h.zooms.0 || zoom > h.zooms.1 || zoom > super::tile::MAX_ZOOM {
         return Err(malformed(
             format!(
-                "--zoom within the archive's zooms {}..{}",
+                "--input-zoom within the archive's zooms {}..{}",
                 h.zooms.0, h.zooms.1
             ),
             zoom,
