@@ -11,6 +11,7 @@ import { Lod } from './lod.js';
 const overlay = document.getElementById('overlay');
 const state = {
   scripted: false,
+  minClearance: Infinity,
   fly: false,
   wire: false,
   targetPx: Number(new URLSearchParams(location.search).get('px')) || 1,
@@ -40,6 +41,17 @@ const api = {
   frames: (n = 1) => new Promise((resolve) => waiters.push({ frame: frameNo + n, resolve })),
   pixels: () => pixels(),
   ground: (x, y) => groundZ(x, y),
+  // Lowest eye height above the ground under it over the frames driven by the
+  // person's controls since the last call (then reset); the default view back.
+  clearance: () => {
+    const c = state.minClearance;
+    state.minClearance = Infinity;
+    return c;
+  },
+  homeView: () => homeView(),
+  fly: (on) => {
+    if (state.fly !== on) toggleFly();
+  },
 };
 window.cota = api;
 const waiters = [];
@@ -164,7 +176,11 @@ function uploadChanges() {
 
 const orbit = new OrbitControls(camera, renderer.domElement);
 orbit.listenToKeyEvents(window);
-orbit.enableDamping = false;
+// Smooth damping; the polar angle stays above the horizon (85° from the zenith
+// at most), and keepAboveGround() below holds the eye over the terrain.
+orbit.enableDamping = true;
+orbit.dampingFactor = 0.12;
+orbit.maxPolarAngle = (85 * Math.PI) / 180;
 const keys = new Set();
 const look = { yaw: 0, pitch: 0, dragging: false, x: 0, y: 0 };
 window.addEventListener('keydown', (e) => {
@@ -248,6 +264,25 @@ function flyStep(dt) {
   if (keys.has('KeyE')) p.z += speed;
   if (keys.has('KeyQ')) p.z -= speed;
   camera.lookAt(p.clone().add(dir));
+}
+
+/** Lifts the eye to at least a margin above the ground under it (orbit and fly). */
+function keepAboveGround() {
+  const p = camera.position;
+  const g = groundZ(p.x, p.y);
+  const margin = Math.max(10, 2 * Math.max(meta.cell_size_m[0], meta.cell_size_m[1]));
+  if (p.z < g + margin) p.z = g + margin;
+}
+
+/** The default view: the whole extent in the frame, from the south, looking down at about 30°. */
+function homeView() {
+  state.scripted = false;
+  if (state.fly) toggleFly();
+  orbit.enabled = true;
+  const ext = Math.max(meta.width * meta.cell_size_m[0], meta.height * meta.cell_size_m[1]);
+  camera.position.set(-0.1 * ext, -0.75 * ext, 0.45 * ext);
+  orbit.target.set(0, 0, meta.height_range_m[0]);
+  orbit.update();
 }
 
 function setView(eye, target) {
@@ -340,6 +375,9 @@ function frame(now) {
   if (!state.scripted) {
     if (state.fly) flyStep(dt);
     else orbit.update();
+    keepAboveGround();
+    const p = camera.position;
+    state.minClearance = Math.min(state.minClearance, p.z - groundZ(p.x, p.y));
   }
   const agl = camera.position.z - groundZ(camera.position.x, camera.position.y);
   camera.near = Math.min(2000, Math.max(1, agl * 0.25));
@@ -416,10 +454,7 @@ async function main() {
   stepOf = new Uint8Array(n).fill(255);
   lod = new Lod({ width: meta.width, height: meta.height, cellX: meta.cell_size_m[0], cellY: meta.cell_size_m[1], heights, stepOf });
   uniforms.uZRange.value.set(meta.height_range_m[0], meta.height_range_m[1]);
-  const ext = Math.max(meta.width * meta.cell_size_m[0], meta.height * meta.cell_size_m[1]);
-  camera.position.set(-0.1 * ext, -0.75 * ext, 0.45 * ext);
-  orbit.target.set(0, 0, meta.height_range_m[0]);
-  orbit.update();
+  homeView();
   startWorker();
   api.ready = true;
   requestAnimationFrame(frame);
