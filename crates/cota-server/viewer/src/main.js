@@ -84,13 +84,17 @@ const uniforms = {
   uSun: { value: new THREE.Vector3(-1, 1, 1.2).normalize() },
   uZRange: { value: new THREE.Vector2(0, 1000) },
   uWire: { value: 0 },
+  // ?facets: the old per-triangle shading from screen-space derivatives (for comparison).
+  uFacets: { value: new URLSearchParams(location.search).has('facets') ? 1 : 0 },
 };
 const vertexShader = `
 in vec2 morph;
 uniform float uFrame;
 uniform float uMorphFrames;
 out vec3 vWorld;
+out vec3 vNormal;
 void main() {
+  vNormal = normal;
   float k = clamp((uFrame - morph.y) / uMorphFrames, 0.0, 1.0);
   vec3 p = vec3(position.xy, mix(morph.x, position.z, k));
   vWorld = p;
@@ -101,11 +105,18 @@ layout(location = 0) out highp vec4 fragColor;
 uniform vec3 uSun;
 uniform vec2 uZRange;
 uniform float uWire;
+uniform float uFacets;
 in vec3 vWorld;
+in vec3 vNormal;
 void main() {
   if (uWire > 0.5) { fragColor = vec4(0.07, 0.09, 0.11, 1.0); return; }
-  vec3 n = normalize(cross(dFdx(vWorld), dFdy(vWorld)));
+  vec3 n = uFacets > 0.5 || dot(vNormal, vNormal) < 1e-6 ? normalize(cross(dFdx(vWorld), dFdy(vWorld))) : normalize(vNormal);
   if (n.z < 0.0) n = -n;
+  if (vWorld.z <= 0.0) {
+    float s = clamp(dot(normalize(vec3(0.0, 0.0, 1.0)), uSun), 0.0, 1.0);
+    fragColor = vec4(vec3(0.16, 0.34, 0.52) * (0.6 + 0.4 * s), 1.0);
+    return;
+  }
   float shade = clamp(dot(n, uSun), 0.0, 1.0);
   float h = clamp((vWorld.z - uZRange.x) / max(uZRange.y - uZRange.x, 1.0), 0.0, 1.0);
   vec3 low = vec3(0.30, 0.50, 0.28), mid = vec3(0.70, 0.63, 0.42), high = vec3(0.96, 0.95, 0.92);
@@ -133,11 +144,28 @@ for (const m of [fillMesh, wireMesh]) {
 }
 wireMesh.visible = false;
 
+let normals = null;
+
+/** Per-vertex normal from the known heights around vertex v (central differences two cells wide). */
+function vertexNormal(v) {
+  const x = lod.position[3 * v], y = lod.position[3 * v + 1];
+  const dx = 2 * meta.cell_size_m[0], dy = 2 * meta.cell_size_m[1];
+  const gx = (groundZ(x + dx, y) - groundZ(x - dx, y)) / (2 * dx);
+  const gy = (groundZ(x, y + dy) - groundZ(x, y - dy)) / (2 * dy);
+  const l = Math.hypot(gx, gy, 1);
+  normals[3 * v] = -gx / l;
+  normals[3 * v + 1] = -gy / l;
+  normals[3 * v + 2] = 1 / l;
+}
+
 /** (Re)wraps the LOD's arrays in a geometry (at start and when they grow). */
 function rebuildGeometry() {
   const g = new THREE.BufferGeometry();
   g.setAttribute('position', new THREE.BufferAttribute(lod.position, 3).setUsage(THREE.DynamicDrawUsage));
   g.setAttribute('morph', new THREE.BufferAttribute(lod.morph, 2).setUsage(THREE.DynamicDrawUsage));
+  normals = new Float32Array(lod.position.length);
+  for (let v = 0; v * 3 < normals.length; v++) vertexNormal(v);
+  g.setAttribute('normal', new THREE.BufferAttribute(normals, 3).setUsage(THREE.DynamicDrawUsage));
   g.setIndex(new THREE.BufferAttribute(lod.index, 1).setUsage(THREE.DynamicDrawUsage));
   const r = Math.hypot(meta.width * meta.cell_size_m[0], meta.height * meta.cell_size_m[1]);
   g.boundingSphere = new THREE.Sphere(new THREE.Vector3(), r);
@@ -161,13 +189,18 @@ function uploadChanges() {
   if (tri.length) geometry.index.needsUpdate = true;
   const pos = geometry.getAttribute('position');
   const mor = geometry.getAttribute('morph');
+  const nor = geometry.getAttribute('normal');
   for (const p of vert) {
-    pos.addUpdateRange(p * page * 3, Math.min(page * 3, lod.position.length - p * page * 3));
+    const n3 = Math.min(page * 3, lod.position.length - p * page * 3);
+    for (let v = p * page; v * 3 < p * page * 3 + n3; v++) vertexNormal(v);
+    nor.addUpdateRange(p * page * 3, n3);
+    pos.addUpdateRange(p * page * 3, n3);
     mor.addUpdateRange(p * page * 2, Math.min(page * 2, lod.morph.length - p * page * 2));
   }
   if (vert.length) {
     pos.needsUpdate = true;
     mor.needsUpdate = true;
+    nor.needsUpdate = true;
   }
   geometry.setDrawRange(0, lod.triTop * 3);
 }
