@@ -49,6 +49,14 @@ const api = {
     return c;
   },
   homeView: () => homeView(),
+  // Mean squared luminance step between neighbouring terrain pixels of this
+  // frame, with the per-vertex shading or (facets) the old per-triangle one.
+  roughness: (facets) => {
+    uniforms.uFacets.value = facets ? 1 : 0;
+    const r = roughness();
+    uniforms.uFacets.value = new URLSearchParams(location.search).has('facets') ? 1 : 0;
+    return r;
+  },
   fly: (on) => {
     if (state.fly !== on) toggleFly();
   },
@@ -442,6 +450,29 @@ function frame(now) {
 }
 
 /** Renders now and counts the pixels that are not the sky (for tests). */
+function roughness() {
+  renderer.render(scene, camera);
+  const gl = renderer.getContext();
+  const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
+  const px = new Uint8Array(w * h * 4);
+  gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+  const lum = (i) => 0.2126 * px[i] + 0.7152 * px[i + 1] + 0.0722 * px[i + 2];
+  const sky = scene.background;
+  const sr = Math.round(sky.r * 255), sg = Math.round(sky.g * 255), sb = Math.round(sky.b * 255);
+  const isSky = (i) => Math.abs(px[i] - sr) + Math.abs(px[i + 1] - sg) + Math.abs(px[i + 2] - sb) <= 12;
+  let sum = 0, n = 0;
+  for (let y = 0; y + 1 < h; y++) {
+    for (let x = 0; x + 1 < w; x++) {
+      const i = 4 * (y * w + x), r = i + 4, d = i + 4 * w;
+      if (isSky(i) || isSky(r) || isSky(d)) continue;
+      const a = lum(i);
+      sum += (lum(r) - a) ** 2 + (lum(d) - a) ** 2;
+      n += 2;
+    }
+  }
+  return { meanSquaredStep: n ? sum / n : 0, pairs: n };
+}
+
 function pixels() {
   renderer.render(scene, camera);
   const gl = renderer.getContext();

@@ -210,8 +210,26 @@ async function viewerTest(browser, url, input) {
   results.viewer = summary;
   results.viewer_frames = frames;
   if (docs) await docShots(browser, url, path);
+  await shadingTest(page, path);
   await cameraTest(page);
   await page.close();
+}
+
+/** A close view (the low pass) drawn with the per-vertex normals and with the
+ * old per-triangle shading (?facets): the luminance steps between neighbouring
+ * pixels are smaller with the new one on the same frame. */
+async function shadingTest(page, path) {
+  const p = path[Math.min(path.length - 1, 200)];
+  await page.evaluate(([e, t]) => window.cota.setView(e, t), [p.eye, p.target]);
+  for (let k = 0; k < 40 && (await page.evaluate(() => window.cota.frames(1))).pending; k++);
+  await page.evaluate(() => window.cota.frames(3));
+  const smooth = await page.evaluate(() => window.cota.roughness(false));
+  await page.screenshot({ path: join(out, 'shading-vertex-normals.png') });
+  const facets = await page.evaluate(() => window.cota.roughness(true));
+  const ratio = smooth.meanSquaredStep / facets.meanSquaredStep;
+  results.shading = { smooth, facets, ratio };
+  check('per-vertex shading is smoother than per-triangle on a close view', ratio < 1,
+    `mean squared luminance step ${smooth.meanSquaredStep.toFixed(2)} against ${facets.meanSquaredStep.toFixed(2)} (ratio ${ratio.toFixed(3)}) over ${smooth.pairs} pixel pairs`);
 }
 
 /** Aggressive drags and zooms in orbit mode, then a fly sequence diving at the
