@@ -43,6 +43,10 @@ const api = {
   ground: (x, y) => groundZ(x, y),
   // Lowest eye height above the ground under it over the frames driven by the
   // person's controls since the last call (then reset); the default view back.
+  cursorAt: (sx, sy) => {
+    furniture.mouse = [sx, sy];
+    furniture.moved = true;
+  },
   clearance: () => {
     const c = state.minClearance;
     state.minClearance = Infinity;
@@ -326,6 +330,100 @@ function homeView() {
   orbit.update();
 }
 
+// ---- map furniture -------------------------------------------------------------
+
+const furniture = { mouse: null, moved: false };
+renderer.domElement.addEventListener('pointermove', (e) => {
+  furniture.mouse = [e.clientX, e.clientY];
+  furniture.moved = true;
+});
+
+/** Longitude/latitude of local (x, y), or null for a grid without them. */
+function lonLat(x, y) {
+  const b = meta.lon_lat_bounds;
+  if (!b) return null;
+  const col = x / meta.cell_size_m[0] + (meta.width - 1) / 2;
+  const row = (meta.height - 1) / 2 - y / meta.cell_size_m[1];
+  return [b[0] + (col / (meta.width - 1)) * (b[2] - b[0]), b[1] + (row / (meta.height - 1)) * (b[3] - b[1])];
+}
+
+/** Where the ray through screen pixel (sx, sy) first meets the ground, marching along it. */
+function groundAt(sx, sy) {
+  const el = renderer.domElement;
+  const ndc = new THREE.Vector3((sx / el.clientWidth) * 2 - 1, -(sy / el.clientHeight) * 2 + 1, 0.5);
+  const dir = ndc.unproject(camera).sub(camera.position).normalize();
+  const p = camera.position.clone();
+  let step = Math.max(1, (p.z - groundZ(p.x, p.y)) * 0.02);
+  const far = 4 * Math.hypot(meta.width * meta.cell_size_m[0], meta.height * meta.cell_size_m[1]);
+  let prev = p.clone();
+  for (let t = 0; t < far; t += step, step *= 1.03) {
+    const q = camera.position.clone().addScaledVector(dir, t);
+    if (q.z <= groundZ(q.x, q.y)) {
+      // Halve back between prev and q a few times.
+      let a = prev, b = q;
+      for (let k = 0; k < 12; k++) {
+        const m = a.clone().lerp(b, 0.5);
+        if (m.z <= groundZ(m.x, m.y)) b = m;
+        else a = m;
+      }
+      return b;
+    }
+    prev = q;
+  }
+  return null;
+}
+
+function niceLength(m) {
+  const e = 10 ** Math.floor(Math.log10(m));
+  for (const k of [5, 2, 1]) if (k * e <= m) return k * e;
+  return e;
+}
+
+const deg = (v, pos, neg, d) => `${Math.abs(v).toFixed(d)}° ${v < 0 ? neg : pos}`;
+const fmtLen = (m) => (m >= 1000 ? `${m / 1000} km` : `${m} m`);
+
+function setupFurniture() {
+  const [lo, hi] = meta.height_range_m;
+  const stops = ['rgb(77,128,71) 0%', 'rgb(179,161,107) 50%', 'rgb(245,242,235) 100%'];
+  let grad = stops.join(', ');
+  if (lo < 0 && hi > 0) {
+    const w = (100 * -lo) / (hi - lo);
+    grad = `rgb(41,87,133) 0%, rgb(41,87,133) ${w.toFixed(1)}%, rgb(77,128,71) ${w.toFixed(1)}%, rgb(179,161,107) 50%, rgb(245,242,235) 100%`;
+  }
+  document.getElementById('legend-bar').style.background = `linear-gradient(to right, ${grad})`;
+  const ticks = [lo, (lo + hi) / 2, hi].map((v) => `<span>${Math.round(v)}</span>`).join('');
+  document.getElementById('legend-ticks').innerHTML = ticks;
+  const wkm = (meta.width * meta.cell_size_m[0]) / 1000, hkm = (meta.height * meta.cell_size_m[1]) / 1000;
+  const b = meta.lon_lat_bounds;
+  const ext = b ? `\n${deg(b[0], 'E', 'W', 3)} … ${deg(b[2], 'E', 'W', 3)}, ${deg(b[3], 'N', 'S', 3)} … ${deg(b[1], 'N', 'S', 3)}` : '';
+  document.getElementById('dataset').textContent =
+    `${meta.name}\n${meta.width} × ${meta.height} samples, ${wkm.toFixed(1)} × ${hkm.toFixed(1)} km, ${Math.round(lo)}…${Math.round(hi)} m${ext}`;
+}
+
+function updateFurniture() {
+  const d = new THREE.Vector3();
+  camera.getWorldDirection(d);
+  const heading = Math.atan2(d.x, d.y); // 0 looking north
+  document.getElementById('needle').setAttribute('transform', `rotate(${((-heading * 180) / Math.PI).toFixed(1)})`);
+  const el = renderer.domElement;
+  const hit = groundAt(el.clientWidth / 2, el.clientHeight / 2);
+  const dist = hit ? hit.distanceTo(camera.position) : Math.max(1, camera.position.z - groundZ(camera.position.x, camera.position.y));
+  const mPerPx = (dist * 2 * Math.tan((camera.fov * Math.PI) / 360)) / el.clientHeight;
+  const len = niceLength(mPerPx * 180);
+  document.getElementById('scale-bar').style.width = `${Math.round(len / mPerPx)}px`;
+  document.getElementById('scale-label').textContent = `${fmtLen(len)} (at the view's centre)`;
+  if (furniture.moved && furniture.mouse) {
+    furniture.moved = false;
+    const g = groundAt(furniture.mouse[0], furniture.mouse[1]);
+    const c = document.getElementById('cursor');
+    if (!g) c.textContent = 'cursor: off the terrain';
+    else {
+      const ll = lonLat(g.x, g.y);
+      c.textContent = `cursor: ${ll ? `${deg(ll[1], 'N', 'S', 5)}  ${deg(ll[0], 'E', 'W', 5)}` : `x ${g.x.toFixed(0)} m  y ${g.y.toFixed(0)} m`}  height ${groundZ(g.x, g.y).toFixed(0)} m`;
+    }
+  }
+}
+
 function setView(eye, target) {
   state.scripted = true;
   orbit.enabled = false;
@@ -403,6 +501,7 @@ function drawOverlay() {
     `refine      ${s.refineMs.toFixed(2)} ms/frame (median ${s.refineMedianMs.toFixed(2)})`,
     `stream      ${kb(s.bytes)} of ${kb(s.total)}, step ${s.steps}/${s.stepsAnnounced}${s.done ? ' (done)' : ''}`,
     `screen err  max ${s.maxError.sent.toFixed(2)} px, target ${s.targetPx} px${s.maxError.all > s.maxError.sent + 1e-9 ? ` (${s.maxError.all.toFixed(1)} px until the stream arrives)` : ''}`,
+    `            (how far, in pixels, the drawn surface may be from the full data;${s.maxError.all > s.maxError.sent + 1e-9 ? '\n             larger while the finer steps are still streaming in' : ''})`,
     `mode        ${state.fly ? 'fly' : 'orbit'}${state.wire ? ', wireframe' : ''}`,
   ].join('\n');
 }
@@ -432,6 +531,7 @@ function frame(now) {
   state.triangles.push(lod.triCount);
   if (state.refineMs.length > 100000) state.refineMs.splice(0, 50000);
   uploadChanges();
+  if (frameNo % 4 === 0) updateFurniture();
   uniforms.uFrame.value = lod.frame;
   wireUniforms.uFrame.value = lod.frame;
   renderer.render(scene, camera);
@@ -519,6 +619,7 @@ async function main() {
   lod = new Lod({ width: meta.width, height: meta.height, cellX: meta.cell_size_m[0], cellY: meta.cell_size_m[1], heights, stepOf });
   uniforms.uZRange.value.set(meta.height_range_m[0], meta.height_range_m[1]);
   homeView();
+  setupFurniture();
   startWorker();
   api.ready = true;
   requestAnimationFrame(frame);
