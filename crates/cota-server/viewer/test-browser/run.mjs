@@ -211,6 +211,7 @@ async function viewerTest(browser, url, input) {
   results.viewer_frames = frames;
   if (docs) await docShots(browser, url, path);
   await shadingTest(page, path);
+  await furnitureTest(page);
   await cameraTest(page);
   await page.close();
 }
@@ -230,6 +231,18 @@ async function shadingTest(page, path) {
   results.shading = { smooth, facets, ratio };
   check('per-vertex shading is smoother than per-triangle on a close view', ratio < 1,
     `mean squared luminance step ${smooth.meanSquaredStep.toFixed(2)} against ${facets.meanSquaredStep.toFixed(2)} (ratio ${ratio.toFixed(3)}) over ${smooth.pairs} pixel pairs`);
+}
+
+/** Legend, scale bar, north arrow, cursor readout and dataset panel at the default view. */
+async function furnitureTest(page) {
+  await page.evaluate(() => window.cota.homeView());
+  await page.evaluate(() => window.cota.cursorAt(640, 420));
+  await page.evaluate(() => window.cota.frames(12));
+  const t = await page.evaluate(() => Object.fromEntries(['cursor', 'scale-label', 'legend-ticks', 'dataset'].map((id) => [id, document.getElementById(id).textContent])));
+  await page.screenshot({ path: join(out, 'viewer-furniture.png') });
+  results.furniture = t;
+  check('map furniture shown', /height -?\d+ m/.test(t.cursor) && /\d+ k?m/.test(t['scale-label']) && /\d/.test(t['legend-ticks']) && t.dataset.length > 0,
+    JSON.stringify(t).replace(/\\n/g, ' / '));
 }
 
 /** Aggressive drags and zooms in orbit mode, then a fly sequence diving at the
