@@ -11,6 +11,7 @@ import { Lod } from './lod.js';
 const overlay = document.getElementById('overlay');
 const state = {
   scripted: false,
+  minClearance: Infinity,
   fly: false,
   wire: false,
   targetPx: Number(new URLSearchParams(location.search).get('px')) || 1,
@@ -40,6 +41,29 @@ const api = {
   frames: (n = 1) => new Promise((resolve) => waiters.push({ frame: frameNo + n, resolve })),
   pixels: () => pixels(),
   ground: (x, y) => groundZ(x, y),
+  // Lowest eye height above the ground under it over the frames driven by the
+  // person's controls since the last call (then reset); the default view back.
+  cursorAt: (sx, sy) => {
+    furniture.mouse = [sx, sy];
+    furniture.moved = true;
+  },
+  clearance: () => {
+    const c = state.minClearance;
+    state.minClearance = Infinity;
+    return c;
+  },
+  homeView: () => homeView(),
+  // Mean squared luminance step between neighbouring terrain pixels of this
+  // frame, with the per-vertex shading or (facets) the old per-triangle one.
+  roughness: (facets) => {
+    uniforms.uFacets.value = facets ? 1 : 0;
+    const r = roughness();
+    uniforms.uFacets.value = new URLSearchParams(location.search).has('facets') ? 1 : 0;
+    return r;
+  },
+  fly: (on) => {
+    if (state.fly !== on) toggleFly();
+  },
 };
 window.cota = api;
 const waiters = [];
@@ -72,13 +96,17 @@ const uniforms = {
   uSun: { value: new THREE.Vector3(-1, 1, 1.2).normalize() },
   uZRange: { value: new THREE.Vector2(0, 1000) },
   uWire: { value: 0 },
+  // ?facets: the old per-triangle shading from screen-space derivatives (for comparison).
+  uFacets: { value: new URLSearchParams(location.search).has('facets') ? 1 : 0 },
 };
 const vertexShader = `
 in vec2 morph;
 uniform float uFrame;
 uniform float uMorphFrames;
 out vec3 vWorld;
+out vec3 vNormal;
 void main() {
+  vNormal = normal;
   float k = clamp((uFrame - morph.y) / uMorphFrames, 0.0, 1.0);
   vec3 p = vec3(position.xy, mix(morph.x, position.z, k));
   vWorld = p;
@@ -89,11 +117,18 @@ layout(location = 0) out highp vec4 fragColor;
 uniform vec3 uSun;
 uniform vec2 uZRange;
 uniform float uWire;
+uniform float uFacets;
 in vec3 vWorld;
+in vec3 vNormal;
 void main() {
   if (uWire > 0.5) { fragColor = vec4(0.07, 0.09, 0.11, 1.0); return; }
-  vec3 n = normalize(cross(dFdx(vWorld), dFdy(vWorld)));
+  vec3 n = uFacets > 0.5 || dot(vNormal, vNormal) < 1e-6 ? normalize(cross(dFdx(vWorld), dFdy(vWorld))) : normalize(vNormal);
   if (n.z < 0.0) n = -n;
+  if (vWorld.z <= 0.0) {
+    float s = clamp(dot(normalize(vec3(0.0, 0.0, 1.0)), uSun), 0.0, 1.0);
+    fragColor = vec4(vec3(0.16, 0.34, 0.52) * (0.6 + 0.4 * s), 1.0);
+    return;
+  }
   float shade = clamp(dot(n, uSun), 0.0, 1.0);
   float h = clamp((vWorld.z - uZRange.x) / max(uZRange.y - uZRange.x, 1.0), 0.0, 1.0);
   vec3 low = vec3(0.30, 0.50, 0.28), mid = vec3(0.70, 0.63, 0.42), high = vec3(0.96, 0.95, 0.92);
@@ -121,11 +156,28 @@ for (const m of [fillMesh, wireMesh]) {
 }
 wireMesh.visible = false;
 
+let normals = null;
+
+/** Per-vertex normal from the known heights around vertex v (central differences two cells wide). */
+function vertexNormal(v) {
+  const x = lod.position[3 * v], y = lod.position[3 * v + 1];
+  const dx = 2 * meta.cell_size_m[0], dy = 2 * meta.cell_size_m[1];
+  const gx = (groundZ(x + dx, y) - groundZ(x - dx, y)) / (2 * dx);
+  const gy = (groundZ(x, y + dy) - groundZ(x, y - dy)) / (2 * dy);
+  const l = Math.hypot(gx, gy, 1);
+  normals[3 * v] = -gx / l;
+  normals[3 * v + 1] = -gy / l;
+  normals[3 * v + 2] = 1 / l;
+}
+
 /** (Re)wraps the LOD's arrays in a geometry (at start and when they grow). */
 function rebuildGeometry() {
   const g = new THREE.BufferGeometry();
   g.setAttribute('position', new THREE.BufferAttribute(lod.position, 3).setUsage(THREE.DynamicDrawUsage));
   g.setAttribute('morph', new THREE.BufferAttribute(lod.morph, 2).setUsage(THREE.DynamicDrawUsage));
+  normals = new Float32Array(lod.position.length);
+  for (let v = 0; v * 3 < normals.length; v++) vertexNormal(v);
+  g.setAttribute('normal', new THREE.BufferAttribute(normals, 3).setUsage(THREE.DynamicDrawUsage));
   g.setIndex(new THREE.BufferAttribute(lod.index, 1).setUsage(THREE.DynamicDrawUsage));
   const r = Math.hypot(meta.width * meta.cell_size_m[0], meta.height * meta.cell_size_m[1]);
   g.boundingSphere = new THREE.Sphere(new THREE.Vector3(), r);
@@ -149,13 +201,18 @@ function uploadChanges() {
   if (tri.length) geometry.index.needsUpdate = true;
   const pos = geometry.getAttribute('position');
   const mor = geometry.getAttribute('morph');
+  const nor = geometry.getAttribute('normal');
   for (const p of vert) {
-    pos.addUpdateRange(p * page * 3, Math.min(page * 3, lod.position.length - p * page * 3));
+    const n3 = Math.min(page * 3, lod.position.length - p * page * 3);
+    for (let v = p * page; v * 3 < p * page * 3 + n3; v++) vertexNormal(v);
+    nor.addUpdateRange(p * page * 3, n3);
+    pos.addUpdateRange(p * page * 3, n3);
     mor.addUpdateRange(p * page * 2, Math.min(page * 2, lod.morph.length - p * page * 2));
   }
   if (vert.length) {
     pos.needsUpdate = true;
     mor.needsUpdate = true;
+    nor.needsUpdate = true;
   }
   geometry.setDrawRange(0, lod.triTop * 3);
 }
@@ -164,7 +221,11 @@ function uploadChanges() {
 
 const orbit = new OrbitControls(camera, renderer.domElement);
 orbit.listenToKeyEvents(window);
-orbit.enableDamping = false;
+// Smooth damping; the polar angle stays above the horizon (85° from the zenith
+// at most), and keepAboveGround() below holds the eye over the terrain.
+orbit.enableDamping = true;
+orbit.dampingFactor = 0.12;
+orbit.maxPolarAngle = (85 * Math.PI) / 180;
 const keys = new Set();
 const look = { yaw: 0, pitch: 0, dragging: false, x: 0, y: 0 };
 window.addEventListener('keydown', (e) => {
@@ -250,6 +311,119 @@ function flyStep(dt) {
   camera.lookAt(p.clone().add(dir));
 }
 
+/** Lifts the eye to at least a margin above the ground under it (orbit and fly). */
+function keepAboveGround() {
+  const p = camera.position;
+  const g = groundZ(p.x, p.y);
+  const margin = Math.max(10, 2 * Math.max(meta.cell_size_m[0], meta.cell_size_m[1]));
+  if (p.z < g + margin) p.z = g + margin;
+}
+
+/** The default view: the whole extent in the frame, from the south, looking down at about 30°. */
+function homeView() {
+  state.scripted = false;
+  if (state.fly) toggleFly();
+  orbit.enabled = true;
+  const ext = Math.max(meta.width * meta.cell_size_m[0], meta.height * meta.cell_size_m[1]);
+  camera.position.set(-0.1 * ext, -0.75 * ext, 0.45 * ext);
+  orbit.target.set(0, 0, meta.height_range_m[0]);
+  orbit.update();
+}
+
+// ---- map furniture -------------------------------------------------------------
+
+const furniture = { mouse: null, moved: false };
+renderer.domElement.addEventListener('pointermove', (e) => {
+  furniture.mouse = [e.clientX, e.clientY];
+  furniture.moved = true;
+});
+
+/** Longitude/latitude of local (x, y), or null for a grid without them. */
+function lonLat(x, y) {
+  const b = meta.lon_lat_bounds;
+  if (!b) return null;
+  const col = x / meta.cell_size_m[0] + (meta.width - 1) / 2;
+  const row = (meta.height - 1) / 2 - y / meta.cell_size_m[1];
+  return [b[0] + (col / (meta.width - 1)) * (b[2] - b[0]), b[1] + (row / (meta.height - 1)) * (b[3] - b[1])];
+}
+
+/** Where the ray through screen pixel (sx, sy) first meets the ground, marching along it. */
+function groundAt(sx, sy) {
+  const el = renderer.domElement;
+  const ndc = new THREE.Vector3((sx / el.clientWidth) * 2 - 1, -(sy / el.clientHeight) * 2 + 1, 0.5);
+  const dir = ndc.unproject(camera).sub(camera.position).normalize();
+  const p = camera.position.clone();
+  let step = Math.max(1, (p.z - groundZ(p.x, p.y)) * 0.02);
+  const far = 4 * Math.hypot(meta.width * meta.cell_size_m[0], meta.height * meta.cell_size_m[1]);
+  let prev = p.clone();
+  for (let t = 0; t < far; t += step, step *= 1.03) {
+    const q = camera.position.clone().addScaledVector(dir, t);
+    if (q.z <= groundZ(q.x, q.y)) {
+      // Halve back between prev and q a few times.
+      let a = prev, b = q;
+      for (let k = 0; k < 12; k++) {
+        const m = a.clone().lerp(b, 0.5);
+        if (m.z <= groundZ(m.x, m.y)) b = m;
+        else a = m;
+      }
+      return b;
+    }
+    prev = q;
+  }
+  return null;
+}
+
+function niceLength(m) {
+  const e = 10 ** Math.floor(Math.log10(m));
+  for (const k of [5, 2, 1]) if (k * e <= m) return k * e;
+  return e;
+}
+
+const deg = (v, pos, neg, d) => `${Math.abs(v).toFixed(d)}° ${v < 0 ? neg : pos}`;
+const fmtLen = (m) => (m >= 1000 ? `${m / 1000} km` : `${m} m`);
+
+function setupFurniture() {
+  const [lo, hi] = meta.height_range_m;
+  const stops = ['rgb(77,128,71) 0%', 'rgb(179,161,107) 50%', 'rgb(245,242,235) 100%'];
+  let grad = stops.join(', ');
+  if (lo < 0 && hi > 0) {
+    const w = (100 * -lo) / (hi - lo);
+    grad = `rgb(41,87,133) 0%, rgb(41,87,133) ${w.toFixed(1)}%, rgb(77,128,71) ${w.toFixed(1)}%, rgb(179,161,107) 50%, rgb(245,242,235) 100%`;
+  }
+  document.getElementById('legend-bar').style.background = `linear-gradient(to right, ${grad})`;
+  const ticks = [lo, (lo + hi) / 2, hi].map((v) => `<span>${Math.round(v)}</span>`).join('');
+  document.getElementById('legend-ticks').innerHTML = ticks;
+  const wkm = (meta.width * meta.cell_size_m[0]) / 1000, hkm = (meta.height * meta.cell_size_m[1]) / 1000;
+  const b = meta.lon_lat_bounds;
+  const ext = b ? `\n${deg(b[0], 'E', 'W', 3)} … ${deg(b[2], 'E', 'W', 3)}, ${deg(b[3], 'N', 'S', 3)} … ${deg(b[1], 'N', 'S', 3)}` : '';
+  document.getElementById('dataset').textContent =
+    `${meta.name}\n${meta.width} × ${meta.height} samples, ${wkm.toFixed(1)} × ${hkm.toFixed(1)} km, ${Math.round(lo)}…${Math.round(hi)} m${ext}`;
+}
+
+function updateFurniture() {
+  const d = new THREE.Vector3();
+  camera.getWorldDirection(d);
+  const heading = Math.atan2(d.x, d.y); // 0 looking north
+  document.getElementById('needle').setAttribute('transform', `rotate(${((-heading * 180) / Math.PI).toFixed(1)})`);
+  const el = renderer.domElement;
+  const hit = groundAt(el.clientWidth / 2, el.clientHeight / 2);
+  const dist = hit ? hit.distanceTo(camera.position) : Math.max(1, camera.position.z - groundZ(camera.position.x, camera.position.y));
+  const mPerPx = (dist * 2 * Math.tan((camera.fov * Math.PI) / 360)) / el.clientHeight;
+  const len = niceLength(mPerPx * 180);
+  document.getElementById('scale-bar').style.width = `${Math.round(len / mPerPx)}px`;
+  document.getElementById('scale-label').textContent = `${fmtLen(len)} (at the view's centre)`;
+  if (furniture.moved && furniture.mouse) {
+    furniture.moved = false;
+    const g = groundAt(furniture.mouse[0], furniture.mouse[1]);
+    const c = document.getElementById('cursor');
+    if (!g) c.textContent = 'cursor: off the terrain';
+    else {
+      const ll = lonLat(g.x, g.y);
+      c.textContent = `cursor: ${ll ? `${deg(ll[1], 'N', 'S', 5)}  ${deg(ll[0], 'E', 'W', 5)}` : `x ${g.x.toFixed(0)} m  y ${g.y.toFixed(0)} m`}  height ${groundZ(g.x, g.y).toFixed(0)} m`;
+    }
+  }
+}
+
 function setView(eye, target) {
   state.scripted = true;
   orbit.enabled = false;
@@ -327,6 +501,7 @@ function drawOverlay() {
     `refine      ${s.refineMs.toFixed(2)} ms/frame (median ${s.refineMedianMs.toFixed(2)})`,
     `stream      ${kb(s.bytes)} of ${kb(s.total)}, step ${s.steps}/${s.stepsAnnounced}${s.done ? ' (done)' : ''}`,
     `screen err  max ${s.maxError.sent.toFixed(2)} px, target ${s.targetPx} px${s.maxError.all > s.maxError.sent + 1e-9 ? ` (${s.maxError.all.toFixed(1)} px until the stream arrives)` : ''}`,
+    `            (how far, in pixels, the drawn surface may be from the full data;${s.maxError.all > s.maxError.sent + 1e-9 ? '\n             larger while the finer steps are still streaming in' : ''})`,
     `mode        ${state.fly ? 'fly' : 'orbit'}${state.wire ? ', wireframe' : ''}`,
   ].join('\n');
 }
@@ -340,6 +515,9 @@ function frame(now) {
   if (!state.scripted) {
     if (state.fly) flyStep(dt);
     else orbit.update();
+    keepAboveGround();
+    const p = camera.position;
+    state.minClearance = Math.min(state.minClearance, p.z - groundZ(p.x, p.y));
   }
   const agl = camera.position.z - groundZ(camera.position.x, camera.position.y);
   camera.near = Math.min(2000, Math.max(1, agl * 0.25));
@@ -353,6 +531,7 @@ function frame(now) {
   state.triangles.push(lod.triCount);
   if (state.refineMs.length > 100000) state.refineMs.splice(0, 50000);
   uploadChanges();
+  if (frameNo % 4 === 0) updateFurniture();
   uniforms.uFrame.value = lod.frame;
   wireUniforms.uFrame.value = lod.frame;
   renderer.render(scene, camera);
@@ -371,6 +550,29 @@ function frame(now) {
 }
 
 /** Renders now and counts the pixels that are not the sky (for tests). */
+function roughness() {
+  renderer.render(scene, camera);
+  const gl = renderer.getContext();
+  const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
+  const px = new Uint8Array(w * h * 4);
+  gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+  const lum = (i) => 0.2126 * px[i] + 0.7152 * px[i + 1] + 0.0722 * px[i + 2];
+  const sky = scene.background;
+  const sr = Math.round(sky.r * 255), sg = Math.round(sky.g * 255), sb = Math.round(sky.b * 255);
+  const isSky = (i) => Math.abs(px[i] - sr) + Math.abs(px[i + 1] - sg) + Math.abs(px[i + 2] - sb) <= 12;
+  let sum = 0, n = 0;
+  for (let y = 0; y + 1 < h; y++) {
+    for (let x = 0; x + 1 < w; x++) {
+      const i = 4 * (y * w + x), r = i + 4, d = i + 4 * w;
+      if (isSky(i) || isSky(r) || isSky(d)) continue;
+      const a = lum(i);
+      sum += (lum(r) - a) ** 2 + (lum(d) - a) ** 2;
+      n += 2;
+    }
+  }
+  return { meanSquaredStep: n ? sum / n : 0, pairs: n };
+}
+
 function pixels() {
   renderer.render(scene, camera);
   const gl = renderer.getContext();
@@ -416,10 +618,8 @@ async function main() {
   stepOf = new Uint8Array(n).fill(255);
   lod = new Lod({ width: meta.width, height: meta.height, cellX: meta.cell_size_m[0], cellY: meta.cell_size_m[1], heights, stepOf });
   uniforms.uZRange.value.set(meta.height_range_m[0], meta.height_range_m[1]);
-  const ext = Math.max(meta.width * meta.cell_size_m[0], meta.height * meta.cell_size_m[1]);
-  camera.position.set(-0.1 * ext, -0.75 * ext, 0.45 * ext);
-  orbit.target.set(0, 0, meta.height_range_m[0]);
-  orbit.update();
+  homeView();
+  setupFurniture();
   startWorker();
   api.ready = true;
   requestAnimationFrame(frame);

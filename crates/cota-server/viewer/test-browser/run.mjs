@@ -18,7 +18,7 @@
 //     over the middle of the view against the page as it was (`?plain`: no
 //     light, no imagery), whose surface was an almost uniform green.
 // Usage: node test-browser/run.mjs [--docs DIR] [--cesium-only] (COTA_BIN: the cota binary,
-// default target/release/cota; CHROMIUM: default /usr/bin/chromium).
+// default $CARGO_TARGET_DIR/release/cota or target/release/cota; CHROMIUM: default /usr/bin/chromium).
 // Writes target/viewer-tests/results.json and screenshots beside it.
 import { chromium } from 'playwright-core';
 import { spawn, spawnSync } from 'node:child_process';
@@ -35,7 +35,8 @@ mkdirSync(out, { recursive: true });
 const docsAt = process.argv.indexOf('--docs');
 const docs = docsAt >= 0 ? resolve(process.argv[docsAt + 1]) : null;
 const cesiumOnly = process.argv.includes('--cesium-only');
-const bin = process.env.COTA_BIN || join(repo, 'target/release/cota');
+const targetDir = process.env.CARGO_TARGET_DIR ? resolve(process.env.CARGO_TARGET_DIR) : join(repo, 'target');
+const bin = process.env.COTA_BIN || join(targetDir, 'release/cota');
 const shared = process.env.COTA_SHARED_DATA || join(repo, '../shared/data');
 const ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
   '--disable-component-update', '--disable-sync', '--enable-unsafe-swiftshader'];
@@ -209,7 +210,81 @@ async function viewerTest(browser, url, input) {
   results.viewer = summary;
   results.viewer_frames = frames;
   if (docs) await docShots(browser, url, path);
+  await shadingTest(page, path);
+  await furnitureTest(page);
+  await cameraTest(page);
   await page.close();
+}
+
+/** A close view (the low pass) drawn with the per-vertex normals and with the
+ * old per-triangle shading (?facets): the luminance steps between neighbouring
+ * pixels are smaller with the new one on the same frame. */
+async function shadingTest(page, path) {
+  const p = path[Math.min(path.length - 1, 200)];
+  await page.evaluate(([e, t]) => window.cota.setView(e, t), [p.eye, p.target]);
+  for (let k = 0; k < 40 && (await page.evaluate(() => window.cota.frames(1))).pending; k++);
+  await page.evaluate(() => window.cota.frames(3));
+  const smooth = await page.evaluate(() => window.cota.roughness(false));
+  await page.screenshot({ path: join(out, 'shading-vertex-normals.png') });
+  const facets = await page.evaluate(() => window.cota.roughness(true));
+  const ratio = smooth.meanSquaredStep / facets.meanSquaredStep;
+  results.shading = { smooth, facets, ratio };
+  check('per-vertex shading is smoother than per-triangle on a close view', ratio < 1,
+    `mean squared luminance step ${smooth.meanSquaredStep.toFixed(2)} against ${facets.meanSquaredStep.toFixed(2)} (ratio ${ratio.toFixed(3)}) over ${smooth.pairs} pixel pairs`);
+}
+
+/** Legend, scale bar, north arrow, cursor readout and dataset panel at the default view. */
+async function furnitureTest(page) {
+  await page.evaluate(() => window.cota.homeView());
+  await page.evaluate(() => window.cota.cursorAt(640, 420));
+  await page.evaluate(() => window.cota.frames(12));
+  const t = await page.evaluate(() => Object.fromEntries(['cursor', 'scale-label', 'legend-ticks', 'dataset'].map((id) => [id, document.getElementById(id).textContent])));
+  await page.screenshot({ path: join(out, 'viewer-furniture.png') });
+  results.furniture = t;
+  check('map furniture shown', /height -?\d+ m/.test(t.cursor) && /\d+ k?m/.test(t['scale-label']) && /\d/.test(t['legend-ticks']) && t.dataset.length > 0,
+    JSON.stringify(t).replace(/\\n/g, ' / '));
+}
+
+/** Aggressive drags and zooms in orbit mode, then a fly sequence diving at the
+ * ground: the eye stays above the terrain under it on every frame. */
+async function cameraTest(page) {
+  await page.evaluate(() => window.cota.homeView());
+  await page.evaluate(() => window.cota.frames(3));
+  await page.evaluate(() => window.cota.clearance());
+  const drag = async (dx, dy, steps = 10) => {
+    await page.mouse.move(640, 360);
+    await page.mouse.down();
+    await page.mouse.move(640 + dx, 360 + dy, { steps });
+    await page.mouse.up();
+    await page.evaluate(() => window.cota.frames(2));
+  };
+  await drag(0, -70);
+  const after70 = await page.evaluate(() => window.cota.clearance());
+  for (const [dx, dy] of [[0, -400], [300, -300], [-600, -200], [0, 600], [0, -700]]) await drag(dx, dy);
+  for (let k = 0; k < 30; k++) {
+    await page.mouse.move(640, 360);
+    await page.mouse.wheel(0, -800);
+    await page.evaluate(() => window.cota.frames(1));
+  }
+  await drag(0, -500);
+  await page.evaluate(() => window.cota.frames(30));
+  const orbitMin = await page.evaluate(() => window.cota.clearance());
+  await page.screenshot({ path: join(out, 'camera-orbit.png') });
+  await page.evaluate(() => window.cota.fly(true));
+  await drag(0, 300); // look down
+  for (const key of ['KeyW', 'KeyQ', 'KeyS']) {
+    await page.keyboard.down(key);
+    await page.waitForTimeout(1500);
+    await page.keyboard.up(key);
+  }
+  await page.evaluate(() => window.cota.frames(5));
+  const flyMin = await page.evaluate(() => window.cota.clearance());
+  await page.screenshot({ path: join(out, 'camera-fly.png') });
+  await page.evaluate(() => window.cota.fly(false));
+  const min = Math.min(after70, orbitMin, flyMin);
+  results.camera = { min_clearance_m: min, after_70px_drag_m: after70, orbit_min_m: orbitMin, fly_min_m: flyMin };
+  check('the eye stays above the terrain under drags, zooms and flight', min > 0,
+    `lowest height above the ground under the eye ${min.toFixed(1)} m (70 px drag ${after70.toFixed(1)}, orbit ${orbitMin.toFixed(1)}, fly ${flyMin.toFixed(1)})`);
 }
 
 /** Small screenshots for the docs (640×360). */
