@@ -96,6 +96,7 @@ pub struct InputArgs {
         long,
         value_name = "W,S,E,N",
         value_delimiter = ',',
+        allow_hyphen_values = true,
         allow_negative_numbers = true
     )]
     pub bbox: Option<Vec<f64>>,
@@ -217,7 +218,7 @@ pub struct MeshArgs {
     /// Mesh only a window of the input (after mosaicking, before the void
     /// fill): first column, first row (row 0 is the northern row), width,
     /// height, in samples.
-    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, conflicts_with = "bbox")]
+    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, allow_hyphen_values = true, conflicts_with = "bbox")]
     pub crop: Option<Crop>,
     /// Vertical exaggeration: the heights written (and --base-m) are
     /// multiplied by F; the report's errors stay in true metres. Not with
@@ -432,10 +433,10 @@ pub struct RefineArgs {
     pub tolerance: Option<f64>,
     /// Observer position in metres, local frame (x east, y north, z up, origin
     /// at the south-west sample). Required by view, paper001 and paper003.
-    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_negative_numbers = true)]
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vec3, allow_hyphen_values = true)]
     pub observer: Option<[f64; 3]>,
     /// View direction (view) or direction of motion (paper003).
-    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_direction, allow_negative_numbers = true, default_value = "0,1,0")]
+    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_direction, allow_hyphen_values = true, default_value = "0,1,0")]
     pub look: [f64; 3],
     /// Vertical field of view in degrees (view).
     #[arg(
@@ -462,7 +463,7 @@ pub struct RefineArgs {
     )]
     pub max_error_px: f64,
     /// Direction towards the light (light).
-    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_direction, allow_negative_numbers = true, default_value = "1,1,1")]
+    #[arg(long, value_name = "DX,DY,DZ", value_parser = parse_direction, allow_hyphen_values = true, default_value = "1,1,1")]
     pub light: [f64; 3],
     /// Weight of pure curvature in [0, 1] (light): accept when K·(alpha + (1 − alpha)·I) <= T.
     #[arg(
@@ -659,7 +660,7 @@ pub struct CompareArgs {
     )]
     pub tolerances: Vec<f64>,
     /// Compare on a window of the input: first column, first row, width, height.
-    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop)]
+    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, allow_hyphen_values = true)]
     pub crop: Option<Crop>,
     /// Bitree modes to compare with the quadtree.
     #[arg(
