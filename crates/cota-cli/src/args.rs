@@ -223,7 +223,7 @@ pub struct MeshArgs {
     /// Mesh only a window of the input (after mosaicking, before the void
     /// fill): first column, first row (row 0 is the northern row), width,
     /// height, in samples.
-    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, conflicts_with = "bbox")]
+    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, allow_hyphen_values = true, conflicts_with = "bbox")]
     pub crop: Option<Crop>,
     /// Vertical exaggeration: the heights written (and --base-m) are
     /// multiplied by F; the report's errors stay in true metres. Not with
@@ -665,7 +665,7 @@ pub struct CompareArgs {
     )]
     pub tolerances: Vec<f64>,
     /// Compare on a window of the input: first column, first row, width, height.
-    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop)]
+    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, allow_hyphen_values = true)]
     pub crop: Option<Crop>,
     /// Bitree modes to compare with the quadtree.
     #[arg(

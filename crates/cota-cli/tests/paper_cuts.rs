@@ -140,3 +140,17 @@ fn input_zoom_is_named_for_what_it_is() {
         "{e}"
     );
 }
+
+/// Negative numbers in a crop are refused by the crop's own message, not by
+/// clap's "unexpected argument" with its `-- -7` tip.
+#[test]
+fn negative_crop_is_refused_by_its_own_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.obj");
+    let o = cota(&["mesh", "--crop", "-1,0,10,10", "-o", out.to_str().unwrap()]);
+    let e = stderr(&o);
+    assert!(!o.status.success());
+    assert!(!e.contains("unexpected argument"), "{e}");
+    assert!(e.contains("COL,ROW,W,H"), "{e}");
+    assert!(!out.exists());
+}
