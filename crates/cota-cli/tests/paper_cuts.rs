@@ -154,3 +154,20 @@ fn negative_crop_is_refused_by_its_own_message() {
     assert!(e.contains("COL,ROW,W,H"), "{e}");
     assert!(!out.exists());
 }
+
+/// An output that cannot be made: the operating system's text once, not
+/// once from the wrapping error and again from its cause.
+#[test]
+fn os_error_text_is_printed_once() {
+    let o = cota(&[
+        "tiles",
+        "--max-zoom",
+        "3",
+        "-o",
+        "/proc/cota-cannot-make-this",
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("/proc/cota-cannot-make-this"), "{e}");
+    assert_eq!(e.matches("(os error").count(), 1, "{e}");
+}

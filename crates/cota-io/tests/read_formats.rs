@@ -229,7 +229,7 @@ fn pmtiles_bad_requests_and_corrupt_directories() {
     let p = write_file(dir.path(), "terrain.pmtiles", &bytes);
     // No selection: the zooms and bounds are named.
     let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
-    assert_contains(&msg, &["--zoom", "--bbox", "zooms 15..15"]);
+    assert_contains(&msg, &["--input-zoom", "--bbox", "zooms 15..15"]);
     let wrong_zoom = TileRequest {
         zoom: 9,
         bbox_deg: tile14_bbox(1e-4),
