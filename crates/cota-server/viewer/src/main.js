@@ -549,16 +549,22 @@ function frame(now) {
   }
 }
 
-/** Renders now and counts the pixels that are not the sky (for tests). */
-function roughness() {
+/** Renders now and reads the frame back (for tests): its RGBA pixels, size, and the sky's colour. */
+function readFrame() {
   renderer.render(scene, camera);
   const gl = renderer.getContext();
   const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
   const px = new Uint8Array(w * h * 4);
   gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
-  const lum = (i) => 0.2126 * px[i] + 0.7152 * px[i + 1] + 0.0722 * px[i + 2];
   const sky = scene.background;
   const sr = Math.round(sky.r * 255), sg = Math.round(sky.g * 255), sb = Math.round(sky.b * 255);
+  return { px, w, h, sr, sg, sb };
+}
+
+/** Renders now and measures the mean squared luminance step between neighbouring terrain pixels (for tests). */
+function roughness() {
+  const { px, w, h, sr, sg, sb } = readFrame();
+  const lum = (i) => 0.2126 * px[i] + 0.7152 * px[i + 1] + 0.0722 * px[i + 2];
   const isSky = (i) => Math.abs(px[i] - sr) + Math.abs(px[i + 1] - sg) + Math.abs(px[i + 2] - sb) <= 12;
   let sum = 0, n = 0;
   for (let y = 0; y + 1 < h; y++) {
@@ -574,13 +580,7 @@ function roughness() {
 }
 
 function pixels() {
-  renderer.render(scene, camera);
-  const gl = renderer.getContext();
-  const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
-  const px = new Uint8Array(w * h * 4);
-  gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
-  const sky = scene.background;
-  const sr = Math.round(sky.r * 255), sg = Math.round(sky.g * 255), sb = Math.round(sky.b * 255);
+  const { px, w, h, sr, sg, sb } = readFrame();
   let terrain = 0;
   const shades = new Set();
   for (let i = 0; i < px.length; i += 4) {
