@@ -2,7 +2,7 @@
 """Reference points for cota's map projections, computed with PROJ (pyproj).
 
 Writes crates/cota-io/tests/data/crs_reference.json, which
-crates/cota-io/tests/crs.rs checks cota's transforms against (1 mm in
+crates/cota-io/tests/suite/crs.rs checks cota's transforms against (1 mm in
 projected metres, 1e-8 degrees in longitude/latitude).
 
 For each CRS: about 20 points spread over its area of use (from PROJ's

@@ -154,6 +154,18 @@ pub enum Seam {
     First,
 }
 
+/// The tile format of `cota tiles`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum TileFormatArg {
+    /// Cesium quantized-mesh-1.0: OUT/layer.json and OUT/{z}/{x}/{y}.terrain.
+    QuantizedMesh,
+    /// 3D Tiles 1.1 terrain (CesiumJS's Cesium3DTilesTerrainProvider,
+    /// 3DTilesRendererJS): OUT/tileset.json, subtrees and
+    /// OUT/{root}/{z}/{x}/{y}.glb.
+    #[value(name = "3dtiles")]
+    Tiles3d,
+}
+
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum Voids {
     /// Fill voids harmonically from their border (continuous surface).
@@ -931,6 +943,12 @@ pub struct TilesArgs {
     /// (built as OUT.partial, renamed when complete).
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
+    /// Tile format: quantized-mesh, or 3dtiles (GLB tiles with
+    /// CESIUM_tile_edges, implicit tiling, float32 positions; directory
+    /// output only, from zoom 0).
+    #[arg(long, value_enum, default_value_t = TileFormatArg::QuantizedMesh,
+        conflicts_with_all = ["gzip", "watermask", "metadata", "imagery", "plan", "shard", "reduce"])]
+    pub format: TileFormatArg,
     /// Coarsest zoom written (0: the two root tiles).
     #[arg(long, default_value_t = 0, value_name = "A")]
     pub min_zoom: u8,

@@ -15,12 +15,12 @@ use cota_core::{HeightGrid, LonLat};
 use cota_io::tiles::drawn::{Against, SourceGrid};
 use cota_io::tiles::{
     is_mbtiles, plan_layout_path, plan_part_path, read_shard_frame, reduce_shards,
-    shard_frame_path, write_mbtiles, write_plan, write_pyramid, write_shard, PyramidOptions,
-    PyramidReport, ShardFrame, TileExtensions,
+    shard_frame_path, write_mbtiles, write_plan, write_pyramid, write_shard, write_tiles3d,
+    PyramidOptions, PyramidReport, ShardFrame, TileExtensions, TileFormat,
 };
 use serde_json::json;
 
-use crate::args::{TilesArgs, Voids};
+use crate::args::{TileFormatArg, TilesArgs, Voids};
 use crate::{input, progress, tiles_part};
 
 /// Runs `cota tiles`.
@@ -31,12 +31,7 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     if matches!(a.voids, Voids::Hole) {
         anyhow::bail!("{}", HOLES_REFUSED);
     }
-    if is_mbtiles(&a.output) && (a.plan || a.shard.is_some() || a.imagery) {
-        anyhow::bail!(
-            "{}: expected a directory for --plan, --shard and --imagery, found an .mbtiles archive; write the archive in one run",
-            a.output.display()
-        );
-    }
+    refuse_archive_mismatch(a)?;
     let opts = tiler_options(a);
     if let Some((i, n)) = a.shard {
         let frame = read_shard_frame(&a.output, n)
@@ -100,6 +95,23 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     let times = [prep_s, t0.elapsed().as_secs_f64()];
     finish(a, &name, &prepared, &deviation, &report, times, json!(null));
     Ok(std::process::ExitCode::SUCCESS)
+}
+
+/// An `.mbtiles` output with what only a directory takes: refused in words.
+fn refuse_archive_mismatch(a: &TilesArgs) -> anyhow::Result<()> {
+    if is_mbtiles(&a.output) && a.format == TileFormatArg::Tiles3d {
+        anyhow::bail!(
+            "{}: expected a directory for --format 3dtiles, found an .mbtiles name; 3D Tiles archives are not written yet",
+            a.output.display()
+        );
+    }
+    if is_mbtiles(&a.output) && (a.plan || a.shard.is_some() || a.imagery) {
+        anyhow::bail!(
+            "{}: expected a directory for --plan, --shard and --imagery, found an .mbtiles archive; write the archive in one run",
+            a.output.display()
+        );
+    }
+    Ok(())
 }
 
 /// The one input when it is a single grid in WGS 84 longitude/latitude
@@ -448,6 +460,10 @@ fn pyramid_options(a: &TilesArgs) -> PyramidOptions {
         .with_gzip(a.gzip)
         .with_force(a.force)
         .with_check(a.check)
+        .with_format(match a.format {
+            TileFormatArg::QuantizedMesh => TileFormat::QuantizedMesh,
+            TileFormatArg::Tiles3d => TileFormat::Tiles3d,
+        })
 }
 
 /// Writes the pyramid, or with --shard one shard of it (`part`: the shard's
@@ -473,6 +489,11 @@ fn write(
         Some(s) => write_shard(prepared, &a.output, &pyramid, s, frame, &|n| {
             pb.set_position(n)
         }),
+        None if a.format == TileFormatArg::Tiles3d => {
+            write_tiles3d(prepared, &a.output, &pyramid, against, &|n| {
+                pb.set_position(n)
+            })
+        }
         None if is_mbtiles(&a.output) => {
             write_mbtiles(prepared, &a.output, &pyramid, against, &|n| {
                 pb.set_position(n)

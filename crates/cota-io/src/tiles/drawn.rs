@@ -257,6 +257,20 @@ impl<'t> DrawnTile<'t> {
         }
     }
 
+    /// The same tile drawn from other ECEF positions of its vertices (the
+    /// float32 positions of its 3D Tiles GLB): footprints stay the tile's,
+    /// heights are measured on `xyz`.
+    ///
+    /// # Panics
+    /// Never: positions beyond the tile's vertex count are ignored, missing
+    /// ones keep the tile's own.
+    pub fn with_positions(mut self, xyz: &[[f64; 3]]) -> DrawnTile<'t> {
+        for (p, q) in self.xyz.iter_mut().zip(xyz) {
+            *p = *q;
+        }
+        self
+    }
+
     /// The drawn surface's height along the normal at `(lon, lat)`, found
     /// from triangle `k` (whose footprint holds the point) or, when the
     /// normal meets the surface beside it, from a triangle sharing a vertex

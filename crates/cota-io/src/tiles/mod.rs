@@ -39,15 +39,19 @@ pub mod decode;
 pub mod drawn;
 pub mod ellipsoid;
 pub mod frame;
+pub mod glb_decode;
+pub mod glb_tile;
 pub mod layer;
 pub mod mbtiles;
 pub mod part;
 pub mod plan_frame;
 pub mod plan_parts;
 pub mod pyramid;
+pub mod pyramid3d;
 pub mod quantized_mesh;
 pub mod seams;
 pub mod shard;
+pub mod tileset3d;
 
 pub use coarse::{
     corners_path, partial_path, read_band_corners, read_partial, write_band_corners, write_partial,
@@ -70,8 +74,9 @@ pub use plan_frame::{
 pub use plan_parts::{finish_plan, plan_layout_or, plan_part_path, run_plan_part, PlanPartReport};
 pub use pyramid::{
     finish_tile, make_tile, tile_path, write_pyramid, MadeTile, PyramidError, PyramidOptions,
-    PyramidReport, ZoomReport,
+    PyramidReport, TileFormat, ZoomReport,
 };
+pub use pyramid3d::{make_glb_tile, write_tiles3d};
 pub use quantized_mesh::{encode, encode_tile, EncodeError, Extensions, TileExtensions, TileFrame};
 pub use seams::{compare_border, edge_lists_match, BorderCheck, Neighbour};
 pub use shard::{reduce_shards, shard_record_path, write_plan, write_shard, ReduceReport};

@@ -131,6 +131,20 @@ pub struct PyramidOptions {
     /// every lattice sample of its square, and its edge lists) before it is
     /// written. Default: true (`cota tiles` turns it on with `--check`).
     pub check: bool,
+    /// The tile format. Default: quantized-mesh.
+    pub format: TileFormat,
+}
+
+/// The format of a pyramid's tiles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum TileFormat {
+    /// Cesium quantized-mesh-1.0: `layer.json` and `{z}/{x}/{y}.terrain`.
+    #[default]
+    QuantizedMesh,
+    /// 3D Tiles 1.1 terrain: `tileset.json`, subtrees and GLB tiles
+    /// ([`super::pyramid3d`]).
+    Tiles3d,
 }
 
 impl PyramidOptions {
@@ -140,6 +154,7 @@ impl PyramidOptions {
         gzip: false,
         force: false,
         check: true,
+        format: TileFormat::QuantizedMesh,
     };
 
     /// Sets [`PyramidOptions::extensions`].
@@ -157,6 +172,12 @@ impl PyramidOptions {
     /// Sets [`PyramidOptions::force`].
     pub const fn with_force(mut self, yes: bool) -> Self {
         self.force = yes;
+        self
+    }
+
+    /// Sets [`PyramidOptions::format`].
+    pub const fn with_format(mut self, f: TileFormat) -> Self {
+        self.format = f;
         self
     }
 
@@ -267,7 +288,9 @@ pub fn finish_tile(
         made.measured_error_m = report.metrics.max_error_m;
     }
     if let Some(against) = source {
-        let [drawn, between] = check_drawn(&decoded, &tile, against)?;
+        let drawn = DrawnTile::new(&decoded, tile.rect_deg);
+        let bounds = [tile.max_error_m, tile.source_bound_m];
+        let [drawn, between] = check_drawn(&drawn, t, bounds, against)?;
         made.drawn_error_m = drawn;
         made.between_m = between;
     }
@@ -275,24 +298,23 @@ pub fn finish_tile(
 }
 
 /// The decoded tile drawn as a client draws it, against the source's
-/// samples and, at random points, the ellipsoid far from the data:
+/// samples and, at random points, the ellipsoid far from the data, within
+/// `[bound, bound at the source's samples]`:
 /// `[largest error, largest deviation between samples]`.
-fn check_drawn(
-    decoded: &super::decode::DecodedTile,
-    tile: &TileMesh,
+pub(crate) fn check_drawn(
+    drawn: &DrawnTile<'_>,
+    t: TileId,
+    [bound, at_source]: [f64; 2],
     against: &Against<'_>,
 ) -> Result<[f64; 2], PyramidError> {
-    let drawn = DrawnTile::new(decoded, tile.rect_deg);
-    let at_samples = check_samples(&drawn, &against.samples);
-    let seed =
-        (u64::from(tile.tile.z) << 48) ^ (u64::from(tile.tile.x) << 24) ^ u64::from(tile.tile.y);
-    let random = check_random(&drawn, 4, seed, &*against.reference);
-    let (bound, at_source) = (tile.max_error_m, tile.source_bound_m);
+    let at_samples = check_samples(drawn, &against.samples);
+    let seed = (u64::from(t.z) << 48) ^ (u64::from(t.x) << 24) ^ u64::from(t.y);
+    let random = check_random(drawn, 4, seed, &*against.reference);
     // Rounding slack relative to the heights and the Earth's radius.
     let slack = 1e-6 * at_source.max(1.0) + 1e-6;
     if at_samples.max_error_m > at_source + slack {
         return Err(PyramidError::Drawn {
-            tile: tile.tile,
+            tile: t,
             got_m: at_samples.max_error_m,
             bound_m: at_source,
             lon: at_samples.at[0],
@@ -301,7 +323,7 @@ fn check_drawn(
     }
     if random.ellipsoid_m > bound + slack {
         return Err(PyramidError::Drawn {
-            tile: tile.tile,
+            tile: t,
             got_m: random.ellipsoid_m,
             bound_m: bound,
             lon: f64::NAN,
@@ -384,7 +406,7 @@ impl PyramidReport {
     }
 }
 
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> PyramidError + '_ {
+pub(crate) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> PyramidError + '_ {
     move |source| PyramidError::Io {
         path: path.to_path_buf(),
         source,
@@ -439,7 +461,11 @@ pub(crate) fn manifest(
 ) -> Result<(), PyramidError> {
     std::fs::create_dir_all(out).map_err(io_err(out))?;
     let path = out.join(".cota-tiles.json");
-    let want = run_manifest(prep, &opts.extensions, opts.gzip).to_string();
+    let mut want = run_manifest(prep, &opts.extensions, opts.gzip);
+    if opts.format == TileFormat::Tiles3d {
+        want["format"] = "3dtiles".into();
+    }
+    let want = want.to_string();
     if !opts.force && path.exists() {
         let text = std::fs::read_to_string(&path).map_err(io_err(&path))?;
         // Compared as text: serde_json's parser does not round-trip every

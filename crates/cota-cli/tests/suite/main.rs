@@ -1,0 +1,29 @@
+//! The cota-cli integration tests, one binary (one link instead of one per file).
+
+mod bombs;
+mod cli;
+mod common;
+mod compare_cli;
+mod crs_cli;
+mod formats_cli;
+mod hole_cli;
+mod imagery_cli;
+mod mesh_real;
+mod outputs;
+mod pair_cli;
+mod paper_cuts;
+mod print_cli;
+mod progress_cli;
+mod quantize_cli;
+mod refine_cli;
+mod seams_cli;
+mod serve_cli;
+mod shard_cli;
+mod stdio_cli;
+mod stream_cli;
+mod strip_cli;
+mod tiles_cli;
+mod tin_cli;
+mod validation;
+mod web_tiles_cli;
+mod window_cli;

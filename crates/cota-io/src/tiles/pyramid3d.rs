@@ -1,0 +1,184 @@
+//! Writing a 3D Tiles 1.1 terrain pyramid: `OUT/tileset.json`, the subtree
+//! files and one GLB per tile ([`super::tileset3d`], [`super::glb_tile`]).
+//!
+//! The tiles are the quantized-mesh pyramid's, cut from the same hierarchy
+//! with the same bound per zoom: each is cut, encoded and (with
+//! [`PyramidOptions::check`]) checked as a quantized-mesh tile at every
+//! lattice sample of its square, then turned into a GLB from its decoded
+//! vertices. The check then decodes the GLB with the independent decoder
+//! ([`super::glb_decode`]), requires the same triangles and edges, and draws
+//! the float32 positions as flat ECEF triangles against the source's samples
+//! and the ellipsoid away from the data, within the zoom's bound plus
+//! float32's rounding ([`super::glb_tile::float32_budget_m`]).
+//!
+//! Atomic and resumable as the quantized-mesh writer: each file goes to a
+//! temporary name and is renamed; the manifest `OUT/.cota-tiles.json` says
+//! `"format": "3dtiles"`; a resumed run keeps the tiles there and reads their
+//! metadata back from `asset.extras.cota`. The subtrees, then
+//! `tileset.json`, are written last, so a client never sees a tileset whose
+//! tiles are missing.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
+
+use cota_core::tiles::{Prepared, TileId, TilesError};
+use rayon::prelude::*;
+
+use super::decode::{decode, DecodeError, DecodedTile};
+use super::drawn::{Against, DrawnTile};
+use super::glb_decode::decode_glb;
+use super::glb_tile::{ccw_edges, encode_glb, float32_budget_m, TileMeta};
+use super::pyramid::{
+    check_drawn, finish_tile, fold, io_err, manifest, write_file_atomically, MadeTile, Outcome,
+    PyramidError, PyramidOptions, PyramidReport,
+};
+use super::tileset3d::{glb_rel_path, subtree_bytes, subtree_levels, subtrees, tileset_json};
+
+/// A GLB error as the pyramid reports it.
+fn glb_error(t: TileId, e: impl ToString) -> PyramidError {
+    PyramidError::Decode {
+        tile: t,
+        source: DecodeError::Invalid(e.to_string()),
+    }
+}
+
+/// Cuts tile `t`, checks it as quantized-mesh, makes its GLB and (with
+/// `opts.check` and `source`) checks the GLB as drawn.
+///
+/// # Errors
+/// As [`super::make_tile`], for the GLB too.
+pub fn make_glb_tile(
+    prep: &Prepared<'_>,
+    t: TileId,
+    opts: &PyramidOptions,
+    source: Option<&Against<'_>>,
+) -> Result<(MadeTile, TileMeta), PyramidError> {
+    let tile = prep.cut(t, opts.extensions.normals, false)?;
+    let (rect, bounds) = (tile.rect_deg, [tile.max_error_m, tile.source_bound_m]);
+    let qm = PyramidOptions {
+        gzip: false,
+        ..*opts
+    };
+    let mut made = finish_tile(tile, &qm, Some(&prep.region(t)), None)?;
+    let decoded = decode(&made.bytes).map_err(|source| PyramidError::Decode { tile: t, source })?;
+    made.bytes = encode_glb(&decoded, rect, opts.extensions.normals);
+    if opts.check {
+        if let Some(against) = source {
+            [made.drawn_error_m, made.between_m] =
+                check_glb(&made.bytes, &decoded, rect, t, bounds, against)?;
+        }
+    }
+    Ok((made, TileMeta::of(&decoded)))
+}
+
+/// The GLB decoded independently, its structure against the quantized-mesh
+/// tile's, and drawn from its float32 positions.
+fn check_glb(
+    glb: &[u8],
+    decoded: &DecodedTile,
+    rect: [f64; 4],
+    t: TileId,
+    [bound, at_source]: [f64; 2],
+    against: &Against<'_>,
+) -> Result<[f64; 2], PyramidError> {
+    let g = decode_glb(glb).map_err(|e| glb_error(t, e))?;
+    if g.triangles != decoded.triangles || g.edges != ccw_edges(decoded) {
+        return Err(glb_error(t, "the GLB's triangles or edges (counter-clockwise round the tile) differ from the tile's"));
+    }
+    let c = decoded.header.center;
+    let radius = g
+        .positions
+        .iter()
+        .map(|p| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt())
+        .fold(0.0, f64::max);
+    let extra = float32_budget_m(radius);
+    let drawn = DrawnTile::new(decoded, rect).with_positions(&g.positions);
+    check_drawn(&drawn, t, [bound + extra, at_source + extra], against)
+}
+
+/// One tile: made and written, or (not `force`) read back from the output.
+fn one_tile(
+    prep: &Prepared<'_>,
+    out: &Path,
+    t: TileId,
+    opts: &PyramidOptions,
+    source: Option<&Against<'_>>,
+) -> Result<(TileId, TileMeta, Outcome), PyramidError> {
+    let path = out.join(glb_rel_path(t));
+    if !opts.force && path.is_file() {
+        let bytes = std::fs::read(&path).map_err(io_err(&path))?;
+        let meta = decode_glb(&bytes)
+            .map_err(|e| glb_error(t, e))?
+            .meta
+            .ok_or_else(|| {
+                glb_error(
+                    t,
+                    format!("{}: no asset.extras.cota; use --force", path.display()),
+                )
+            })?;
+        return Ok((t, meta, Outcome::skipped(t)));
+    }
+    let (made, meta) = make_glb_tile(prep, t, opts, source)?;
+    write_file_atomically(&path, &made.bytes, opts.force)?;
+    Ok((t, meta, Outcome::made(t, &made)))
+}
+
+/// Writes every tile of `prep` under `out` as a 3D Tiles terrain pyramid,
+/// then its subtrees and `tileset.json`; `progress(done)` after each tile.
+///
+/// # Errors
+/// [`PyramidError`]: the first tile that failed, an unwritable output, an
+/// output made with other settings, or a pyramid that does not start at
+/// zoom 0 (implicit tiling starts at the two roots).
+pub fn write_tiles3d(
+    prep: &Prepared<'_>,
+    out: &Path,
+    opts: &PyramidOptions,
+    source: Option<&Against<'_>>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<PyramidReport, PyramidError> {
+    let t0 = Instant::now();
+    let (Some(first), Some(last)) = (prep.zooms().first(), prep.zooms().last()) else {
+        return Err(PyramidError::Tiles(TilesError::BadOptions(
+            "no zoom to write".into(),
+        )));
+    };
+    if first.zoom != 0 {
+        return Err(PyramidError::Tiles(TilesError::BadOptions(format!(
+            "3D Tiles terrain starts at the two zoom-0 roots (implicit tiling); found a first zoom of {}: use --min-zoom 0",
+            first.zoom
+        ))));
+    }
+    manifest(prep, out, opts)?;
+    let tiles: Vec<TileId> = prep.tiles().collect();
+    let done = AtomicU64::new(0);
+    let results: Vec<(TileId, TileMeta, Outcome)> = tiles
+        .par_iter()
+        .map(|&t| {
+            let r = one_tile(prep, out, t, opts, source);
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1);
+            r
+        })
+        .collect::<Result<_, _>>()?;
+    let metas: HashMap<TileId, TileMeta> = results.iter().map(|r| (r.0, r.1)).collect();
+    let levels = subtree_levels(last.zoom);
+    for s in subtrees(&metas, levels) {
+        let bytes = subtree_bytes(s, levels, &metas);
+        write_file_atomically(&out.join(s.rel_path()), &bytes, opts.force)?;
+    }
+    let lo = metas.values().map(|m| m.min_height_m).fold(0.0, f64::min);
+    let hi = metas.values().map(|m| m.max_height_m).fold(0.0, f64::max);
+    let tileset = tileset_json(last.zoom, first.max_error_m, lo, hi);
+    write_file_atomically(
+        &out.join("tileset.json"),
+        format!("{tileset:#}\n").as_bytes(),
+        opts.force,
+    )?;
+    let outcomes: Vec<Outcome> = results.into_iter().map(|r| r.2).collect();
+    Ok(PyramidReport {
+        zooms: fold(prep, &outcomes),
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}

@@ -1,0 +1,435 @@
+//! The readers of issue 22 on real heights: Terrarium WebP (the bundled tile,
+//! lossless, against its PNG), z/x/y web tiles made from the shared Mapzen
+//! GeoTIFF tile and mosaicked by their Web-Mercator bounds, a PMTiles archive
+//! of those tiles, NumPy `.npz`/`.npy` and USGS ASCII DEMs written from
+//! bundled grids in the set-up; and their bad-input cases (each a one-line
+//! error naming the file).
+// Test helpers outside #[test] functions unwrap and panic like the tests do.
+#![allow(clippy::unwrap_used, clippy::panic)]
+
+use crate::common;
+
+use std::path::{Path, PathBuf};
+
+use common::{assert_contains, fixture, shared_data, write_file};
+use cota_core::{Crs, PixelIs};
+use cota_fixtures::formats::{self, ArchiveTile};
+use cota_io::read::pmtiles;
+use cota_io::{
+    read_dem, read_region, ArrayName, DataType, Dem, Format, PngEncoding, ReadErrorKind,
+    ReadOptions, RegionOptions, TileRequest,
+};
+
+fn read(path: &Path, opts: &ReadOptions) -> Dem {
+    read_dem(path, opts).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The error of reading `path`, checked to be one line naming the file.
+fn error_of(path: &Path, opts: &ReadOptions) -> (String, ReadErrorKind) {
+    let err = match read_dem(path, opts) {
+        Ok(dem) => panic!("{} read as {:?}", path.display(), dem.format),
+        Err(e) => e,
+    };
+    let msg = err.to_string();
+    eprintln!("{msg}");
+    let name = path.file_name().unwrap().to_string_lossy();
+    assert!(msg.contains(&*name), "{msg:?} does not name {name}");
+    assert!(!msg.contains('\n'), "{msg:?} is not one line");
+    (msg, err.kind)
+}
+
+fn tmp() -> tempfile::TempDir {
+    tempfile::tempdir().unwrap()
+}
+
+#[test]
+fn webp_and_png_terrarium_tiles_decode_to_the_same_heights() {
+    let png = read(&fixture("terrarium.png"), &ReadOptions::DEFAULT);
+    let webp = read(&fixture("terrarium.webp"), &ReadOptions::DEFAULT);
+    // Both detected as Terrarium without being told (terrain-RGB is absurd on them).
+    assert_eq!(png.format, Format::Png(PngEncoding::Terrarium));
+    assert_eq!(webp.format, Format::WebP(PngEncoding::Terrarium));
+    assert_eq!(webp.data_type, DataType::Rgb8);
+    assert_eq!((webp.grid.width(), webp.grid.height()), (256, 256));
+    // Lossless: bit-identical heights.
+    assert_eq!(webp.grid.heights(), png.grid.heights());
+    let (lo, hi) = webp.grid.valid_range().unwrap();
+    assert!((lo - 852.117).abs() < 0.002 && (hi - 2475.066).abs() < 0.002);
+}
+
+#[test]
+fn truncated_and_gray_webp_are_refused() {
+    let dir = tmp();
+    let bytes = std::fs::read(fixture("terrarium.webp")).unwrap();
+    for cut in [13, 40, bytes.len() / 2, bytes.len() - 1] {
+        let p = write_file(dir.path(), "cut.webp", &bytes[..cut]);
+        let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
+        assert_contains(&msg, &["expected a valid WebP image"]);
+    }
+    let gray = ReadOptions::DEFAULT.with_png_encoding(Some(PngEncoding::Gray16));
+    let (msg, _) = error_of(&fixture("terrarium.webp"), &gray);
+    assert_contains(&msg, &["gray16", "terrarium"]);
+}
+
+/// The shared Mapzen GeoTIFF tile 14/10348/7801 (512², EPSG:3857) cut into
+/// its four zoom-15 tiles, each a lossless Terrarium WebP.
+fn zoom15_tiles() -> Option<(Dem, Vec<ArchiveTile>)> {
+    let data = shared_data()?;
+    let tif = read(
+        &data.join("geotiff/mapzen-geotiff-14-10348-7801.tif"),
+        &ReadOptions::DEFAULT,
+    );
+    let g = &tif.grid;
+    let mut tiles = Vec::new();
+    for (dy, dx) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+        let part: Vec<f32> = (0..256)
+            .flat_map(|r| {
+                let row = (dy * 256 + r) * 512 + dx * 256;
+                g.heights()[row..row + 256].to_vec()
+            })
+            .collect();
+        let bytes = formats::webp_lossless(&formats::terrarium_rgb(&part), 256, 256);
+        tiles.push(ArchiveTile {
+            z: 15,
+            x: 2 * 10348 + dx as u32,
+            y: 2 * 7801 + dy as u32,
+            bytes,
+        });
+    }
+    Some((tif, tiles))
+}
+
+/// Asserts that `dem` holds the GeoTIFF's heights (within Terrarium's
+/// 1/256 m step) at the same places.
+fn assert_same_tile(dem: &Dem, tif: &Dem) {
+    let (g, t) = (&dem.grid, &tif.grid);
+    assert_eq!((g.width(), g.height()), (512, 512));
+    assert_eq!(g.georef().crs, Crs::Epsg(3857));
+    assert_eq!(g.georef().pixel_is, PixelIs::Area);
+    let (a, b) = (
+        g.georef().sample_xy(0.0, 0.0),
+        t.georef().sample_xy(0.0, 0.0),
+    );
+    let px = t.georef().pixel_x;
+    assert!(
+        (a.0 - b.0).abs() < 1e-6 * px && (a.1 - b.1).abs() < 1e-6 * px,
+        "{a:?} vs {b:?}"
+    );
+    assert!((g.georef().pixel_x - px).abs() < 1e-9 * px);
+    let worst = g
+        .heights()
+        .iter()
+        .zip(t.heights())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 1.0 / 512.0 + 1e-4, "largest difference {worst} m");
+}
+
+#[test]
+fn xyz_tiles_mosaic_by_their_web_mercator_bounds() {
+    let Some((tif, tiles)) = zoom15_tiles() else {
+        return;
+    };
+    let dir = tmp();
+    let paths: Vec<PathBuf> = tiles
+        .iter()
+        .map(|t| {
+            let d = dir.path().join(format!("{}/{}", t.z, t.x));
+            std::fs::create_dir_all(&d).unwrap();
+            write_file(&d, &format!("{}.webp", t.y), &t.bytes)
+        })
+        .collect();
+    let one = read(&paths[0], &ReadOptions::DEFAULT);
+    assert_eq!(one.grid.georef().crs, Crs::Epsg(3857));
+    let region = read_region(&paths, &RegionOptions::DEFAULT.with_fill(None)).unwrap();
+    assert_eq!(region.hole_samples, 0);
+    let seams = region.seams.unwrap();
+    assert_eq!(
+        seams.overlap_samples, 0,
+        "web tiles abut, they do not overlap"
+    );
+    let dem = Dem {
+        grid: region.grid,
+        format: one.format,
+        data_type: one.data_type,
+        nodata: None,
+        path: paths[0].clone(),
+    };
+    assert_same_tile(&dem, &tif);
+}
+
+/// The tile's box in degrees, shrunk by `inset` degrees.
+fn tile14_bbox(inset: f64) -> [f64; 4] {
+    let n = 2f64.powi(14);
+    let lon = |x: f64| x / n * 360.0 - 180.0;
+    let lat = |y: f64| {
+        (std::f64::consts::PI * (1.0 - 2.0 * y / n))
+            .sinh()
+            .atan()
+            .to_degrees()
+    };
+    [
+        lon(10348.0) + inset,
+        lat(7802.0) + inset,
+        lon(10349.0) - inset,
+        lat(7801.0) - inset,
+    ]
+}
+
+#[test]
+fn pmtiles_archive_reads_the_tiles_of_a_box() {
+    let Some((tif, tiles)) = zoom15_tiles() else {
+        return;
+    };
+    let dir = tmp();
+    let (bytes, _) = formats::pmtiles(&tiles, 4, tile14_bbox(0.0));
+    let p = write_file(dir.path(), "terrain.pmtiles", &bytes);
+
+    let s = pmtiles::summary(&p).unwrap();
+    assert_eq!(
+        (s.min_zoom, s.max_zoom, s.tile_type.as_str()),
+        (15, 15, "webp")
+    );
+    assert!((s.bounds_deg[0] - tile14_bbox(0.0)[0]).abs() < 1e-6);
+
+    let all = TileRequest {
+        zoom: 15,
+        bbox_deg: tile14_bbox(1e-4),
+    };
+    let dem = read(&p, &ReadOptions::DEFAULT.with_tiles(Some(all)));
+    assert_eq!(dem.format, Format::Pmtiles(PngEncoding::Terrarium));
+    assert_same_tile(&dem, &tif);
+
+    // A box inside the north-west zoom-15 tile reads that tile alone.
+    let b = tile14_bbox(0.0);
+    let nw = [
+        b[0] + 1e-4,
+        (b[1] + b[3]) / 2.0 + 1e-4,
+        (b[0] + b[2]) / 2.0 - 1e-4,
+        b[3] - 1e-4,
+    ];
+    let one = read(
+        &p,
+        &ReadOptions::DEFAULT.with_tiles(Some(TileRequest {
+            zoom: 15,
+            bbox_deg: nw,
+        })),
+    );
+    assert_eq!((one.grid.width(), one.grid.height()), (256, 256));
+    assert_eq!(one.grid.get(0, 0), dem.grid.get(0, 0));
+}
+
+#[test]
+fn pmtiles_bad_requests_and_corrupt_directories() {
+    let Some((_, tiles)) = zoom15_tiles() else {
+        return;
+    };
+    let dir = tmp();
+    let (bytes, root) = formats::pmtiles(&tiles, 4, tile14_bbox(0.0));
+    let p = write_file(dir.path(), "terrain.pmtiles", &bytes);
+    // No selection: the zooms and bounds are named.
+    let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
+    assert_contains(&msg, &["--input-zoom", "--bbox", "zooms 15..15"]);
+    let wrong_zoom = TileRequest {
+        zoom: 9,
+        bbox_deg: tile14_bbox(1e-4),
+    };
+    let (msg, _) = error_of(&p, &ReadOptions::DEFAULT.with_tiles(Some(wrong_zoom)));
+    assert_contains(&msg, &["zooms 15..15", "found 9"]);
+    let huge = TileRequest {
+        zoom: 15,
+        bbox_deg: [-180.0, -85.0, 180.0, 85.0],
+    };
+    let (msg, _) = error_of(&p, &ReadOptions::DEFAULT.with_tiles(Some(huge)));
+    assert_contains(&msg, &["at most 4096 tiles"]);
+    let req = ReadOptions::DEFAULT.with_tiles(Some(TileRequest {
+        zoom: 15,
+        bbox_deg: tile14_bbox(1e-4),
+    }));
+    // A directory whose gzip stream is damaged.
+    let mut bad = bytes.clone();
+    for b in &mut bad[root.start + 10..root.end - 8] {
+        *b ^= 0x5a;
+    }
+    let p = write_file(dir.path(), "corrupt.pmtiles", &bad);
+    let (msg, _) = error_of(&p, &req);
+    assert_contains(&msg, &["directory"]);
+    // A root directory pointing past the end of the file.
+    let mut bad = bytes.clone();
+    bad[16..24].copy_from_slice(&(1u64 << 40).to_le_bytes());
+    let p = write_file(dir.path(), "past_end.pmtiles", &bad);
+    let (msg, _) = error_of(&p, &req);
+    assert_contains(&msg, &["inside the file"]);
+    // Truncated inside the tile data.
+    let p = write_file(dir.path(), "short.pmtiles", &bytes[..bytes.len() - 100]);
+    error_of(&p, &req);
+    let p = write_file(dir.path(), "header.pmtiles", &bytes[..50]);
+    let (msg, _) = error_of(&p, &req);
+    assert_contains(&msg, &["127 bytes"]);
+}
+
+/// The bundled ESRI grid with voids, as (heights, width, height).
+fn hugo() -> (Vec<f32>, usize, usize) {
+    let s = cota_fixtures::bundled("hugo_site.asc");
+    (s.heights, s.width, s.height)
+}
+
+#[test]
+fn npz_written_from_a_real_grid() {
+    let (h, w, ht) = hugo();
+    let dir = tmp();
+    let npz = formats::npz(&[
+        ("elevation", formats::npy_f32(&h, w, ht)),
+        ("cell_size_m", formats::npy_scalar(10.0)),
+    ]);
+    let p = write_file(dir.path(), "hugo.npz", &npz);
+    let dem = read(&p, &ReadOptions::DEFAULT);
+    assert_eq!(dem.format, Format::Npz);
+    assert_eq!((dem.grid.width(), dem.grid.height()), (w, ht));
+    assert_eq!(dem.grid.void_count(), 2028);
+    assert_eq!(dem.grid.cell_size_m(), [10.0, 10.0]);
+    let same = dem
+        .grid
+        .heights()
+        .iter()
+        .zip(&h)
+        .all(|(a, b)| a == b || (a.is_nan() && b.is_nan()));
+    assert!(same);
+
+    // Two 2-D arrays with no conventional name: ambiguous, the names listed.
+    let two = formats::npz(&[
+        ("a", formats::npy_f32(&h, w, ht)),
+        ("b", formats::npy_f32(&h, w, ht)),
+    ]);
+    let p = write_file(dir.path(), "two.npz", &two);
+    let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
+    assert_contains(&msg, &["a, b", "--array"]);
+    let b = ReadOptions::DEFAULT.with_array(ArrayName::new("b"));
+    assert_eq!(read(&p, &b).grid.width(), w);
+    let (msg, _) = error_of(&p, &ReadOptions::DEFAULT.with_array(ArrayName::new("c")));
+    assert_contains(&msg, &["\"c\"", "a, b"]);
+
+    // A plain .npy with the cell size from the options.
+    let p = write_file(dir.path(), "hugo.npy", &formats::npy_f32(&h, w, ht));
+    let dem = read(&p, &ReadOptions::DEFAULT.with_cell_size_m(10.0));
+    assert_eq!((dem.format, dem.data_type), (Format::Npy, DataType::F32));
+    assert_eq!(dem.grid.cell_size_m(), [10.0, 10.0]);
+}
+
+#[test]
+fn npz_companion_arrays_give_a_georeference() {
+    let (h, w, ht) = hugo();
+    let dir = tmp();
+    let npz = formats::npz(&[
+        ("elevation", formats::npy_f32(&h, w, ht)),
+        ("dx", formats::npy_scalar(1.0 / 3600.0)),
+        ("dy", formats::npy_scalar(1.0 / 3600.0)),
+        ("xmin", formats::npy_scalar(-105.0)),
+        ("ymax", formats::npy_scalar(40.0)),
+    ]);
+    let p = write_file(dir.path(), "geo.npz", &npz);
+    let dem = read(&p, &ReadOptions::DEFAULT);
+    let g = dem.grid.georef();
+    assert!(g.known && g.crs.is_geographic(), "{:?}", g.crs);
+    assert_eq!(g.sample_xy(0.0, 0.0), (-105.0, 40.0));
+    let [dx, dy] = dem.grid.cell_size_m();
+    assert!(
+        (dy - 30.85).abs() < 0.1 && (dx - 23.7).abs() < 0.2,
+        "{dx} {dy}"
+    );
+}
+
+#[test]
+fn npy_bad_input() {
+    let dir = tmp();
+    let cases: [(&str, Vec<u8>, &[&str]); 5] = [
+        (
+            "complex.npy",
+            formats::npy("<c8", false, &[2, 2], &[0; 32]),
+            &["dtype", "c8"],
+        ),
+        (
+            "cube.npy",
+            formats::npy("<f4", false, &[2, 2, 2], &[0; 32]),
+            &["2-D"],
+        ),
+        (
+            "short.npy",
+            formats::npy("<f4", false, &[3, 3], &[0; 20]),
+            &["36 bytes", "found 20 bytes"],
+        ),
+        (
+            "huge.npy",
+            formats::npy("<f4", false, &[1 << 20, 1 << 20], &[0; 8]),
+            &["too large"],
+        ),
+        (
+            "trunc.npy",
+            formats::npy("<f4", false, &[3, 3], &[0; 36])[..20].to_vec(),
+            &[".npy header"],
+        ),
+    ];
+    for (name, bytes, needles) in cases {
+        let p = write_file(dir.path(), name, &bytes);
+        let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
+        assert_contains(&msg, needles);
+    }
+    // Fortran order is read (transposed), not refused.
+    let data: Vec<u8> = [1.0f32, 2.0, 3.0, 4.0, 5.0, 6.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let p = write_file(
+        dir.path(),
+        "f.npy",
+        &formats::npy("<f4", true, &[2, 3], &data),
+    );
+    assert_eq!(
+        read(&p, &ReadOptions::DEFAULT).grid.heights(),
+        &[1.0, 3.0, 5.0, 2.0, 4.0, 6.0]
+    );
+}
+
+#[test]
+fn usgs_dem_written_from_the_bundled_srtm_tile() {
+    let s = cota_fixtures::bundled_tile();
+    let dir = tmp();
+    let bytes = formats::usgs_dem(&s.heights, s.width, -72.0, -29.0, 3.0, s.width);
+    let p = write_file(dir.path(), "S29W072.dem", &bytes);
+    let dem = read(&p, &ReadOptions::DEFAULT);
+    assert_eq!(dem.format, Format::UsgsDem);
+    assert_eq!((dem.grid.width(), dem.grid.height()), (1201, 1201));
+    assert_eq!(dem.grid.georef().crs, Crs::WGS84);
+    let (x, y) = dem.grid.georef().sample_xy(0.0, 0.0);
+    assert!(
+        (x + 72.0).abs() < 1e-9 && (y + 28.0).abs() < 1e-9,
+        "{x} {y}"
+    );
+    let srtm = read(&fixture("S29W072.hgt.zip"), &ReadOptions::DEFAULT);
+    assert_eq!(dem.grid.void_count(), srtm.grid.void_count());
+    let same = dem
+        .grid
+        .heights()
+        .iter()
+        .zip(srtm.grid.heights())
+        .all(|(a, b)| a == b || (a.is_nan() && b.is_nan()));
+    assert!(same, "the .dem and the .hgt.zip differ");
+}
+
+#[test]
+fn usgs_dem_with_a_wrong_profile_count() {
+    let s = cota_fixtures::bundled_tile().crop(0, 0, 101, 101);
+    let dir = tmp();
+    let more = formats::usgs_dem(&s.heights, 101, -72.0, -29.0, 3.0, 102);
+    let p = write_file(dir.path(), "more.dem", &more);
+    let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
+    assert_contains(&msg, &["102 profiles", "found 101"]);
+    let ok = formats::usgs_dem(&s.heights, 101, -72.0, -29.0, 3.0, 101);
+    let p = write_file(dir.path(), "cut.dem", &ok[..ok.len() - 1024 * 3]);
+    let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
+    assert_contains(&msg, &["profile"]);
+    let absurd = formats::usgs_dem(&s.heights, 101, -72.0, -29.0, 3.0, 999_999);
+    let p = write_file(dir.path(), "absurd.dem", &absurd);
+    let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
+    assert_contains(&msg, &["999999 profiles"]);
+}

@@ -1,0 +1,159 @@
+//! 3D Tiles terrain pyramids on a real DEM (issue 30): every GLB decodes with
+//! the independent decoder into the quantized-mesh tile's triangles, drawn
+//! within its zoom's bound (plus float32's rounding) at every source sample;
+//! the subtrees mark exactly the tiles written; a resumed run skips them and
+//! rebuilds the same subtrees and tileset.
+#![allow(clippy::unwrap_used, clippy::panic)]
+
+use crate::common;
+
+use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
+use cota_core::{fill_voids, FillOptions, LonLat};
+use cota_io::tiles::drawn::{check_samples, Against, DrawnTile, SourceGrid};
+use cota_io::tiles::glb_decode::decode_glb;
+use cota_io::tiles::glb_tile::float32_budget_m;
+use cota_io::tiles::tileset3d::glb_rel_path;
+use cota_io::tiles::{
+    decode, make_tile, write_tiles3d, PyramidError, PyramidOptions, TileExtensions, TileFormat,
+};
+use cota_io::{read_dem, ReadOptions};
+
+fn opts() -> PyramidOptions {
+    PyramidOptions::DEFAULT
+        .with_format(TileFormat::Tiles3d)
+        .with_extensions(TileExtensions::with(true, false, false))
+}
+
+/// The subtree file's JSON and availability bits.
+fn subtree(bytes: &[u8]) -> (serde_json::Value, Vec<u8>) {
+    assert_eq!(&bytes[..4], b"subt");
+    let n = u64::from_le_bytes(bytes[8..16].try_into().unwrap()) as usize;
+    let doc: serde_json::Value = serde_json::from_slice(&bytes[24..24 + n]).unwrap();
+    (doc, bytes[24 + n..].to_vec())
+}
+
+#[test]
+fn fixture_pyramid_as_glb_within_bounds_and_resumable() {
+    let mut g = read_dem(&common::fixture("S29W072.hgt.zip"), &ReadOptions::DEFAULT)
+        .unwrap()
+        .grid;
+    fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
+    let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(10))).unwrap();
+    let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
+    let rect = [-72.0, -29.0, -71.0, -28.0];
+    let grid = SourceGrid {
+        grid: &g,
+        transform: &LonLat,
+    };
+    let against = Against::new(vec![grid], vec![rect], 0.5);
+    let out = tempfile::tempdir().unwrap();
+    let report = write_tiles3d(&prep, out.path(), &opts(), Some(&against), &|_| {}).unwrap();
+    assert_eq!(report.written(), prep.tile_count());
+    let mut worst = 0.0f64;
+    for t in prep.tiles() {
+        let bytes = std::fs::read(out.path().join(glb_rel_path(t))).unwrap();
+        let glb = decode_glb(&bytes).unwrap();
+        // The same tile as quantized-mesh, decoded: same triangles, same vertices.
+        let qm = make_tile(&prep, t, &PyramidOptions::DEFAULT.with_check(false), None).unwrap();
+        let d = decode(&qm.bytes).unwrap();
+        assert_eq!(glb.triangles, d.triangles, "{t}");
+        assert!(glb
+            .normals
+            .as_ref()
+            .is_some_and(|n| n.len() == glb.positions.len()));
+        let z = prep.zoom(t.z).unwrap();
+        let r = d.header.sphere_radius_m + 1e3;
+        let drawn = DrawnTile::new(&d, qm_rect(t)).with_positions(&glb.positions);
+        let got = check_samples(&drawn, &against.samples).max_error_m;
+        let bound = prep.source_bound_m(t.z) + float32_budget_m(r);
+        assert!(
+            got <= bound + 1e-6,
+            "{t}: {got} m as drawn, bound {bound} m"
+        );
+        worst = worst.max(got / z.max_error_m);
+    }
+    eprintln!("worst error as drawn / e_z over the GLB tiles: {worst:.3}");
+    // The subtrees mark exactly the tiles written: count them.
+    let tileset: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.path().join("tileset.json")).unwrap()).unwrap();
+    assert_eq!(tileset["root"]["children"].as_array().unwrap().len(), 2);
+    let levels = tileset["root"]["children"][0]["implicitTiling"]["subtreeLevels"]
+        .as_u64()
+        .unwrap();
+    assert_eq!(levels, 6, "zooms 0-10 in two layers of subtrees");
+    let mut marked = 0;
+    for root in 0..2 {
+        let dir = out.path().join(format!("{root}/subtrees"));
+        for e in walk(&dir) {
+            let (doc, _) = subtree(&std::fs::read(&e).unwrap());
+            marked += doc["tileAvailability"]["availableCount"].as_u64().unwrap();
+            assert_eq!(
+                doc["propertyTables"][0]["count"],
+                doc["tileAvailability"]["availableCount"]
+            );
+        }
+    }
+    assert_eq!(marked, prep.tile_count());
+    // Resumed: one tile removed is made again, the rest skipped; same tileset.
+    let victim = out.path().join(glb_rel_path(prep.tiles().last().unwrap()));
+    std::fs::remove_file(&victim).unwrap();
+    let before = std::fs::read(out.path().join("0/subtrees/0/0/0.subtree")).unwrap();
+    let again = write_tiles3d(&prep, out.path(), &opts(), None, &|_| {}).unwrap();
+    assert_eq!(
+        (again.written(), again.skipped()),
+        (1, prep.tile_count() - 1)
+    );
+    assert_eq!(
+        std::fs::read(out.path().join("0/subtrees/0/0/0.subtree")).unwrap(),
+        before
+    );
+    // Other settings are refused, as for quantized-mesh.
+    let qm = PyramidOptions::DEFAULT;
+    let err = write_tiles3d(
+        &prep,
+        out.path(),
+        &qm.with_format(TileFormat::Tiles3d),
+        None,
+        &|_| {},
+    )
+    .unwrap_err();
+    assert!(matches!(err, PyramidError::Changed { .. }), "{err}");
+}
+
+fn qm_rect(t: TileId) -> [f64; 4] {
+    let size = 180.0 / f64::from(1u32 << t.z);
+    let (w, s) = (
+        -180.0 + f64::from(t.x) * size,
+        -90.0 + f64::from(t.y) * size,
+    );
+    [w, s, w + size, s + size]
+}
+
+fn walk(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn a_pyramid_not_from_zoom_0_is_refused() {
+    let mut g = read_dem(&common::fixture("S29W072.hgt.zip"), &ReadOptions::DEFAULT)
+        .unwrap()
+        .grid;
+    fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
+    let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(6))).unwrap();
+    let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT.with_min_zoom(3)).unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let err = write_tiles3d(&prep, out.path(), &opts(), None, &|_| {}).unwrap_err();
+    assert!(err.to_string().contains("--min-zoom 0"), "{err}");
+}
