@@ -87,6 +87,18 @@ impl DecodedTile {
         lo + f64::from(self.height[i]) / 32767.0 * (hi - lo)
     }
 
+    /// Vertex `i`'s longitude and latitude (degrees) and height (metres)
+    /// over `rect` (`[west, south, east, north]`, degrees), as a client
+    /// computes them.
+    pub fn geodetic(&self, i: usize, rect: [f64; 4]) -> [f64; 3] {
+        let m = 32767.0;
+        [
+            rect[0] + f64::from(self.u[i]) / m * (rect[2] - rect[0]),
+            rect[1] + f64::from(self.v[i]) / m * (rect[3] - rect[1]),
+            self.height_m(i),
+        ]
+    }
+
     /// The tile on its lattice of `cells × cells` cells: vertex `(u, v)` at
     /// `(u·cells / 32767, (32767 − v)·cells / 32767)` cells from the north-west
     /// corner, exactly, for [`cota_core::mesh::check::check_placed_mesh`].

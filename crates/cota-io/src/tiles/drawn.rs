@@ -219,16 +219,7 @@ pub struct DrawnTile<'t> {
 impl<'t> DrawnTile<'t> {
     /// `tile` over `rect` (`[west, south, east, north]`, degrees).
     pub fn new(tile: &'t DecodedTile, rect: [f64; 4]) -> DrawnTile<'t> {
-        let m = 32767.0;
-        let geo: Vec<[f64; 3]> = (0..tile.u.len())
-            .map(|i| {
-                [
-                    rect[0] + f64::from(tile.u[i]) / m * (rect[2] - rect[0]),
-                    rect[1] + f64::from(tile.v[i]) / m * (rect[3] - rect[1]),
-                    tile.height_m(i),
-                ]
-            })
-            .collect();
+        let geo: Vec<[f64; 3]> = (0..tile.u.len()).map(|i| tile.geodetic(i, rect)).collect();
         let xyz = geo.iter().map(|g| ecef(g[0], g[1], g[2])).collect();
         let n = geo.len();
         let mut fan_starts = vec![0usize; n + 1];
@@ -259,11 +250,8 @@ impl<'t> DrawnTile<'t> {
 
     /// The same tile drawn from other ECEF positions of its vertices (the
     /// float32 positions of its 3D Tiles GLB): footprints stay the tile's,
-    /// heights are measured on `xyz`.
-    ///
-    /// # Panics
-    /// Never: positions beyond the tile's vertex count are ignored, missing
-    /// ones keep the tile's own.
+    /// heights are measured on `xyz` (positions beyond the tile's vertex
+    /// count are ignored; missing ones keep the tile's own).
     pub fn with_positions(mut self, xyz: &[[f64; 3]]) -> DrawnTile<'t> {
         for (p, q) in self.xyz.iter_mut().zip(xyz) {
             *p = *q;

@@ -71,12 +71,10 @@ impl TileMeta {
 /// The ECEF positions of a decoded quantized-mesh tile's vertices over
 /// `rect` (`[west, south, east, north]`, degrees), as its client computes them.
 pub fn ecef_positions(tile: &DecodedTile, rect: [f64; 4]) -> Vec<[f64; 3]> {
-    let m = 32767.0;
     (0..tile.u.len())
         .map(|i| {
-            let lon = rect[0] + f64::from(tile.u[i]) / m * (rect[2] - rect[0]);
-            let lat = rect[1] + f64::from(tile.v[i]) / m * (rect[3] - rect[1]);
-            ecef(lon, lat, tile.height_m(i))
+            let [lon, lat, h] = tile.geodetic(i, rect);
+            ecef(lon, lat, h)
         })
         .collect()
 }

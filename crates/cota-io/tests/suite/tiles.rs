@@ -170,7 +170,8 @@ fn resume_skips_force_redoes_and_changed_settings_are_refused() {
     assert_eq!(stray, 0);
 }
 
-fn walk(dir: &Path) -> Vec<String> {
+/// Every file under `dir`, as displayed paths.
+pub(crate) fn walk(dir: &Path) -> Vec<String> {
     let mut v = Vec::new();
     for e in std::fs::read_dir(dir).unwrap() {
         let p = e.unwrap().path();

@@ -7,7 +7,7 @@
 
 use crate::common;
 
-use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
+use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
 use cota_core::{fill_voids, FillOptions, LonLat};
 use cota_io::tiles::drawn::{check_samples, Against, DrawnTile, SourceGrid};
 use cota_io::tiles::glb_decode::decode_glb;
@@ -63,7 +63,8 @@ fn fixture_pyramid_as_glb_within_bounds_and_resumable() {
             .is_some_and(|n| n.len() == glb.positions.len()));
         let z = prep.zoom(t.z).unwrap();
         let r = d.header.sphere_radius_m + 1e3;
-        let drawn = DrawnTile::new(&d, qm_rect(t)).with_positions(&glb.positions);
+        let rect = prep.lattice().scheme().tile_rect_deg(t);
+        let drawn = DrawnTile::new(&d, rect).with_positions(&glb.positions);
         let got = check_samples(&drawn, &against.samples).max_error_m;
         let bound = prep.source_bound_m(t.z) + float32_budget_m(r);
         assert!(
@@ -84,7 +85,7 @@ fn fixture_pyramid_as_glb_within_bounds_and_resumable() {
     let mut marked = 0;
     for root in 0..2 {
         let dir = out.path().join(format!("{root}/subtrees"));
-        for e in walk(&dir) {
+        for e in crate::tiles::walk(&dir) {
             let (doc, _) = subtree(&std::fs::read(&e).unwrap());
             marked += doc["tileAvailability"]["availableCount"].as_u64().unwrap();
             assert_eq!(
@@ -118,31 +119,6 @@ fn fixture_pyramid_as_glb_within_bounds_and_resumable() {
     )
     .unwrap_err();
     assert!(matches!(err, PyramidError::Changed { .. }), "{err}");
-}
-
-fn qm_rect(t: TileId) -> [f64; 4] {
-    let size = 180.0 / f64::from(1u32 << t.z);
-    let (w, s) = (
-        -180.0 + f64::from(t.x) * size,
-        -90.0 + f64::from(t.y) * size,
-    );
-    [w, s, w + size, s + size]
-}
-
-fn walk(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.push(p);
-            }
-        }
-    }
-    out
 }
 
 #[test]
