@@ -44,11 +44,17 @@ fn main() -> ExitCode {
 
 /// The error and its causes, joined by ": ", each cause once: a cause whose
 /// text an outer error already printed (an I/O error its wrapper quotes) is
-/// not printed again.
+/// not printed again, nor a path the outer error ends with.
 fn error_text(e: &anyhow::Error) -> String {
     let mut text = String::new();
     for cause in e.chain() {
-        let t = cause.to_string();
+        let mut t = cause.to_string();
+        // "writing /x" then "/x: No such file…": the path once.
+        if let Some((head, rest)) = t.split_once(": ") {
+            if !head.is_empty() && text.ends_with(head) {
+                t = rest.to_string();
+            }
+        }
         if text.contains(&t) {
             continue;
         }

@@ -338,7 +338,7 @@ fn measure_mesh(
                 .context("the invariant checker rejected the mesh (this is a bug in cota)")?
                 .metrics
         } else {
-            measure(grid, mesh)
+            measure(grid, mesh).within_rounding_of(check_opts.max_error_m, grid)
         })
     })
 }
@@ -472,7 +472,7 @@ fn strip_and_write<'m>(
         None => std::thread::scope(|s| -> anyhow::Result<_> {
             let writer = s.spawn(strip_then_write);
             let t = Instant::now();
-            let metrics = measure(grid, &m.mesh);
+            let metrics = measure(grid, &m.mesh).within_rounding_of(m.check.max_error_m, grid);
             let measure_ms = ms(t);
             let written = writer
                 .join()

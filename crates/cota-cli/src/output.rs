@@ -56,6 +56,13 @@ pub fn check_output(
         }
         return Ok(format);
     }
+    check_file_path(out)?;
+    Ok(format)
+}
+
+/// Fails early on a file path that cannot be written: no such directory,
+/// a directory in its place, or a directory where no file can be made.
+pub fn check_file_path(out: &Path) -> anyhow::Result<()> {
     let dir = match out.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -70,7 +77,68 @@ pub fn check_output(
     if out.is_dir() {
         anyhow::bail!("cannot write {}: it is a directory", out.display());
     }
-    Ok(format)
+    probe_dir(out, dir)
+}
+
+/// Fails early unless a file can be made in `dir` (the directory `out` goes
+/// to): a read-only directory, `/proc` or a full disk would otherwise fail
+/// only when the work is done. Creates and removes an empty file there.
+pub fn probe_dir(out: &Path, dir: &Path) -> anyhow::Result<()> {
+    let probe = dir.join(format!(".cota-probe-{}", std::process::id()));
+    let made = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe);
+    match made {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => anyhow::bail!(
+            "cannot write {}: cannot create a file in {}: {e}",
+            out.display(),
+            dir.display()
+        ),
+    }
+}
+
+/// Fails early on an output directory (`cota tiles -o DIR`) that cannot be
+/// written: an existing file that is not a directory, or no writable
+/// directory to make it in. `archive`: `out` is a file (`.mbtiles`) instead.
+pub fn check_output_dir(out: &Path, archive: bool) -> anyhow::Result<()> {
+    if archive {
+        if out.is_dir() {
+            anyhow::bail!("cannot write {}: it is a directory", out.display());
+        }
+        let dir = match out.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        return probe_dir(out, dir);
+    }
+    if out.exists() && !out.is_dir() {
+        anyhow::bail!(
+            "cannot write {}: expected a directory, found a file",
+            out.display()
+        );
+    }
+    // The nearest directory that exists: the output or the one it is made in.
+    let mut dir = out;
+    while !dir.exists() {
+        match dir.parent() {
+            Some(p) if !p.as_os_str().is_empty() => dir = p,
+            _ => return probe_dir(out, Path::new(".")),
+        }
+    }
+    if !dir.is_dir() {
+        anyhow::bail!(
+            "cannot write {}: {} is not a directory",
+            out.display(),
+            dir.display()
+        );
+    }
+    probe_dir(out, dir)
 }
 
 /// Writes what `encode` writes to `out`: atomically to a file (a read-only

@@ -71,7 +71,7 @@ fn check_encode(a: &StreamEncodeArgs) -> anyhow::Result<()> {
             "-o -: expected a file name (cota stream encode prints its report on stdout)"
         );
     }
-    Ok(())
+    crate::output::check_file_path(&a.output)
 }
 
 fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {

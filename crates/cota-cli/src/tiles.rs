@@ -97,7 +97,8 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     Ok(std::process::ExitCode::SUCCESS)
 }
 
-/// An `.mbtiles` output with what only a directory takes: refused in words.
+/// An `.mbtiles` output with what only a directory takes: refused in words;
+/// an output that cannot be written: refused before any work.
 fn refuse_archive_mismatch(a: &TilesArgs) -> anyhow::Result<()> {
     if is_mbtiles(&a.output) && a.format == TileFormatArg::Tiles3d {
         anyhow::bail!(
@@ -111,7 +112,7 @@ fn refuse_archive_mismatch(a: &TilesArgs) -> anyhow::Result<()> {
             a.output.display()
         );
     }
-    Ok(())
+    crate::output::check_output_dir(&a.output, is_mbtiles(&a.output))
 }
 
 /// The one input when it is a single grid in WGS 84 longitude/latitude

@@ -171,3 +171,99 @@ fn os_error_text_is_printed_once() {
     assert!(e.contains("/proc/cota-cannot-make-this"), "{e}");
     assert_eq!(e.matches("(os error").count(), 1, "{e}");
 }
+
+/// `--mesh tin` on 1 and on 2 threads: the same mesh, byte for byte, and a
+/// reported largest error that a script can test against the bound
+/// (`max_error_m <= 1`), as the checker does.
+#[test]
+fn the_tin_is_the_same_on_any_thread_count_and_its_error_never_reads_above_the_bound() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |threads: &str| {
+        let out = dir.path().join(format!("tin{threads}.obj"));
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_cota"))
+            .env("RAYON_NUM_THREADS", threads)
+            .args([
+                "mesh",
+                "--mesh",
+                "tin",
+                "--max-error",
+                "1",
+                "--check",
+                "--json",
+                "-o",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        let r: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        let max = r["max_error_m"].as_f64().unwrap();
+        assert!(max <= 1.0, "reported {max} m for a bound of 1 m");
+        (
+            std::fs::read(&out).unwrap(),
+            r["triangles"].as_u64().unwrap(),
+        )
+    };
+    let (one, n1) = run("1");
+    let (two, n2) = run("2");
+    assert_eq!(n1, n2, "triangles on 1 and 2 threads");
+    assert!(one == two, "the TIN differs between 1 and 2 threads");
+}
+
+/// Outputs that cannot be written are refused before any work (before the
+/// input is even opened: it does not exist here), each path named once: a directory where no file can be made (`/proc`), a file in
+/// the way of a tiles directory, a tiles directory under a file.
+#[test]
+fn outputs_are_refused_before_any_work_and_named_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, b"x").unwrap();
+    let file_s = file.to_str().unwrap();
+    let under = format!("{file_s}/tiles");
+    let cases: Vec<(Vec<&str>, String)> = vec![
+        (
+            vec!["tiles", "-o", file_s],
+            format!("cannot write {file_s}: expected a directory, found a file"),
+        ),
+        (
+            vec!["tiles", "-o", &under],
+            format!("cannot write {under}: {file_s} is not a directory"),
+        ),
+    ];
+    let proc_cases: Vec<(Vec<&str>, String)> = if std::path::Path::new("/proc/self").is_dir() {
+        vec![
+            (
+                vec!["mesh", "-o", "/proc/x.glb"],
+                "cannot write /proc/x.glb: cannot create a file in /proc".into(),
+            ),
+            (
+                vec!["tiles", "-o", "/proc/x"],
+                "cannot write /proc/x: cannot create a file in /proc".into(),
+            ),
+            (
+                vec!["stream", "encode", "-o", "/proc/x.cota"],
+                "cannot write /proc/x.cota: cannot create a file in /proc".into(),
+            ),
+        ]
+    } else {
+        eprintln!("skipped: /proc cases (no /proc here)");
+        vec![]
+    };
+    for (mut args, want) in cases.into_iter().chain(proc_cases) {
+        // An input that does not exist: the output must be refused first.
+        args.insert(args.len() - 2, "no-such-dem.hgt");
+        let o = cota(&args);
+        let e = stderr(&o);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(e.contains(&want), "{args:?}: {e}");
+        assert!(
+            !e.contains("at path"),
+            "{args:?}: a temporary path leaked: {e}"
+        );
+        let first = e.find(args[args.len() - 1]).unwrap();
+        assert!(
+            !e[first + 1..].contains(&format!("{}:", args[args.len() - 1])),
+            "{args:?}: the path is printed twice: {e}"
+        );
+    }
+}

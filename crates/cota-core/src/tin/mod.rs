@@ -99,8 +99,9 @@ pub struct TinOptions {
     /// their vertices there exactly. Default: false (border vertices are
     /// removed like any other where the bound allows).
     pub lock_border: bool,
-    /// Bands of rows decimated in parallel; 0 picks twice the rayon threads
-    /// (at most one band per 4096 seed vertices). Default: 0.
+    /// Bands of rows decimated in parallel; 0 picks one band per 4096 seed
+    /// vertices, at most 32, whatever the thread count, so that the mesh is
+    /// the same on any number of threads. Default: 0.
     pub bands: usize,
     /// Sweeps of the decimation over the vertices: the first visits every
     /// vertex, each later one only those whose star changed since they were
@@ -243,7 +244,7 @@ fn tin_at(tree: &Bitree<'_>, e: f64, opts: &TinOptions) -> Result<Mesh, MeshErro
         .map(|v| opts.lock_border && on_border(v))
         .collect();
     let k = match opts.bands {
-        0 => (2 * rayon::current_num_threads()).min(seed.vertices.len() / 4096),
+        0 => (seed.vertices.len() / 4096).min(32),
         k => k,
     };
     let hs = span::Heights::of(grid);

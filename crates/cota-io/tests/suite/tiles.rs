@@ -108,7 +108,9 @@ fn two_tile_mosaic_small_bounds_and_seams() {
         data.join("srtm/N00E010.hgt"),
         data.join("srtm/N00E011.hgt.zip"),
     ]);
-    let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT).unwrap();
+    // Zooms 8 to 11 (the lattice one zoom short of the data's 12: a quarter
+    // of the samples, every tile border and the files' seam still there).
+    let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(11))).unwrap();
     let opts = TilerOptions::DEFAULT
         .with_min_zoom(8)
         .with_error(ErrorSchedule::AtMaxZoom { max_error_m: 2.0 });
@@ -117,7 +119,7 @@ fn two_tile_mosaic_small_bounds_and_seams() {
     write_pyramid(&prep, out.path(), &PyramidOptions::DEFAULT, None, &|_| {}).unwrap();
     let tiles = decode_all(&prep, out.path());
     let (borders, _) = assert_no_seams(&tiles);
-    assert!(borders > 2000, "{borders}");
+    assert!(borders > 700, "{borders}");
 }
 
 #[test]

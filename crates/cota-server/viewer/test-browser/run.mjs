@@ -304,8 +304,13 @@ async function docShots(browser, url, path) {
   await page.close();
 }
 
-/** `cota tiles` on the input into a temporary directory, and its --json report. */
+/**
+ * `cota tiles` on the input into a temporary directory, and its --json report;
+ * or the pyramid of the same input that $COTA_BROWSER_TILES names (CI made it
+ * in its tiles step: not made a third time), kept.
+ */
 function makeTiles(files) {
+  if (process.env.COTA_BROWSER_TILES) return { dir: process.env.COTA_BROWSER_TILES, given: true };
   const dir = mkdtempSync(join(tmpdir(), 'cota-tiles-'));
   const t0 = Date.now();
   const r = spawnSync(bin, ['tiles', ...files, '-o', dir, '--normals', '--metadata', '--gzip', '--json'], { encoding: 'utf8' });
@@ -439,7 +444,7 @@ async function main() {
   } catch (e) {
     check('CesiumJS page', false, String(e.message || e));
   } finally {
-    if (tiles) rmSync(tiles.dir, { recursive: true, force: true });
+    if (tiles && !tiles.given) rmSync(tiles.dir, { recursive: true, force: true });
   }
   await browser.close();
   writeFileSync(join(out, 'results.json'), JSON.stringify(results, null, 2));

@@ -452,11 +452,7 @@ fn check_on_pool(
             });
         }
         if let Some(bound) = opts.max_error_m {
-            let scale = grid
-                .valid_range()
-                .map(|(lo, hi)| (lo.abs().max(hi.abs()) as f64).max(1.0))
-                .unwrap_or(1.0);
-            if metrics.max_error_m > bound + 1e-9 * scale {
+            if metrics.max_error_m > bound + Metrics::rounding_allowance_m(grid) {
                 found.push(Violation::ErrorBound {
                     got: metrics.max_error_m,
                     bound,
@@ -472,7 +468,9 @@ fn check_on_pool(
             total: found.total,
         });
     }
-    Ok(CheckReport { metrics })
+    Ok(CheckReport {
+        metrics: metrics.within_rounding_of(opts.max_error_m, grid),
+    })
 }
 
 /// Checks each vertex; returns the vertex at each sample (`u32::MAX` for
