@@ -251,6 +251,17 @@ pub struct MeshArgs {
     /// this height in metres (for 3D printing).
     #[arg(long, value_name = "M", allow_negative_numbers = true)]
     pub base_m: Option<f64>,
+    /// STL only: close the surface into a solid whose flat base lies MM
+    /// millimetres of the model below its lowest point, whatever the
+    /// terrain's heights (a coast at 0 m, a basin below sea level). Needs a
+    /// print scale (--scale or --size-mm).
+    #[arg(
+        long,
+        value_name = "MM",
+        allow_negative_numbers = true,
+        conflicts_with = "base_m"
+    )]
+    pub base_mm: Option<f64>,
     /// STL only: print scale, model length to true length, as 1:N or a
     /// factor (1:100000 = 0.00001: 1 km becomes 10 mm). The STL is then in
     /// millimetres, heights (times --z-scale, from 0 m) at the same scale.

@@ -31,7 +31,7 @@ pub fn validate(a: &MeshArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     let refuse = |what: &str| anyhow::bail!("--voids hole: {what}");
-    if a.base_m.is_some() {
+    if a.base_m.is_some() || a.base_mm.is_some() {
         return refuse(
             "expected no --base-m (a solid with holes in its top is not closed; fill the voids to print it)",
         );

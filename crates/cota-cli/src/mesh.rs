@@ -166,7 +166,11 @@ fn validate_tin(a: &MeshArgs) -> anyhow::Result<()> {
 fn validate(a: &MeshArgs) -> anyhow::Result<()> {
     crate::hole::validate(a)?;
     let format = match &a.output {
-        Some(out) => Some(crate::output::check_output(out, a.format, a.base_m)?),
+        Some(out) => Some(crate::output::check_output(
+            out,
+            a.format,
+            a.base_m.or(a.base_mm),
+        )?),
         None => None,
     };
     crate::print::validate(a, format)?;
@@ -285,14 +289,14 @@ fn mesh_grid(
 }
 
 /// The export options the flags give.
-fn export_options(a: &MeshArgs) -> ExportOptions {
+fn export_options(a: &MeshArgs, base_m: Option<f64>) -> ExportOptions {
     let coords = match a.coords {
         CoordsArg::Local => Coords::LocalMetres,
         CoordsArg::Grid => Coords::Grid,
     };
     ExportOptions::DEFAULT
         .with_coords(coords)
-        .with_base_m(a.base_m.map(|b| b * a.z_scale))
+        .with_base_m(base_m.map(|b| b * a.z_scale))
         .with_quantize(a.quantize)
         .with_replace_read_only(a.force.force)
 }
@@ -307,7 +311,7 @@ fn quantization(
     let t = Instant::now();
     let quant = match a.quantize {
         true => Some(
-            GlbQuantization::new(&m.mesh, grid, &export_options(a))
+            GlbQuantization::new(&m.mesh, grid, &export_options(a, None))
                 .context("quantizing the mesh")?,
         ),
         false => None,
@@ -391,7 +395,8 @@ fn write(
         return Ok(0.0);
     };
     let units = crate::print::mm_per_m(a, grid)?.unwrap_or(1.0);
-    let eo = export_options(a).with_stl_units_per_m(units);
+    let base = crate::print::base_m(a, grid)?;
+    let eo = export_options(a, base).with_stl_units_per_m(units);
     let t = Instant::now();
     let mesh = scaled(&m.mesh, a.z_scale);
     if crate::pair::write_draped(&a.texture, out, a.force.force, grid, &mesh, &eo)? {
@@ -501,6 +506,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     let files = crate::input::name(&input.files);
     let fill = crate::input::fill(&mut grid, a.voids).with_context(|| files.clone())?;
     let fill_ms = ms(t);
+    crate::print::base_m(a, &grid)?;
     let (mut m, build_ms, extract_ms) =
         mesh_grid(a, &grid, holes.as_ref()).with_context(|| files.clone())?;
     let cut = holes.as_ref().map(|h| crate::hole::cut(&mut m, h));

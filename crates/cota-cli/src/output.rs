@@ -44,7 +44,7 @@ pub fn check_output(
     let format = format_of(out, flag)?;
     if base_m.is_some() && format != MeshFormat::Stl {
         anyhow::bail!(
-            "{}: --base-m makes a closed solid for 3D printing and applies to .stl output only, found .{format}",
+            "{}: --base-m and --base-mm make a closed solid for 3D printing and apply to .stl output only, found .{format}",
             out.display()
         );
     }

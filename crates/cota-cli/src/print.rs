@@ -22,6 +22,19 @@ fn flag(a: &MeshArgs) -> Option<&'static str> {
 /// Refuses a print scale that makes no sense: a size that is not a
 /// positive number, no output or one other than STL, grid coordinates.
 pub fn validate(a: &MeshArgs, format: Option<MeshFormat>) -> anyhow::Result<()> {
+    if let Some(mm) = a.base_mm {
+        if !(mm.is_finite() && mm > 0.0) {
+            anyhow::bail!(
+                "--base-mm: expected a positive number of millimetres, found {}",
+                num(mm)
+            );
+        }
+        if flag(a).is_none() {
+            anyhow::bail!(
+                "--base-mm: expected --scale 1:N or --size-mm MM (millimetres of the model need a print scale); --base-m M sets the base in metres"
+            );
+        }
+    }
     let Some(flag) = flag(a) else {
         return Ok(());
     };
@@ -78,6 +91,25 @@ pub fn mm_per_m(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<Option<f64>> 
     }
 }
 
+/// The height of the solid's base in true metres (before `--z-scale`):
+/// `--base-m`, or `--base-mm` below the lowest sample at the print scale.
+/// A `--base-m` not below the lowest sample is refused here, before any
+/// meshing, with the flag that fits any terrain.
+pub fn base_m(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<Option<f64>> {
+    let lo = grid.valid_range().map_or(0.0, |(lo, _)| f64::from(lo));
+    if let Some(b) = a.base_m.filter(|b| !(*b < lo)) {
+        anyhow::bail!(
+            "--base-m: expected a base below the lowest sample ({} m), found {} m; give a lower --base-m, or --base-mm MM for a base MM millimetres below the lowest point",
+            num(lo),
+            num(b)
+        );
+    }
+    let (Some(mm), Some(k)) = (a.base_mm, mm_per_m(a, grid)?) else {
+        return Ok(a.base_m);
+    };
+    Ok(Some(lo - mm / (k * a.z_scale)))
+}
+
 /// Adds the print fields to the report: the scale as 1:N, millimetres per
 /// metre and the model's size in millimetres (x, y, and z from the base or
 /// the lowest sample to the highest); `null` without a print scale.
@@ -89,7 +121,7 @@ pub fn add_fields(
     let k = mm_per_m(a, grid)?;
     let [ex, ey] = extent_m(grid);
     let (lo, hi) = grid.valid_range().unwrap_or((0.0, 0.0));
-    let bottom = a.base_m.map_or(f64::from(lo), |b| b.min(f64::from(lo)));
+    let bottom = base_m(a, grid)?.map_or(f64::from(lo), |b| b.min(f64::from(lo)));
     let relief_m = (f64::from(hi) - bottom) * a.z_scale;
     let fields = json!({
         "print_scale": k.map(|k| format!("1:{}", num(1000.0 / k))),

@@ -267,3 +267,65 @@ fn outputs_are_refused_before_any_work_and_named_once() {
         );
     }
 }
+
+/// The README's 3D-printing command, as written there, on the bundled
+/// coastal tile (sea at 0 m, where `--base-m 0` was refused) and on every
+/// shared DEM: each gives a closed STL whose base lies 2 mm below its lowest
+/// point. `--base-m 0` on the coast is refused before any meshing, naming
+/// the flag that fits.
+#[test]
+fn the_readme_print_command_works_on_every_dem_coast_included() {
+    let readme =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
+    let line = readme
+        .lines()
+        .find(|l| l.contains("**3D printing**"))
+        .expect("the README's 3D printing line");
+    let cmd = line.split('`').nth(1).expect("a command in backticks");
+    let words: Vec<&str> = cmd.split_whitespace().collect();
+    assert_eq!(&words[..2], ["cota", "mesh"], "{cmd}");
+    let mut dems = vec![fixture("S29W072.hgt.zip")];
+    for rel in [
+        "srtm/N00E010.hgt",
+        "srtm/N42E001.hgt.zip",
+        "asc/hugo_site.asc",
+        "geotiff/mt_fuji_90m.tif",
+        "geotiff/sanfrancisco_rio_rgbify.tif",
+        "png/terrarium.png",
+    ] {
+        match shared(rel) {
+            Some(p) => dems.push(p),
+            None => eprintln!("skipped: {rel} (shared data absent)"),
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for dem in &dems {
+        let out = dir.path().join("model.stl");
+        let mut args: Vec<String> = words[1..].iter().map(|w| w.to_string()).collect();
+        let o_at = args.iter().position(|w| w == "-o").unwrap();
+        args[o_at + 1] = out.to_str().unwrap().to_string();
+        args.insert(1, dem.to_str().unwrap().to_string());
+        args.push("--json".into());
+        let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = cota(&refs);
+        assert!(o.status.success(), "{}: {}", dem.display(), stderr(&o));
+        let r: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        let z_mm = r["print_size_mm"][2].as_f64().unwrap();
+        assert!(z_mm > 2.0 - 1e-9, "{}: {z_mm} mm high", dem.display());
+        assert!(std::fs::metadata(&out).unwrap().len() > 1000);
+    }
+    let o = cota(&[
+        "mesh",
+        "-o",
+        dir.path().join("x.stl").to_str().unwrap(),
+        "--base-m",
+        "0",
+    ]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("--base-m: expected a base below the lowest sample (-5 m), found 0 m")
+            && e.contains("--base-mm"),
+        "{e}"
+    );
+}
