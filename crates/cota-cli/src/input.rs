@@ -150,7 +150,10 @@ fn check_options(a: &InputArgs) -> anyhow::Result<()> {
         ("--seam-tolerance", a.seam_tolerance_m),
     ] {
         if !v.is_finite() {
-            anyhow::bail!("{name}: expected a finite number of metres, found {v}");
+            anyhow::bail!(
+                "{name}: expected a finite number of metres, found {}",
+                num(v)
+            );
         }
     }
     if a.seam_tolerance_m < 0.0 {

@@ -21,7 +21,7 @@ use crate::args::{
     CoordsArg, CriterionArg, HierarchyArg, MeshArgs, MeshKindArg, OddSpansArg, StripMethodArg,
 };
 use crate::hole::Holes;
-use crate::input::load;
+use crate::input::{load, num};
 use crate::progress;
 
 fn ms(t: Instant) -> f64 {
@@ -647,11 +647,12 @@ fn text(r: &serde_json::Value) -> String {
     );
     let bound = match (r["threshold_m"].as_f64(), r["z_step_m"].as_f64()) {
         (Some(b), Some(s)) => format!(
-            "bound {b} + {} m = {} m as written",
-            s / 2.0,
-            f("written_bound_m")
+            "bound {} + {} m = {} m as written",
+            num(b),
+            num(s / 2.0),
+            num(f("written_bound_m"))
         ),
-        (Some(b), None) => format!("bound {b} m"),
+        (Some(b), None) => format!("bound {} m", num(b)),
         (None, _) => "no vertical bound".to_string(),
     };
     say!(

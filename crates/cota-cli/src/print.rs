@@ -124,7 +124,7 @@ pub fn add_fields(
     let bottom = base_m(a, grid)?.map_or(f64::from(lo), |b| b.min(f64::from(lo)));
     let relief_m = (f64::from(hi) - bottom) * a.z_scale;
     let fields = json!({
-        "print_scale": k.map(|k| format!("1:{}", num(1000.0 / k))),
+        "print_scale": k.map(|k| format!("1:{}", scale_n(1000.0 / k))),
         "print_mm_per_m": k,
         "print_size_mm": k.map(|k| [ex * k, ey * k, relief_m * k]),
     });
@@ -132,6 +132,22 @@ pub fn add_fields(
         r.extend(f);
     }
     Ok(())
+}
+
+/// N of a print scale 1:N as people write it: whole from 100 up (a
+/// `--size-mm` gives 1:742218, not 1:742218.0622702213), else to four
+/// significant figures.
+fn scale_n(n: f64) -> String {
+    if n.abs() >= 100.0 {
+        format!("{n:.0}")
+    } else {
+        sig4(n)
+    }
+}
+
+/// `v` to four significant figures, plainly.
+fn sig4(v: f64) -> String {
+    num(format!("{v:.3e}").parse().unwrap_or(v))
 }
 
 /// The print line of the text report, when a print scale is set.
@@ -145,7 +161,7 @@ pub fn text_line(s: &mut String, r: &serde_json::Value) {
         say!(
             s,
             "print       {scale} ({} mm per m): {x:.1} x {y:.1} mm, {z:.1} mm high; STL in millimetres",
-            num(r["print_mm_per_m"].as_f64().unwrap_or(0.0))
+            sig4(r["print_mm_per_m"].as_f64().unwrap_or(0.0))
         );
     }
 }

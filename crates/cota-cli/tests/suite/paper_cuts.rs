@@ -329,3 +329,37 @@ fn the_readme_print_command_works_on_every_dem_coast_included() {
         "{e}"
     );
 }
+
+/// Numbers in reports to a sensible precision: a bound of 1e300 m is not
+/// printed as 301 digits, a print scale from `--size-mm` is a whole 1:N.
+#[test]
+fn numbers_are_printed_to_a_sensible_precision() {
+    let o = cota(&["mesh", "--max-error", "1e300"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let t = stdout(&o);
+    assert!(
+        t.contains("(bound 1e300 m)") && t.contains("max-error 1e300 m"),
+        "{t}"
+    );
+    assert!(!t.contains("000000000000"), "{t}");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m.stl");
+    let o = cota(&[
+        "mesh",
+        "--size-mm",
+        "150",
+        "--base-mm",
+        "2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let t = stdout(&o);
+    let line = t.lines().find(|l| l.starts_with("print")).unwrap();
+    let scale = line.split_whitespace().nth(1).unwrap();
+    assert!(
+        scale.starts_with("1:") && scale[2..].chars().all(|c| c.is_ascii_digit()),
+        "{line}"
+    );
+    assert!(line.contains("(0.001353 mm per m)"), "{line}");
+}

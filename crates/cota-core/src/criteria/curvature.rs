@@ -193,7 +193,7 @@ impl Criterion for AccumulatedCurvature<'_> {
     }
 
     fn name(&self) -> String {
-        format!("curvature {} 1/m", self.tolerance)
+        format!("curvature {} 1/m", super::plain(self.tolerance))
     }
 }
 

@@ -152,7 +152,7 @@ impl Criterion for MaxVerticalError {
     }
 
     fn name(&self) -> String {
-        format!("max-error {} m", self.max_error_m)
+        format!("max-error {} m", plain(self.max_error_m))
     }
 
     fn vertical_bound_m(&self) -> Option<f64> {
@@ -287,7 +287,7 @@ impl Criterion for EuclideanDistance {
     }
 
     fn name(&self) -> String {
-        format!("euclidean {} m", self.max_distance_m)
+        format!("euclidean {} m", plain(self.max_distance_m))
     }
 }
 
@@ -324,6 +324,17 @@ impl Criterion for RelativeSize {
     }
 
     fn name(&self) -> String {
-        format!("size {} of the diagonal", self.factor)
+        format!("size {} of the diagonal", plain(self.factor))
+    }
+}
+
+/// A parameter as a criterion's name shows it: as given, but in exponent
+/// form outside 10⁻⁴ to 10⁹ (a bound of 1e300 is not 301 digits).
+pub(crate) fn plain(v: f64) -> String {
+    let a = v.abs();
+    if v.is_finite() && a != 0.0 && !(1e-4..1e9).contains(&a) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }
