@@ -10,8 +10,9 @@ use cota_core::{CriterionKind, Crs, Mode};
 #[derive(Debug, Parser)]
 #[command(name = "cota", version, about, propagate_version = true)]
 pub struct Cli {
-    /// Show no progress (warnings and errors are still printed). Progress is
-    /// drawn only when stderr is a terminal.
+    /// Show no progress and no text report: only warnings and errors (and
+    /// the report when asked for with --json; `cota info` still describes).
+    /// Progress is drawn only when stderr is a terminal.
     #[arg(long, global = true)]
     pub quiet: bool,
     #[command(subcommand)]

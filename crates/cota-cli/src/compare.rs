@@ -75,7 +75,7 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
     };
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
+    } else if !crate::progress::quiet() {
         print!("{}", text(&report));
     }
     Ok(ExitCode::SUCCESS)

@@ -570,7 +570,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
         true => format!("{}\n", serde_json::to_string_pretty(&report)?),
         false => text(&report),
     };
-    crate::output::print_report(a.output.as_deref(), &text);
+    crate::output::print_report(a.output.as_deref(), &text, a.json);
     Ok(ExitCode::SUCCESS)
 }
 

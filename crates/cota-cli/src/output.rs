@@ -165,8 +165,12 @@ where
 }
 
 /// Prints a report: to stdout, or to stderr when the output itself goes to
-/// stdout (`-o -`).
-pub fn print_report(out: Option<&Path>, text: &str) {
+/// stdout (`-o -`). A text report (`json` false) is not printed with
+/// `--quiet`.
+pub fn print_report(out: Option<&Path>, text: &str, json: bool) {
+    if !json && crate::progress::quiet() {
+        return;
+    }
     if out.is_some_and(is_dash) {
         eprint!("{text}");
     } else {

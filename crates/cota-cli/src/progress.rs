@@ -20,9 +20,15 @@ pub fn set_quiet(quiet: bool) {
     QUIET.store(quiet, Ordering::Relaxed);
 }
 
+/// True with `--quiet`: no progress, and no text report (errors, warnings
+/// and a report asked for with `--json` are still printed).
+pub fn quiet() -> bool {
+    QUIET.load(Ordering::Relaxed)
+}
+
 /// True when progress is drawn: stderr is a terminal and no `--quiet`.
 fn shown() -> bool {
-    !QUIET.load(Ordering::Relaxed) && std::io::stderr().is_terminal()
+    !quiet() && std::io::stderr().is_terminal()
 }
 
 /// The style of a bar whose length is known.

@@ -138,8 +138,10 @@ fn run_encode(a: &StreamEncodeArgs) -> anyhow::Result<ExitCode> {
         println!("{}", serde_json::to_string_pretty(&report)?);
         return Ok(ExitCode::SUCCESS);
     }
-    print_encode_text(a, &name, &grid, &s, &ends);
-    println!("wrote       {}", a.output.display());
+    if !crate::progress::quiet() {
+        print_encode_text(a, &name, &grid, &s, &ends);
+        println!("wrote       {}", a.output.display());
+    }
     Ok(ExitCode::SUCCESS)
 }
 
@@ -316,7 +318,7 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
         true => format!("{}\n", serde_json::to_string_pretty(&report)?),
         false => decode_text(a, &d, &mesh, used),
     };
-    crate::output::print_report(a.output.as_deref(), &text);
+    crate::output::print_report(a.output.as_deref(), &text, a.json);
     Ok(ExitCode::SUCCESS)
 }
 

@@ -300,7 +300,7 @@ fn finish(
             v["part"] = part;
         }
         println!("{v}");
-    } else {
+    } else if !crate::progress::quiet() {
         print_report(name, prepared, deviation, report, times, &a.output, a.check);
     }
 }

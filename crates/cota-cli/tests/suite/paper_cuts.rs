@@ -363,3 +363,37 @@ fn numbers_are_printed_to_a_sensible_precision() {
     );
     assert!(line.contains("(0.001353 mm per m)"), "{line}");
 }
+
+/// `--quiet` silences everything but errors: no text report from mesh,
+/// tiles, stream encode or compare; a report asked for with `--json` is
+/// still printed; an error still is.
+#[test]
+fn quiet_silences_the_report_but_not_json_or_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let (glb, tiles, stream) = (d("m.glb"), d("t"), d("s.cota"));
+    for args in [
+        vec!["--quiet", "mesh", "--max-error", "20", "-o", &glb],
+        vec!["--quiet", "tiles", "--max-zoom", "6", "-o", &tiles],
+        vec![
+            "--quiet",
+            "stream",
+            "encode",
+            "--max-error",
+            "50",
+            "-o",
+            &stream,
+        ],
+    ] {
+        let o = cota(&args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        assert_eq!(stdout(&o), "", "{args:?}");
+        let e = stderr(&o);
+        assert!(e.lines().all(|l| l.contains("warning")), "{args:?}: {e}");
+    }
+    let o = cota(&["--quiet", "mesh", "--max-error", "20", "--json"]);
+    let r: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert!(r["triangles"].as_u64().unwrap() > 0);
+    let o = cota(&["--quiet", "mesh", "--max-error", "-1"]);
+    assert!(!o.status.success() && stderr(&o).contains("error"));
+}

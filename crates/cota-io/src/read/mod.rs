@@ -19,6 +19,7 @@
 mod asc;
 mod geotiff;
 mod npy;
+mod orient;
 pub mod pmtiles;
 mod png;
 mod region;

@@ -22,6 +22,13 @@
 //!   units (pixel-is-point, `ymin` taken as the southern row) — degrees when
 //!   small enough to be degrees (see `GeoRef::guess_geographic`). Otherwise
 //!   [`ReadOptions::cell_size_m`].
+//! * Coordinate arrays: 1-D members `x` and `y` (or `lon` and `lat`,
+//!   `longitude` and `latitude`), one value per column and per row, as
+//!   xarray and rasterio write them, come first. They give the sample
+//!   centres (pixel-is-point) and the direction: `y` rising means the rows
+//!   run south to north, `x` falling east to west; the grid is flipped to
+//!   north-up (`read/orient.rs`) so it lands where its coordinates say. The
+//!   steps must be even (within 10⁻⁶ of a step), else the file is refused.
 
 use std::io::{Cursor, Read};
 use std::path::Path;
@@ -100,7 +107,14 @@ pub(crate) fn decode_npz(
         headers.push(parse_header(&head).ok().map(|h| h.shape));
     }
     let chosen = choose(&names, &headers, opts)?;
-    let georef = companion_georef(&mut zip, &names, bytes.len(), opts)?;
+    let shape = names
+        .iter()
+        .position(|n| *n == chosen)
+        .and_then(|i| headers[i].clone());
+    let georef = match coordinate_georef(&mut zip, &names, bytes.len(), shape.as_deref())? {
+        Some(g) => g,
+        None => companion_georef(&mut zip, &names, bytes.len(), opts)?,
+    };
     let data = member(&mut zip, &chosen, bytes.len(), None)?;
     let what = format!(" in array {chosen:?}");
     let (grid, dt) = array_grid(&data, georef, &what, opts)?;
@@ -154,6 +168,83 @@ fn choose(
                 ),
             }),
     }
+}
+
+/// Names of the 1-D coordinate arrays, (columns, rows).
+const COORDINATE_NAMES: [(&str, &str); 3] = [("x", "y"), ("lon", "lat"), ("longitude", "latitude")];
+
+/// The georeference the 1-D coordinate arrays give (`x`/`y` and the like,
+/// one value per column and per row of the heights' `shape`), with their
+/// directions: a positive `pixel_y` for rows that run south to north.
+fn coordinate_georef(
+    zip: &mut ZipArchive<Cursor<&[u8]>>,
+    names: &[String],
+    file_len: usize,
+    shape: Option<&[u64]>,
+) -> Result<Option<GeoRef>, ReadErrorKind> {
+    let Some(&[rows, cols]) = shape else {
+        return Ok(None);
+    };
+    let has = |n: &str| names.iter().any(|m| m == n);
+    let Some((xn, yn)) = COORDINATE_NAMES.iter().find(|(x, y)| has(x) && has(y)) else {
+        return Ok(None);
+    };
+    let cap = Some(8 * (rows.max(cols) + 1) + 4096);
+    let xs = coordinates(&member(zip, xn, file_len, cap)?, xn, cols)?;
+    let ys = coordinates(&member(zip, yn, file_len, cap)?, yn, rows)?;
+    let (Some((x0, dx)), Some((y0, dy))) = (even_step(&xs, xn)?, even_step(&ys, yn)?) else {
+        return Ok(None);
+    };
+    Ok(Some(GeoRef {
+        crs: cota_core::Crs::Unknown,
+        origin_x: x0,
+        origin_y: y0,
+        pixel_x: dx,
+        pixel_y: dy,
+        pixel_is: PixelIs::Point,
+        known: true,
+    }))
+}
+
+/// The values of 1-D coordinate array `name`, which must hold `n` of them.
+fn coordinates(bytes: &[u8], name: &str, n: u64) -> Result<Vec<f64>, ReadErrorKind> {
+    let h = parse_header(bytes)?;
+    let data = bytes.get(h.data_offset..).unwrap_or_default();
+    if h.shape != [n] || data.len() as u64 != n * h.size as u64 {
+        return Err(malformed(
+            format!("coordinate array {name:?} of {n} values, one per sample"),
+            format!("shape {:?}", h.shape),
+        ));
+    }
+    Ok(values(data, &h).collect())
+}
+
+/// The first value and the step of evenly spaced coordinates (`None` for
+/// fewer than two); uneven or non-finite steps are refused.
+fn even_step(v: &[f64], name: &str) -> Result<Option<(f64, f64)>, ReadErrorKind> {
+    let (Some(&first), Some(&last)) = (v.first(), v.last()) else {
+        return Ok(None);
+    };
+    if v.len() < 2 {
+        return Ok(None);
+    }
+    let step = (last - first) / (v.len() - 1) as f64;
+    let uneven = v
+        .iter()
+        .enumerate()
+        .find(|(i, c)| !((*c - (first + *i as f64 * step)).abs() <= 1e-6 * step.abs()));
+    if !(step.is_finite() && step != 0.0) || uneven.is_some() {
+        let at = uneven.map_or(0, |(i, _)| i);
+        return Err(malformed(
+            format!("evenly spaced coordinates in array {name:?} (a regular grid)"),
+            format!(
+                "{} at index {at} where an even step of {step} gives {}",
+                v.get(at).copied().unwrap_or(f64::NAN),
+                first + at as f64 * step
+            ),
+        ));
+    }
+    Ok(Some((first, step)))
 }
 
 /// The georeference the companion scalars give, else the placeholder.
@@ -354,7 +445,8 @@ fn array_grid(
     if h.fortran {
         heights = transpose(&heights, rows as usize, cols as usize);
     }
-    let georef = place_southern(georef, rows as usize);
+    let mut georef = place_southern(georef, rows as usize);
+    super::orient::north_up(&mut heights, cols as usize, rows as usize, &mut georef);
     let grid = HeightGrid::new(cols as usize, rows as usize, heights, georef)?;
     Ok((grid, data_type(h.kind, h.size)))
 }
@@ -378,34 +470,34 @@ fn transpose(v: &[f32], rows: usize, cols: usize) -> Vec<f32> {
 
 /// The values as f32 metres (NaN stays a void; infinities become voids).
 fn convert(data: &[u8], h: &Header) -> Vec<f32> {
-    let be = h.big_endian;
-    data.chunks_exact(h.size)
-        .map(|c| {
-            let mut b = [0u8; 8];
-            if be {
-                b[8 - c.len()..].copy_from_slice(c);
-                b.reverse();
-            } else {
-                b[..c.len()].copy_from_slice(c);
-            }
-            let v = match (h.kind, h.size) {
-                (b'i', 1) => f64::from(b[0] as i8),
-                (b'i', 2) => f64::from(i16::from_le_bytes([b[0], b[1]])),
-                (b'i', 4) => f64::from(i32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-                (b'i', _) => i64::from_le_bytes(b) as f64,
-                (b'u', 1) => f64::from(b[0]),
-                (b'u', 2) => f64::from(u16::from_le_bytes([b[0], b[1]])),
-                (b'u', _) => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-                (_, 4) => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-                _ => f64::from_le_bytes(b),
-            };
-            if v.is_finite() {
-                v as f32
-            } else {
-                f32::NAN
-            }
-        })
+    values(data, h)
+        .map(|v| if v.is_finite() { v as f32 } else { f32::NAN })
         .collect()
+}
+
+/// The values, as f64.
+fn values<'a>(data: &'a [u8], h: &'a Header) -> impl Iterator<Item = f64> + 'a {
+    let be = h.big_endian;
+    data.chunks_exact(h.size.max(1)).map(move |c| {
+        let mut b = [0u8; 8];
+        if be {
+            b[8 - c.len()..].copy_from_slice(c);
+            b.reverse();
+        } else {
+            b[..c.len()].copy_from_slice(c);
+        }
+        match (h.kind, h.size) {
+            (b'i', 1) => f64::from(b[0] as i8),
+            (b'i', 2) => f64::from(i16::from_le_bytes([b[0], b[1]])),
+            (b'i', 4) => f64::from(i32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            (b'i', _) => i64::from_le_bytes(b) as f64,
+            (b'u', 1) => f64::from(b[0]),
+            (b'u', 2) => f64::from(u16::from_le_bytes([b[0], b[1]])),
+            (b'u', _) => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            (_, 4) => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            _ => f64::from_le_bytes(b),
+        }
+    })
 }
 
 /// The reported data type.

@@ -339,6 +339,84 @@ fn npz_companion_arrays_give_a_georeference() {
     );
 }
 
+/// 1-D coordinate arrays give the georeference and the direction: the same
+/// real grid stored north to south (y falling) and south to north (y rising,
+/// rows flipped), or east to west, reads as the same north-up grid at the
+/// same place; uneven coordinates are refused, naming the array.
+#[test]
+fn npz_coordinate_arrays_are_honoured_in_either_direction() {
+    let (h, w, ht) = hugo();
+    let dir = tmp();
+    let step = 1.0 / 3600.0;
+    let f64s = |v: &[f64]| -> Vec<u8> {
+        let data: Vec<u8> = v.iter().flat_map(|c| c.to_le_bytes()).collect();
+        formats::npy("<f8", false, &[v.len()], &data)
+    };
+    let xs: Vec<f64> = (0..w).map(|i| -105.0 + i as f64 * step).collect();
+    let ys: Vec<f64> = (0..ht).map(|j| 40.0 - j as f64 * step).collect();
+    let north = formats::npz(&[
+        ("elevation", formats::npy_f32(&h, w, ht)),
+        ("x", f64s(&xs)),
+        ("y", f64s(&ys)),
+    ]);
+    let flipped_rows: Vec<f32> = h.chunks(w).rev().flatten().copied().collect();
+    let ys_up: Vec<f64> = ys.iter().rev().copied().collect();
+    let south = formats::npz(&[
+        ("elevation", formats::npy_f32(&flipped_rows, w, ht)),
+        ("lon", f64s(&xs)),
+        ("lat", f64s(&ys_up)),
+    ]);
+    let flipped_cols: Vec<f32> = h
+        .chunks(w)
+        .flat_map(|r| r.iter().rev().copied().collect::<Vec<_>>())
+        .collect();
+    let xs_west: Vec<f64> = xs.iter().rev().copied().collect();
+    let west = formats::npz(&[
+        ("elevation", formats::npy_f32(&flipped_cols, w, ht)),
+        ("x", f64s(&xs_west)),
+        ("y", f64s(&ys)),
+    ]);
+    let same = |a: &[f32], b: &[f32]| {
+        a.iter()
+            .zip(b)
+            .all(|(a, b)| a == b || (a.is_nan() && b.is_nan()))
+    };
+    for (name, bytes) in [
+        ("north.npz", north),
+        ("south.npz", south),
+        ("west.npz", west),
+    ] {
+        let p = write_file(dir.path(), name, &bytes);
+        let dem = read(&p, &ReadOptions::DEFAULT);
+        let g = dem.grid.georef();
+        assert!(g.known && g.crs.is_geographic(), "{name}: {:?}", g.crs);
+        let (x, y) = g.sample_xy(0.0, 0.0);
+        assert!(
+            (x + 105.0).abs() < 1e-9 && (y - 40.0).abs() < 1e-9,
+            "{name}: row 0 col 0 at {x}, {y}"
+        );
+        assert!(g.pixel_x > 0.0 && g.pixel_y < 0.0, "{name}: {g:?}");
+        assert!(same(dem.grid.heights(), &h), "{name}: heights not north-up");
+    }
+    let mut uneven = ys.clone();
+    uneven[3] += step / 2.0;
+    let bad = formats::npz(&[
+        ("elevation", formats::npy_f32(&h, w, ht)),
+        ("x", f64s(&xs)),
+        ("y", f64s(&uneven)),
+    ]);
+    let p = write_file(dir.path(), "uneven.npz", &bad);
+    let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
+    assert_contains(
+        &msg,
+        &[
+            "uneven.npz",
+            "evenly spaced coordinates in array \"y\"",
+            "index 3",
+        ],
+    );
+}
+
 #[test]
 fn npy_bad_input() {
     let dir = tmp();

@@ -33,7 +33,7 @@ use std::io::{self, Cursor};
 use std::path::Path;
 
 use cota_core::grid::{check_dimensions, MAX_SAMPLES};
-use cota_core::{GeoRef, GridError, HeightGrid, PixelIs};
+use cota_core::{GridError, HeightGrid};
 use tiff::decoder::ifd::Value;
 use tiff::decoder::{ChunkType, Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
@@ -68,7 +68,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<De
     }
     scale_heights(&mut heights, geo.vertical_to_m);
     let mut georef = geo.georef;
-    north_up(&mut heights, layout.width, layout.height, &mut georef);
+    super::orient::north_up(&mut heights, layout.width, layout.height, &mut georef);
     let grid = HeightGrid::new(layout.width, layout.height, heights, georef)?;
     Ok(Dem {
         grid,
@@ -721,36 +721,5 @@ impl Dst<'_> {
 fn scale_heights(heights: &mut [f32], to_m: f32) {
     if to_m != 1.0 {
         heights.iter_mut().for_each(|h| *h *= to_m);
-    }
-}
-
-/// Flips a grid stored south-up (pixel_y > 0) or east-to-west (pixel_x < 0)
-/// so that row 0 is north and column 0 west, adjusting the origin.
-fn north_up(heights: &mut [f32], width: usize, height: usize, g: &mut GeoRef) {
-    if width == 0 || heights.len() != width * height {
-        return;
-    }
-    let span = |n: usize| match g.pixel_is {
-        PixelIs::Area => n as f64,
-        PixelIs::Point => n as f64 - 1.0,
-    };
-    if g.pixel_y > 0.0 {
-        for r in 0..height / 2 {
-            let (top, bottom) = heights.split_at_mut((height - 1 - r) * width);
-            // Both rows are `width` long: `bottom` starts at row height-1-r > r.
-            if let (Some(a), Some(b)) = (
-                top.get_mut(r * width..(r + 1) * width),
-                bottom.get_mut(..width),
-            ) {
-                a.swap_with_slice(b);
-            }
-        }
-        g.origin_y += span(height) * g.pixel_y;
-        g.pixel_y = -g.pixel_y;
-    }
-    if g.pixel_x < 0.0 {
-        heights.chunks_mut(width).for_each(<[f32]>::reverse);
-        g.origin_x += span(width) * g.pixel_x;
-        g.pixel_x = -g.pixel_x;
     }
 }
