@@ -217,7 +217,7 @@ fn print_text(input: &Input) {
         }
         let nd = f
             .nodata
-            .map(|v| format!(" (nodata value {})", crate::input::num(f64::from(v))))
+            .map(|v| format!(" (nodata value {})", crate::input::num(v)))
             .unwrap_or_default();
         println!("  voids       {}{nd}", f.nodata_count);
     }

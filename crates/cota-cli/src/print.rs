@@ -97,7 +97,7 @@ pub fn mm_per_m(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<Option<f64>> 
 /// meshing, with the flag that fits any terrain.
 pub fn base_m(a: &MeshArgs, grid: &HeightGrid) -> anyhow::Result<Option<f64>> {
     let lo = grid.valid_range().map_or(0.0, |(lo, _)| f64::from(lo));
-    if let Some(b) = a.base_m.filter(|b| !(*b < lo)) {
+    if let Some(b) = a.base_m.filter(|b| b.is_nan() || *b >= lo) {
         anyhow::bail!(
             "--base-m: expected a base below the lowest sample ({} m), found {} m; give a lower --base-m, or --base-mm MM for a base MM millimetres below the lowest point",
             num(lo),

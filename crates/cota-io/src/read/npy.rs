@@ -229,10 +229,10 @@ fn even_step(v: &[f64], name: &str) -> Result<Option<(f64, f64)>, ReadErrorKind>
         return Ok(None);
     }
     let step = (last - first) / (v.len() - 1) as f64;
-    let uneven = v
-        .iter()
-        .enumerate()
-        .find(|(i, c)| !((*c - (first + *i as f64 * step)).abs() <= 1e-6 * step.abs()));
+    let uneven = v.iter().enumerate().find(|(i, c)| {
+        let off = (*c - (first + *i as f64 * step)).abs();
+        off.is_nan() || off > 1e-6 * step.abs()
+    });
     if !(step.is_finite() && step != 0.0) || uneven.is_some() {
         let at = uneven.map_or(0, |(i, _)| i);
         return Err(malformed(
