@@ -956,8 +956,8 @@ pub struct TilesArgs {
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     /// Tile format: quantized-mesh, or 3dtiles (GLB tiles with
-    /// CESIUM_tile_edges, implicit tiling, float32 positions; directory
-    /// output only, from zoom 0).
+    /// CESIUM_tile_edges, implicit tiling, float32 positions unless
+    /// --meshopt; directory output only, from zoom 0).
     #[arg(long, value_enum, default_value_t = TileFormatArg::QuantizedMesh,
         conflicts_with_all = ["gzip", "watermask", "metadata", "imagery", "plan", "shard", "reduce"])]
     pub format: TileFormatArg,
@@ -988,6 +988,12 @@ pub struct TilesArgs {
     /// Gzip every tile (serve with Content-Encoding: gzip).
     #[arg(long)]
     pub gzip: bool,
+    /// With --format 3dtiles: u16 positions over each tile's box
+    /// (KHR_mesh_quantization) and positions, indices and edges compressed
+    /// with EXT_meshopt_compression (both required extensions; CesiumJS
+    /// reads them). Default: off (float32 positions, plain indices).
+    #[arg(long)]
+    pub meshopt: bool,
     /// Also write shaded-relief imagery beside the terrain: PNG tiles
     /// OUT/imagery/{z}/{x}/{y}.png (hillshade over a hypsometric tint, the
     /// same geographic tiling and TMS rows) and OUT/imagery/imagery.json,

@@ -97,9 +97,13 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     Ok(std::process::ExitCode::SUCCESS)
 }
 
-/// An `.mbtiles` output with what only a directory takes: refused in words;
-/// an output that cannot be written: refused before any work.
+/// An `.mbtiles` output with what only a directory takes, or --meshopt
+/// without --format 3dtiles: refused in words; an output that cannot be
+/// written: refused before any work.
 fn refuse_archive_mismatch(a: &TilesArgs) -> anyhow::Result<()> {
+    if a.meshopt && a.format != TileFormatArg::Tiles3d {
+        anyhow::bail!("--meshopt compresses 3D Tiles GLBs: expected --format 3dtiles with it");
+    }
     if is_mbtiles(&a.output) && a.format == TileFormatArg::Tiles3d {
         anyhow::bail!(
             "{}: expected a directory for --format 3dtiles, found an .mbtiles name; 3D Tiles archives are not written yet",
@@ -461,6 +465,7 @@ fn pyramid_options(a: &TilesArgs) -> PyramidOptions {
         .with_gzip(a.gzip)
         .with_force(a.force)
         .with_check(a.check)
+        .with_meshopt(a.meshopt)
         .with_format(match a.format {
             TileFormatArg::QuantizedMesh => TileFormat::QuantizedMesh,
             TileFormatArg::Tiles3d => TileFormat::Tiles3d,

@@ -12,7 +12,8 @@
 //!   with a world file or the DEM's extent, placed on a DEM in the same CRS.
 //! * Mesh writers (OBJ, PLY, STL, GLB, and a textured GLB), each written
 //!   atomically.
-//! * Cesium quantized-mesh-1.0 terrain pyramids ([`tiles`]).
+//! * Cesium quantized-mesh-1.0 and 3D Tiles terrain pyramids ([`tiles`]),
+//!   the latter optionally with `EXT_meshopt_compression` ([`meshopt`]).
 //! * CRSs ([`crs`]): a grid's map to and from WGS 84 longitude/latitude
 //!   (proj4rs), `--src-crs`, footprints.
 //!
@@ -25,6 +26,7 @@ pub mod error;
 pub mod export;
 pub mod image;
 pub mod limits;
+pub mod meshopt;
 pub mod read;
 pub mod relief;
 pub mod stream_file;

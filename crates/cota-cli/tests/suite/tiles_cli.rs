@@ -459,6 +459,19 @@ fn three_d_tiles_pyramid_and_its_refusals() {
         "{}",
         stderr(&r)
     );
+    // --meshopt: the same pyramid with compressed GLBs, checked; a
+    // quantized-mesh run with it, refused.
+    let packed = dir.path().join("t3dm");
+    let r = cota(&[&args[..], &["--meshopt", "-o", packed.to_str().unwrap()]].concat());
+    assert!(r.status.success(), "{}", stderr(&r));
+    let glb = std::fs::read(packed.join("0/0/0/0.glb")).unwrap();
+    assert!(String::from_utf8_lossy(&glb).contains("EXT_meshopt_compression"));
+    let r = cota(&["tiles", "--meshopt", "-o", packed.to_str().unwrap()]);
+    assert!(
+        !r.status.success() && stderr(&r).contains("--format 3dtiles"),
+        "{}",
+        stderr(&r)
+    );
     let mb = dir.path().join("t.mbtiles");
     let r = cota(&["tiles", "--format", "3dtiles", "-o", mb.to_str().unwrap()]);
     assert!(

@@ -14,32 +14,45 @@
 //! * `POSITION`: float32 positions relative to that centre, in glTF axes
 //!   (ECEF `x, z, −y`). CesiumJS reads plain positions as float32 whatever
 //!   the accessor says, so `KHR_mesh_quantization` alone is not an option
-//!   for it (only through `EXT_meshopt_compression`, not written yet);
+//!   for it; with [`GlbGeometry::Meshopt`] it is u16 (normalized, stride 8)
+//!   over the tile's box in east, north, up axes, the node matrix mapping
+//!   `[0, 1]³` to the box (CesiumJS divides by 65 535 and applies it),
+//!   compressed with `EXT_meshopt_compression` ([`crate::meshopt`]), and
+//!   the indices too (triangles mode); the views' stand-in is a fallback
+//!   buffer without data, both extensions required;
 //! * indices `UNSIGNED_SHORT` up to 65 535 vertices, else `UNSIGNED_INT`;
-//! * `CESIUM_tile_edges` with `left`, `bottom`, `right`, `top`: accessors of
-//!   the vertices on the west, south, east and north edges, in the order
+//! * `CESIUM_tile_edges` with `left`, `bottom`, `right`, `top`: accessors
+//!   (in one plain buffer view) of the vertices on the west, south, east and north edges, in the order
 //!   CesiumJS hangs its skirts on them, counter-clockwise round the tile
 //!   ([`ccw_edges`]: west south to north, south east to west, east north to
 //!   south, north west to east; in any other order its skirts cut across
 //!   the tile);
-//! * `NORMAL` on request (unit float32 vectors in glTF axes).
+//! * `NORMAL` on request (unit float32 vectors in the node's axes, never
+//!   compressed: CesiumJS reads meshopt normals as its own int8 octahedral
+//!   pairs; with them the quantization box has one scale on all axes, as
+//!   CesiumJS turns normals by the node matrix, not its inverse transpose).
 //!
 //! The tile is made from the decoded quantized-mesh tile of the same
 //! hierarchy (same vertices, triangles and edges; the vertices where a
 //! client of the quantized-mesh tile draws them), so both formats carry the
 //! same bound. The only new error is float32's rounding of each local
-//! coordinate, at most `2⁻²⁴·|c|`; [`float32_budget_m`] bounds it and the
-//! pyramid's check draws the float32 positions themselves.
+//! coordinate, at most `2⁻²⁴·|c|`, or the u16 quantization;
+//! [`float32_budget_m`] and [`u16_budget_m`] bound them and the pyramid's
+//! check draws the positions as the client computes them.
 //!
 //! Per-tile metadata (minimum and maximum height, bounding sphere, horizon
 //! occlusion point) goes to the subtree files ([`super::tileset3d`]); it is
-//! also kept in `asset.extras.cota` so that a resumed run can rebuild the
-//! subtrees without cutting the tile again.
+//! also kept in `asset.extras.cota` (the values' f64 bits in hexadecimal,
+//! one short string) so that a resumed run can rebuild the subtrees without
+//! cutting the tile again.
 
 use serde_json::{json, Value};
 
 use super::decode::DecodedTile;
 use super::ellipsoid::{ecef, oct_decode};
+use crate::meshopt::{
+    encode_index_sequence, encode_triangles_rotated, encode_vertex_buffer, MeshoptError,
+};
 
 /// What the subtree files say of a tile (the quantized-mesh header's values).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -91,12 +104,14 @@ fn to_gltf(p: [f64; 3]) -> [f64; 3] {
     [p[0], p[2], -p[1]]
 }
 
-/// Little-endian bytes of the binary chunk, with accessors' views.
+/// Little-endian bytes of the binary chunk, with accessors' views; with
+/// meshopt, the length of the fallback buffer the compressed views stand in.
 #[derive(Default)]
 struct Bin {
     bytes: Vec<u8>,
     views: Vec<Value>,
     accessors: Vec<Value>,
+    fallback: usize,
 }
 
 impl Bin {
@@ -105,8 +120,10 @@ impl Bin {
         while !self.bytes.len().is_multiple_of(4) {
             self.bytes.push(0);
         }
-        let mut view =
-            json!({"buffer": 0, "byteOffset": self.bytes.len(), "byteLength": data.len()});
+        let mut view = json!({"buffer": 0, "byteLength": data.len()});
+        if !self.bytes.is_empty() {
+            view["byteOffset"] = json!(self.bytes.len());
+        }
         if let Some(t) = target {
             view["target"] = json!(t);
         }
@@ -118,8 +135,56 @@ impl Bin {
         self.accessors.len() - 1
     }
 
-    /// An index accessor (u16 when `wide` is false).
-    fn indices(&mut self, ids: &[u32], wide: bool, target: Option<u32>) -> usize {
+    /// A view of `raw_len` bytes in the fallback buffer whose data is
+    /// `packed` (`EXT_meshopt_compression`, `mode`, `[stride, count]`) in the
+    /// binary chunk, and an accessor over it; its index.
+    fn packed(
+        &mut self,
+        raw_len: usize,
+        [stride, count]: [usize; 2],
+        mode: &str,
+        packed: &[u8],
+        target: Option<u32>,
+        accessor: Value,
+    ) -> usize {
+        while !self.bytes.len().is_multiple_of(4) {
+            self.bytes.push(0);
+        }
+        self.fallback = self.fallback.next_multiple_of(4);
+        let mut ext = json!({"buffer": 0, "byteLength": packed.len(),
+            "byteStride": stride, "count": count, "mode": mode});
+        if !self.bytes.is_empty() {
+            ext["byteOffset"] = json!(self.bytes.len());
+        }
+        let mut view = json!({"buffer": 1, "byteLength": raw_len,
+            "extensions": {"EXT_meshopt_compression": ext}});
+        if self.fallback > 0 {
+            view["byteOffset"] = json!(self.fallback);
+        }
+        if mode == "ATTRIBUTES" {
+            view["byteStride"] = json!(stride);
+        }
+        if let Some(t) = target {
+            view["target"] = json!(t);
+        }
+        self.bytes.extend_from_slice(packed);
+        self.fallback += raw_len;
+        let mut accessor = accessor;
+        accessor["bufferView"] = json!(self.views.len());
+        self.views.push(view);
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+
+    /// An index accessor (u16 when `wide` is false), compressed in meshopt's
+    /// `mode` when given.
+    fn indices(
+        &mut self,
+        ids: &[u32],
+        wide: bool,
+        target: Option<u32>,
+        mode: Option<&str>,
+    ) -> Result<usize, MeshoptError> {
         let (bytes, component): (Vec<u8>, u32) = if wide {
             (ids.iter().flat_map(|i| i.to_le_bytes()).collect(), 5125)
         } else {
@@ -129,7 +194,57 @@ impl Bin {
             )
         };
         let accessor = json!({"componentType": component, "count": ids.len(), "type": "SCALAR"});
-        self.push(&bytes, target, accessor)
+        let stride = if wide { 4 } else { 2 };
+        Ok(match mode {
+            None => self.push(&bytes, target, accessor),
+            Some(m) => {
+                let packed = if m == "TRIANGLES" {
+                    encode_triangles_rotated(ids)?.0
+                } else {
+                    encode_index_sequence(ids)?
+                };
+                self.packed(
+                    bytes.len(),
+                    [stride, ids.len()],
+                    m,
+                    &packed,
+                    target,
+                    accessor,
+                )
+            }
+        })
+    }
+
+    /// The four edge lists in one plain view, an accessor each.
+    fn edges(&mut self, lists: &[Vec<u32>; 4], wide: bool) -> [usize; 4] {
+        let size = if wide { 4 } else { 2 };
+        let flat: Vec<u8> = lists
+            .iter()
+            .flatten()
+            .flat_map(|&i| {
+                if wide {
+                    i.to_le_bytes().to_vec()
+                } else {
+                    (i as u16).to_le_bytes().to_vec()
+                }
+            })
+            .collect();
+        let first = self.push(&flat, None, json!({}));
+        let view = self
+            .accessors
+            .pop()
+            .map_or(json!(0), |a| a["bufferView"].clone());
+        let mut offset = 0;
+        std::array::from_fn(|k| {
+            let mut a = json!({"bufferView": view, "componentType": if wide { 5125 } else { 5123 },
+                "count": lists[k].len(), "type": "SCALAR"});
+            if offset > 0 {
+                a["byteOffset"] = json!(offset);
+            }
+            offset += lists[k].len() * size;
+            self.accessors.push(a);
+            first + k
+        })
     }
 
     /// A float32 VEC3 accessor, with its min and max when `bounds`.
@@ -155,42 +270,206 @@ impl Bin {
     }
 }
 
-/// The GLB of a decoded quantized-mesh tile over `rect`, with vertex normals
-/// when `normals` (and the tile has them).
-pub fn encode_glb(tile: &DecodedTile, rect: [f64; 4], normals: bool) -> Vec<u8> {
-    let centre = tile.header.center;
-    let local: Vec<[f32; 3]> = ecef_positions(tile, rect)
-        .into_iter()
+/// How a GLB tile stores its geometry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum GlbGeometry {
+    /// Float32 positions, plain indices.
+    #[default]
+    Float32,
+    /// `KHR_mesh_quantization` positions (u16 over the tile's box) and
+    /// `EXT_meshopt_compression` positions, indices and edges.
+    Meshopt,
+}
+
+/// The positions' accessor, the node matrix and the node's axes.
+type Placed = (usize, Vec<f64>, [[f64; 3]; 3]);
+
+/// The positions' accessor and the node matrix: float32 local positions
+/// and a translation to the centre `t`, or u16 positions over the local box
+/// and a matrix from `[0, 1]³` to it, with one scale on all three axes when
+/// `uniform` (a tile with normals: CesiumJS turns normals by the node matrix
+/// itself, not its inverse transpose, so a scale differing per axis would
+/// bend them; with one scale both agree).
+fn positions(
+    bin: &mut Bin,
+    local: &[[f64; 3]],
+    [t, rect]: [[f64; 4]; 2],
+    geometry: GlbGeometry,
+    uniform: bool,
+) -> Result<Placed, MeshoptError> {
+    if geometry == GlbGeometry::Float32 {
+        let f: Vec<[f32; 3]> = local.iter().map(|p| p.map(|c| c as f32)).collect();
+        let m = vec![
+            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, t[0], t[1], t[2], 1.0,
+        ];
+        return Ok((bin.vec3(&f, true), m, IDENTITY));
+    }
+    let frame = enu_frame(rect);
+    let turned: Vec<[f64; 3]> = local
+        .iter()
+        .map(|p| frame.map(|axis| axis[0] * p[0] + axis[1] * p[1] + axis[2] * p[2]))
+        .collect();
+    let (lo, mut scale) = quantization_box(&turned);
+    if uniform {
+        scale = [scale.iter().copied().fold(0.0, f64::max); 3];
+    }
+    let q: Vec<[u16; 3]> = turned
+        .iter()
         .map(|p| {
-            let d = to_gltf([p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]]);
-            d.map(|c| c as f32)
+            std::array::from_fn(|k| {
+                ((p[k] - lo[k]) / scale[k] * 65535.0)
+                    .round()
+                    .clamp(0.0, 65535.0) as u16
+            })
         })
         .collect();
-    let wide = local.len() > 65_535;
-    let mut bin = Bin::default();
-    let position = bin.vec3(&local, true);
-    let flat: Vec<u32> = tile.triangles.iter().flatten().copied().collect();
-    let indices = bin.indices(&flat, wide, Some(34963));
-    let edges: Vec<usize> = ccw_edges(tile)
+    let raw: Vec<u8> = q
         .iter()
-        .map(|e| bin.indices(e, wide, None))
+        .flat_map(|v| [v[0], v[1], v[2], 0].into_iter().flat_map(u16::to_le_bytes))
         .collect();
+    let packed = encode_vertex_buffer(&raw, 8)?;
+    let mut min = [u16::MAX; 3];
+    let mut max = [0u16; 3];
+    for v in &q {
+        for k in 0..3 {
+            min[k] = min[k].min(v[k]);
+            max[k] = max[k].max(v[k]);
+        }
+    }
+    let accessor = json!({"componentType": 5123, "normalized": true, "count": q.len(), "type": "VEC3", "min": min, "max": max});
+    let a = bin.packed(
+        raw.len(),
+        [8, q.len()],
+        "ATTRIBUTES",
+        &packed,
+        Some(34962),
+        accessor,
+    );
+    let mut m = vec![0.0; 16];
+    for (k, axis) in frame.iter().enumerate() {
+        for r in 0..3 {
+            m[4 * k + r] = axis[r] * scale[k];
+            m[12 + r] += axis[r] * lo[k];
+        }
+    }
+    for r in 0..3 {
+        m[12 + r] += t[r];
+    }
+    m[15] = 1.0;
+    Ok((a, m, frame))
+}
+
+const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+/// East, north and up at the centre of `rect` (degrees), in glTF axes: the
+/// axes of the quantization box, so that u16 steps follow the terrain (the
+/// vertex stream compresses better). For a tile wider or taller than 10°
+/// the glTF axes themselves: the Khronos validator rejects some rotated
+/// matrices with scales of thousands of kilometres as not TRS (it works in
+/// float32), and those few coarse tiles weigh nothing in the pyramid.
+fn enu_frame(rect: [f64; 4]) -> [[f64; 3]; 3] {
+    if rect[2] - rect[0] > 10.0 || rect[3] - rect[1] > 10.0 {
+        return IDENTITY;
+    }
+    let lon = (0.5 * (rect[0] + rect[2])).to_radians();
+    let lat = (0.5 * (rect[1] + rect[3])).to_radians();
+    let (so, co, sa, ca) = (lon.sin(), lon.cos(), lat.sin(), lat.cos());
+    [
+        to_gltf([-so, co, 0.0]),
+        to_gltf([-sa * co, -sa * so, ca]),
+        to_gltf([ca * co, ca * so, sa]),
+    ]
+}
+
+/// The smallest corner and the size per axis (1 m where the vertices do
+/// not spread) of the box of `local`.
+pub fn quantization_box(local: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in local {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let lo = lo.map(|c| if c.is_finite() { c } else { 0.0 });
+    let scale = std::array::from_fn(|k| {
+        let s = hi[k] - lo[k];
+        if s.is_finite() && s > 0.0 {
+            s
+        } else {
+            1.0
+        }
+    });
+    (lo, scale)
+}
+
+/// The largest error `KHR_mesh_quantization` positions add to a tile whose
+/// box has sides `scale` (metres), as CesiumJS dequantises them (`q / 65535`
+/// rounded to float32, then the node matrix in f64): per axis half a step,
+/// `s / 131070`, plus float32's half ulp of a value in `[0, 1]`, `2⁻²⁵·s`;
+/// the three axes together.
+pub fn u16_budget_m(scale: [f64; 3]) -> f64 {
+    let per_axis = |s: f64| s * (1.0 / 131_070.0 + 2f64.powi(-25));
+    scale
+        .map(|s| per_axis(s).powi(2))
+        .iter()
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// The GLB of a decoded quantized-mesh tile over `rect`, with vertex normals
+/// when `normals` (and the tile has them), its geometry as `geometry` says.
+///
+/// # Errors
+/// [`MeshoptError`] when meshopt cannot hold the tile's indices (more than
+/// 2³⁰ vertices).
+pub fn encode_glb(
+    tile: &DecodedTile,
+    rect: [f64; 4],
+    normals: bool,
+    geometry: GlbGeometry,
+) -> Result<Vec<u8>, MeshoptError> {
+    let centre = tile.header.center;
+    let local: Vec<[f64; 3]> = ecef_positions(tile, rect)
+        .into_iter()
+        .map(|p| to_gltf([p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]]))
+        .collect();
+    let wide = local.len() > 65_535;
+    let packed = geometry == GlbGeometry::Meshopt;
+    let mut bin = Bin::default();
+    let t = to_gltf(centre);
+    let with_normals = normals && tile.normals.is_some();
+    let (position, matrix, frame) = positions(
+        &mut bin,
+        &local,
+        [[t[0], t[1], t[2], 0.0], rect],
+        geometry,
+        with_normals,
+    )?;
+    let flat: Vec<u32> = tile.triangles.iter().flatten().copied().collect();
+    let indices = bin.indices(&flat, wide, Some(34963), packed.then_some("TRIANGLES"))?;
+    let edges = bin.edges(&ccw_edges(tile), wide);
     let mut attributes = json!({"POSITION": position});
     if let (true, Some(oct)) = (normals, &tile.normals) {
         let n: Vec<[f32; 3]> = oct
             .iter()
-            .map(|&e| to_gltf(oct_decode(e)).map(|c| c as f32))
+            .map(|&e| {
+                let n = to_gltf(oct_decode(e));
+                frame.map(|axis| (axis[0] * n[0] + axis[1] * n[1] + axis[2] * n[2]) as f32)
+            })
             .collect();
+        // In the node's frame (turned with the quantization box).
         attributes["NORMAL"] = json!(bin.vec3(&n, false));
     }
-    let t = to_gltf(centre);
     let meta = TileMeta::of(tile);
-    let doc = json!({
+    let mut buffers = vec![json!({"byteLength": bin.bytes.len()})];
+    let mut doc = json!({
         "asset": {"version": "2.0", "generator": "cota", "extras": {"cota": meta_json(&meta)}},
         "extensionsUsed": ["CESIUM_tile_edges"],
         "scene": 0,
         "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, t[0], t[1], t[2], 1]}],
+        "nodes": [{"mesh": 0, "matrix": matrix}],
         "meshes": [{"primitives": [{
             "attributes": attributes,
             "indices": indices,
@@ -199,11 +478,20 @@ pub fn encode_glb(tile: &DecodedTile, rect: [f64; 4], normals: bool) -> Vec<u8> 
                 "left": edges[0], "bottom": edges[1], "right": edges[2], "top": edges[3]
             }}
         }]}],
-        "accessors": bin.accessors,
-        "bufferViews": bin.views,
-        "buffers": [{"byteLength": bin.bytes.len()}],
     });
-    glb(&doc, bin.bytes)
+    if packed {
+        buffers.push(json!({"byteLength": bin.fallback, "extensions": {"EXT_meshopt_compression": {"fallback": true}}}));
+        doc["extensionsUsed"] = json!([
+            "CESIUM_tile_edges",
+            "EXT_meshopt_compression",
+            "KHR_mesh_quantization"
+        ]);
+        doc["extensionsRequired"] = json!(["EXT_meshopt_compression", "KHR_mesh_quantization"]);
+    }
+    doc["accessors"] = json!(bin.accessors);
+    doc["bufferViews"] = json!(bin.views);
+    doc["buffers"] = json!(buffers);
+    Ok(glb(&doc, bin.bytes))
 }
 
 /// The tile's edge lists (sorted along each edge, south to north and west
@@ -243,23 +531,17 @@ impl TileMeta {
     }
 }
 
-/// `TileMeta` as JSON, NaN (never occluded) as null; `f64_bits` holds the
-/// same values as hexadecimal IEEE 754 bits, read back exactly on resume
-/// (decimal text does not always parse back to the same f64).
+/// `TileMeta` for `asset.extras.cota`: the nine values' IEEE 754 bits as
+/// one string of 144 hexadecimal digits (16 per value, in
+/// [`TileMeta::values`] order), read back exactly on resume (decimal text
+/// does not always parse back to the same f64).
 pub(crate) fn meta_json(m: &TileMeta) -> Value {
-    let num = |v: f64| if v.is_finite() { json!(v) } else { Value::Null };
-    let bits: Vec<String> = m
+    let bits: String = m
         .values()
         .iter()
         .map(|v| format!("{:016x}", v.to_bits()))
         .collect();
-    json!({
-        "f64_bits": bits,
-        "min_height_m": m.min_height_m,
-        "max_height_m": m.max_height_m,
-        "sphere": m.sphere.map(num),
-        "horizon_occlusion_point": m.horizon_occlusion_point.map(num),
-    })
+    json!(bits)
 }
 
 /// The GLB container: header, JSON chunk (space-padded), BIN chunk

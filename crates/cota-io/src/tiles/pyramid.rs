@@ -133,6 +133,10 @@ pub struct PyramidOptions {
     pub check: bool,
     /// The tile format. Default: quantized-mesh.
     pub format: TileFormat,
+    /// With [`TileFormat::Tiles3d`]: `KHR_mesh_quantization` positions and
+    /// `EXT_meshopt_compression` geometry ([`super::glb_tile::GlbGeometry`]).
+    /// Default: false (float32 positions, plain indices).
+    pub meshopt: bool,
 }
 
 /// The format of a pyramid's tiles.
@@ -155,7 +159,14 @@ impl PyramidOptions {
         force: false,
         check: true,
         format: TileFormat::QuantizedMesh,
+        meshopt: false,
     };
+
+    /// Sets [`PyramidOptions::meshopt`].
+    pub const fn with_meshopt(mut self, on: bool) -> Self {
+        self.meshopt = on;
+        self
+    }
 
     /// Sets [`PyramidOptions::extensions`].
     pub const fn with_extensions(mut self, e: TileExtensions) -> Self {
@@ -464,6 +475,9 @@ pub(crate) fn manifest(
     let mut want = run_manifest(prep, &opts.extensions, opts.gzip);
     if opts.format == TileFormat::Tiles3d {
         want["format"] = "3dtiles".into();
+        if opts.meshopt {
+            want["compression"] = "meshopt".into();
+        }
     }
     let want = want.to_string();
     if !opts.force && path.exists() {

@@ -7,9 +7,13 @@
 //! lattice sample of its square, then turned into a GLB from its decoded
 //! vertices. The check then decodes the GLB with the independent decoder
 //! ([`super::glb_decode`]), requires the same triangles and edges, and draws
-//! the float32 positions as flat ECEF triangles against the source's samples
+//! the float32 positions (with [`PyramidOptions::meshopt`], the u16
+//! positions dequantised as CesiumJS does: `q / 65535` in float32 through
+//! the node matrix) as flat ECEF triangles against the source's samples
 //! and the ellipsoid away from the data, within the zoom's bound plus
-//! float32's rounding ([`super::glb_tile::float32_budget_m`]).
+//! float32's rounding ([`super::glb_tile::float32_budget_m`]) or the
+//! quantization's ([`super::glb_tile::u16_budget_m`]). With meshopt the
+//! triangles may be turned (same winding): compared as such.
 //!
 //! Atomic and resumable as the quantized-mesh writer: each file goes to a
 //! temporary name and is renamed; the manifest `OUT/.cota-tiles.json` says
@@ -28,8 +32,10 @@ use rayon::prelude::*;
 
 use super::decode::{decode, DecodeError, DecodedTile};
 use super::drawn::{Against, DrawnTile};
-use super::glb_decode::decode_glb;
-use super::glb_tile::{ccw_edges, encode_glb, float32_budget_m, TileMeta};
+use super::glb_decode::{decode_glb, same_triangles};
+use super::glb_tile::{
+    ccw_edges, encode_glb, float32_budget_m, u16_budget_m, GlbGeometry, TileMeta,
+};
 use super::pyramid::{
     check_drawn, finish_tile, fold, io_err, manifest, write_file_atomically, MadeTile, Outcome,
     PyramidError, PyramidOptions, PyramidReport,
@@ -63,7 +69,13 @@ pub fn make_glb_tile(
     };
     let mut made = finish_tile(tile, &qm, Some(&prep.region(t)), None)?;
     let decoded = decode(&made.bytes).map_err(|source| PyramidError::Decode { tile: t, source })?;
-    made.bytes = encode_glb(&decoded, rect, opts.extensions.normals);
+    let geometry = if opts.meshopt {
+        GlbGeometry::Meshopt
+    } else {
+        GlbGeometry::Float32
+    };
+    made.bytes = encode_glb(&decoded, rect, opts.extensions.normals, geometry)
+        .map_err(|e| glb_error(t, e))?;
     if opts.check {
         if let Some(against) = source {
             [made.drawn_error_m, made.between_m] =
@@ -84,7 +96,7 @@ fn check_glb(
     against: &Against<'_>,
 ) -> Result<[f64; 2], PyramidError> {
     let g = decode_glb(glb).map_err(|e| glb_error(t, e))?;
-    if g.triangles != decoded.triangles || g.edges != ccw_edges(decoded) {
+    if !same_triangles(&g.triangles, &decoded.triangles) || g.edges != ccw_edges(decoded) {
         return Err(glb_error(t, "the GLB's triangles or edges (counter-clockwise round the tile) differ from the tile's"));
     }
     let c = decoded.header.center;
@@ -93,7 +105,9 @@ fn check_glb(
         .iter()
         .map(|p| ((p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) + (p[2] - c[2]).powi(2)).sqrt())
         .fold(0.0, f64::max);
-    let extra = float32_budget_m(radius);
+    let extra = g
+        .quantized_scale
+        .map_or(float32_budget_m(radius), u16_budget_m);
     let drawn = DrawnTile::new(decoded, rect).with_positions(&g.positions);
     check_drawn(&drawn, t, [bound + extra, at_source + extra], against)
 }

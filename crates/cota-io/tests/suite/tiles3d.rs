@@ -5,13 +5,16 @@
 //! rebuilds the same subtrees and tileset.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
+#[path = "tiles3d_meshopt.rs"]
+mod meshopt;
+
 use crate::common;
 
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
 use cota_core::{fill_voids, FillOptions, LonLat};
 use cota_io::tiles::drawn::{check_samples, Against, DrawnTile, SourceGrid};
-use cota_io::tiles::glb_decode::decode_glb;
-use cota_io::tiles::glb_tile::float32_budget_m;
+use cota_io::tiles::glb_decode::{decode_glb, same_triangles};
+use cota_io::tiles::glb_tile::{float32_budget_m, u16_budget_m};
 use cota_io::tiles::tileset3d::glb_rel_path;
 use cota_io::tiles::{
     decode, make_tile, write_tiles3d, PyramidError, PyramidOptions, TileExtensions, TileFormat,
@@ -24,6 +27,10 @@ fn opts() -> PyramidOptions {
         .with_extensions(TileExtensions::with(true, false, false))
 }
 
+fn meshopt_opts() -> PyramidOptions {
+    opts().with_meshopt(true)
+}
+
 /// The subtree file's JSON and availability bits.
 fn subtree(bytes: &[u8]) -> (serde_json::Value, Vec<u8>) {
     assert_eq!(&bytes[..4], b"subt");
@@ -34,6 +41,17 @@ fn subtree(bytes: &[u8]) -> (serde_json::Value, Vec<u8>) {
 
 #[test]
 fn fixture_pyramid_as_glb_within_bounds_and_resumable() {
+    pyramid_within_bounds_and_resumable(opts());
+}
+
+/// The same with `KHR_mesh_quantization` and `EXT_meshopt_compression`:
+/// the dequantised positions within the bound plus the u16 budget.
+#[test]
+fn fixture_pyramid_as_meshopt_glb_within_bounds_and_resumable() {
+    pyramid_within_bounds_and_resumable(meshopt_opts());
+}
+
+fn pyramid_within_bounds_and_resumable(opts: PyramidOptions) {
     let mut g = read_dem(&common::fixture("S29W072.hgt.zip"), &ReadOptions::DEFAULT)
         .unwrap()
         .grid;
@@ -47,7 +65,7 @@ fn fixture_pyramid_as_glb_within_bounds_and_resumable() {
     };
     let against = Against::new(vec![grid], vec![rect], 0.5);
     let out = tempfile::tempdir().unwrap();
-    let report = write_tiles3d(&prep, out.path(), &opts(), Some(&against), &|_| {}).unwrap();
+    let report = write_tiles3d(&prep, out.path(), &opts, Some(&against), &|_| {}).unwrap();
     assert_eq!(report.written(), prep.tile_count());
     let mut worst = 0.0f64;
     for t in prep.tiles() {
@@ -56,7 +74,12 @@ fn fixture_pyramid_as_glb_within_bounds_and_resumable() {
         // The same tile as quantized-mesh, decoded: same triangles, same vertices.
         let qm = make_tile(&prep, t, &PyramidOptions::DEFAULT.with_check(false), None).unwrap();
         let d = decode(&qm.bytes).unwrap();
-        assert_eq!(glb.triangles, d.triangles, "{t}");
+        assert!(same_triangles(&glb.triangles, &d.triangles), "{t}");
+        if opts.meshopt {
+            assert!(glb.quantized_scale.is_some(), "{t}");
+        } else {
+            assert_eq!(glb.triangles, d.triangles, "{t}");
+        }
         assert!(glb
             .normals
             .as_ref()
@@ -66,7 +89,10 @@ fn fixture_pyramid_as_glb_within_bounds_and_resumable() {
         let rect = prep.lattice().scheme().tile_rect_deg(t);
         let drawn = DrawnTile::new(&d, rect).with_positions(&glb.positions);
         let got = check_samples(&drawn, &against.samples).max_error_m;
-        let bound = prep.source_bound_m(t.z) + float32_budget_m(r);
+        let budget = glb
+            .quantized_scale
+            .map_or(float32_budget_m(r), u16_budget_m);
+        let bound = prep.source_bound_m(t.z) + budget;
         assert!(
             got <= bound + 1e-6,
             "{t}: {got} m as drawn, bound {bound} m"
@@ -99,7 +125,7 @@ fn fixture_pyramid_as_glb_within_bounds_and_resumable() {
     let victim = out.path().join(glb_rel_path(prep.tiles().last().unwrap()));
     std::fs::remove_file(&victim).unwrap();
     let before = std::fs::read(out.path().join("0/subtrees/0/0/0.subtree")).unwrap();
-    let again = write_tiles3d(&prep, out.path(), &opts(), None, &|_| {}).unwrap();
+    let again = write_tiles3d(&prep, out.path(), &opts, None, &|_| {}).unwrap();
     assert_eq!(
         (again.written(), again.skipped()),
         (1, prep.tile_count() - 1)
@@ -108,17 +134,16 @@ fn fixture_pyramid_as_glb_within_bounds_and_resumable() {
         std::fs::read(out.path().join("0/subtrees/0/0/0.subtree")).unwrap(),
         before
     );
-    // Other settings are refused, as for quantized-mesh.
+    // Other settings are refused, as for quantized-mesh: no normals, or
+    // the other geometry.
     let qm = PyramidOptions::DEFAULT;
-    let err = write_tiles3d(
-        &prep,
-        out.path(),
-        &qm.with_format(TileFormat::Tiles3d),
-        None,
-        &|_| {},
-    )
-    .unwrap_err();
-    assert!(matches!(err, PyramidError::Changed { .. }), "{err}");
+    for other in [
+        qm.with_format(TileFormat::Tiles3d),
+        opts.with_meshopt(!opts.meshopt),
+    ] {
+        let err = write_tiles3d(&prep, out.path(), &other, None, &|_| {}).unwrap_err();
+        assert!(matches!(err, PyramidError::Changed { .. }), "{err}");
+    }
 }
 
 #[test]
