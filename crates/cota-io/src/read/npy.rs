@@ -189,7 +189,12 @@ fn coordinate_georef(
     let Some((xn, yn)) = COORDINATE_NAMES.iter().find(|(x, y)| has(x) && has(y)) else {
         return Ok(None);
     };
-    let cap = Some(8 * (rows.max(cols) + 1) + 4096);
+    let cap = Some(
+        rows.max(cols)
+            .saturating_add(1)
+            .saturating_mul(8)
+            .saturating_add(4096),
+    );
     let xs = coordinates(&member(zip, xn, file_len, cap)?, xn, cols)?;
     let ys = coordinates(&member(zip, yn, file_len, cap)?, yn, rows)?;
     let (Some((x0, dx)), Some((y0, dy))) = (even_step(&xs, xn)?, even_step(&ys, yn)?) else {
@@ -210,7 +215,7 @@ fn coordinate_georef(
 fn coordinates(bytes: &[u8], name: &str, n: u64) -> Result<Vec<f64>, ReadErrorKind> {
     let h = parse_header(bytes)?;
     let data = bytes.get(h.data_offset..).unwrap_or_default();
-    if h.shape != [n] || data.len() as u64 != n * h.size as u64 {
+    if h.shape != [n] || data.len() as u64 != n.saturating_mul(h.size as u64) {
         return Err(malformed(
             format!("coordinate array {name:?} of {n} values, one per sample"),
             format!("shape {:?}", h.shape),

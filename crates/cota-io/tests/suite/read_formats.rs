@@ -415,6 +415,18 @@ fn npz_coordinate_arrays_are_honoured_in_either_direction() {
             "index 3",
         ],
     );
+    // An absurd shape beside coordinate arrays: refused, not overflowed.
+    let huge = formats::npz(&[
+        (
+            "elevation",
+            formats::npy("<f4", false, &[1 << 40, 2], &[0; 8]),
+        ),
+        ("x", f64s(&[0.0, 1.0])),
+        ("y", f64s(&[0.0, 1.0])),
+    ]);
+    let p = write_file(dir.path(), "huge.npz", &huge);
+    let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
+    assert_contains(&msg, &["huge.npz", "coordinate array \"y\""]);
 }
 
 #[test]
