@@ -122,12 +122,7 @@ fn read_options(a: &InputArgs) -> anyhow::Result<ReadOptions> {
 /// A number for a message: plain when of ordinary size, else in scientific
 /// notation (never hundreds of digits).
 pub fn num(v: f64) -> String {
-    let a = v.abs();
-    if v.is_finite() && a != 0.0 && !(1e-4..1e9).contains(&a) {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
-    }
+    cota_core::criteria::plain(v)
 }
 
 /// A number for a report: three significant decimals at most, plainly.

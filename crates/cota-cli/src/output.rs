@@ -105,26 +105,25 @@ pub fn probe_dir(out: &Path, dir: &Path) -> anyhow::Result<()> {
 
 /// Fails early on an output directory (`cota tiles -o DIR`) that cannot be
 /// written: an existing file that is not a directory, or no writable
-/// directory to make it in. `archive`: `out` is a file (`.mbtiles`) instead.
+/// directory to make it in. `archive`: `out` is a file (`.mbtiles`) instead,
+/// whose directories are made as a directory output's are.
 pub fn check_output_dir(out: &Path, archive: bool) -> anyhow::Result<()> {
-    if archive {
-        if out.is_dir() {
-            anyhow::bail!("cannot write {}: it is a directory", out.display());
-        }
-        let dir = match out.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p,
-            _ => Path::new("."),
-        };
-        return probe_dir(out, dir);
+    if archive && out.is_dir() {
+        anyhow::bail!("cannot write {}: it is a directory", out.display());
     }
-    if out.exists() && !out.is_dir() {
+    if !archive && out.exists() && !out.is_dir() {
         anyhow::bail!(
             "cannot write {}: expected a directory, found a file",
             out.display()
         );
     }
-    // The nearest directory that exists: the output or the one it is made in.
-    let mut dir = out;
+    // The nearest directory that exists: where the output (or the
+    // directories made for it) goes.
+    let mut dir = match out.parent() {
+        Some(p) if archive && !p.as_os_str().is_empty() => p,
+        _ if archive => Path::new("."),
+        _ => out,
+    };
     while !dir.exists() {
         match dir.parent() {
             Some(p) if !p.as_os_str().is_empty() => dir = p,

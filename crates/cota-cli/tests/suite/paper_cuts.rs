@@ -397,3 +397,19 @@ fn quiet_silences_the_report_but_not_json_or_errors() {
     let o = cota(&["--quiet", "mesh", "--max-error", "-1"]);
     assert!(!o.status.success() && stderr(&o).contains("error"));
 }
+
+/// The early output check refuses what cannot be written, not what is only
+/// new: an archive or a directory under directories that do not exist yet
+/// is made.
+#[test]
+fn new_output_directories_are_made_not_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for out in [
+        dir.path().join("a/b/t.mbtiles"),
+        dir.path().join("c/d/tiles"),
+    ] {
+        let o = cota(&["tiles", "--max-zoom", "3", "-o", out.to_str().unwrap()]);
+        assert!(o.status.success(), "{}: {}", out.display(), stderr(&o));
+        assert!(out.exists(), "{}", out.display());
+    }
+}

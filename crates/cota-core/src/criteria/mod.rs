@@ -330,7 +330,7 @@ impl Criterion for RelativeSize {
 
 /// A parameter as a criterion's name shows it: as given, but in exponent
 /// form outside 10⁻⁴ to 10⁹ (a bound of 1e300 is not 301 digits).
-pub(crate) fn plain(v: f64) -> String {
+pub fn plain(v: f64) -> String {
     let a = v.abs();
     if v.is_finite() && a != 0.0 && !(1e-4..1e9).contains(&a) {
         format!("{v:e}")
