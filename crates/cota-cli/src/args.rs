@@ -128,6 +128,13 @@ pub struct InputArgs {
     /// bytes per sample, at most 2^30); a gzipped .hgt at most one 3601² tile.
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub max_samples: Option<u64>,
+    /// Accept heights beyond ±12,000 m (refused by default: feet,
+    /// centimetres or an undeclared nodata, not metres). Heights are held as
+    /// f32, to within 0.49 mm up to 16,384 m and half a unit in the last
+    /// place beyond (1 m at 2·10⁷ m): the report says when that exceeds a
+    /// millimetre. Never beyond ±10⁹ m.
+    #[arg(long)]
+    pub any_height: bool,
     /// The CRS of inputs that declare none: EPSG:N (e.g. EPSG:32633) or a
     /// PROJ string ('+proj=utm +zone=33 +datum=WGS84'). For ESRI grids
     /// without a .prj, PNG/WebP/NumPy arrays, GeoTIFFs without GeoKeys, and

@@ -115,6 +115,11 @@ fn read_options(a: &InputArgs) -> anyhow::Result<ReadOptions> {
         .with_cell_size_m(a.cell_size_m)
         .with_band(a.band)
         .with_max_samples(a.max_samples)
+        .with_max_abs_height_m(if a.any_height {
+            cota_io::MAX_ABS_HEIGHT_M
+        } else {
+            cota_io::DEFAULT_MAX_ABS_HEIGHT_M
+        })
         .with_array(array)
         .with_tiles(tiles))
 }
@@ -202,6 +207,27 @@ fn warn_old_zoom_flag() {
         eprintln!(
             "cota: warning: --zoom is deprecated: it is the PMTiles input's zoom, now --input-zoom \
              (the output's zooms are --min-zoom/--max-zoom)"
+        );
+    }
+}
+
+/// Warns (stderr) when heights are large enough (only with `--any-height`)
+/// that f32 holds them to worse than a millimetre: errors and checks are
+/// against the heights as held.
+fn warn_storage_precision(grid: &HeightGrid, files: &[FileInfo]) {
+    let Some((lo, hi)) = grid.valid_range() else {
+        return;
+    };
+    let max_abs = f64::from(lo.abs().max(hi.abs()));
+    let held = cota_io::f32_storage_error_m(max_abs);
+    if held > 1e-3 {
+        eprintln!(
+            "cota: warning: {}: heights up to {} m are held as f32, within {} m of the file's \
+             values: errors and checks are against the heights as held, so a bound below \
+             that says little (heights relative to an offset are not supported)",
+            name(files),
+            num(max_abs),
+            num_short(held)
         );
     }
 }
@@ -453,6 +479,7 @@ pub fn load_with(a: &InputArgs, in_turn: bool) -> anyhow::Result<Input> {
         region
     };
     warn_unpositioned(&region.files);
+    warn_storage_precision(&region.grid, &region.files);
     check_seams(a, region.seams.as_ref(), &region.files)?;
     check_cell_size(&region.grid, &region.files)?;
     let grid = match (&a.bbox, a.zoom) {

@@ -62,6 +62,37 @@ pub struct ReadOptions {
     /// one 3601² tile). Never above [`cota_core::grid::MAX_SAMPLES`].
     /// Default: `None`.
     pub max_samples: Option<u64>,
+    /// Largest height magnitude accepted, metres: a sample beyond ±this is
+    /// refused, naming the file and the sample (a DEM in feet or
+    /// centimetres, a wrong scale or an undeclared nodata is caught here
+    /// rather than meshed). Heights are held as f32: within the default
+    /// ±12,000 m (the deepest trench is −10,994 m, the highest summit
+    /// 8,849 m) a height read from an f64 or text file is held to within
+    /// 0.49 mm of the file's value (half a unit in the last place), exactly
+    /// for integer files; beyond it that grows with the magnitude
+    /// ([`f32_storage_error_m`]). At most [`MAX_ABS_HEIGHT_M`]. Default:
+    /// [`DEFAULT_MAX_ABS_HEIGHT_M`].
+    pub max_abs_height_m: f64,
+}
+
+/// The default [`ReadOptions::max_abs_height_m`]: 12,000 m.
+pub const DEFAULT_MAX_ABS_HEIGHT_M: f64 = 12_000.0;
+
+/// The largest [`ReadOptions::max_abs_height_m`] that may be asked: 10⁹ m.
+/// Beyond it differences of f32 heights lose every metre, so such heights
+/// are refused whatever the option.
+pub const MAX_ABS_HEIGHT_M: f64 = 1e9;
+
+/// The most an f32 height of magnitude up to `max_abs_m` may differ from
+/// the value it was rounded from (half a unit in the last place of f32 at
+/// that magnitude): 0.49 mm up to 16,384 m, 1 m at 2·10⁷ m. 0 for 0.
+pub fn f32_storage_error_m(max_abs_m: f64) -> f64 {
+    if !(max_abs_m.is_finite() && max_abs_m > 0.0) {
+        return 0.0;
+    }
+    // ulp(x) = 2^(floor(log2 x) − 23) for a normal f32.
+    let e = max_abs_m.log2().floor();
+    0.5 * (e - 23.0).exp2()
 }
 
 /// The name of an array in a NumPy `.npz` archive (at most
@@ -129,6 +160,7 @@ impl ReadOptions {
         array: None,
         tiles: None,
         max_samples: None,
+        max_abs_height_m: DEFAULT_MAX_ABS_HEIGHT_M,
     };
 
     /// Sets [`ReadOptions::png_encoding`].
@@ -165,6 +197,16 @@ impl ReadOptions {
     /// Sets [`ReadOptions::max_samples`].
     pub const fn with_max_samples(mut self, max_samples: Option<u64>) -> Self {
         self.max_samples = max_samples;
+        self
+    }
+
+    /// Sets [`ReadOptions::max_abs_height_m`] (capped at [`MAX_ABS_HEIGHT_M`]).
+    pub const fn with_max_abs_height_m(mut self, max_abs_height_m: f64) -> Self {
+        self.max_abs_height_m = if max_abs_height_m < MAX_ABS_HEIGHT_M {
+            max_abs_height_m
+        } else {
+            MAX_ABS_HEIGHT_M
+        };
         self
     }
 

@@ -108,6 +108,26 @@ pub enum ReadErrorKind {
         /// The bytes allowed per sample.
         per_sample: u64,
     },
+    /// A height beyond [`crate::ReadOptions::max_abs_height_m`].
+    #[error(
+        "expected heights within ±{limit_m} m (metres above sea level), found {} m at column \
+         {col}, row {row}: heights in feet or centimetres, a scale, or an undeclared nodata? \
+         {hint}{}",
+        cota_core::criteria::plain(*found_m),
+        if *limit_m < crate::dem::MAX_ABS_HEIGHT_M { ", or pass --any-height to accept such heights" } else { "" }
+    )]
+    AbsurdHeight {
+        /// The height found, metres.
+        found_m: f64,
+        /// Its column (0 west).
+        col: usize,
+        /// Its row (0 north).
+        row: usize,
+        /// The limit, metres.
+        limit_m: f64,
+        /// What to do, for this format.
+        hint: &'static str,
+    },
     /// The grid could not be built from what was read.
     #[error(transparent)]
     Grid(#[from] cota_core::GridError),

@@ -33,7 +33,8 @@ pub mod stream_file;
 pub mod tiles;
 
 pub use dem::{
-    ArrayName, DataType, Dem, DemSummary, Format, PngEncoding, ReadOptions, TileRequest,
+    f32_storage_error_m, ArrayName, DataType, Dem, DemSummary, Format, PngEncoding, ReadOptions,
+    TileRequest, DEFAULT_MAX_ABS_HEIGHT_M, MAX_ABS_HEIGHT_M,
 };
 pub use error::{ReadError, ReadErrorKind, RegionError};
 pub use read::{

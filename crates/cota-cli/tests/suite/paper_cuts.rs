@@ -413,3 +413,54 @@ fn new_output_directories_are_made_not_refused() {
         assert!(out.exists(), "{}", out.display());
     }
 }
+
+/// Heights beyond ±12,000 m (here a real grid, fixtures/hugo_site.asc,
+/// raised by 2·10⁷ m, where f32 holds heights only to the metre) are
+/// refused, naming the file, the sample and the flag; `--any-height`
+/// accepts them and says how precisely they are held.
+#[test]
+fn absurd_heights_are_refused_naming_the_file_and_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(fixture("hugo_site.asc")).unwrap();
+    let mut raised = String::new();
+    for line in text.lines() {
+        let header = line
+            .split_whitespace()
+            .next()
+            .is_some_and(|w| w.chars().next().is_some_and(char::is_alphabetic));
+        if header {
+            raised.push_str(line);
+        } else {
+            let vals: Vec<String> = line
+                .split_whitespace()
+                .map(|v| {
+                    let h: f64 = v.parse().unwrap();
+                    if h < -9000.0 {
+                        v.to_string()
+                    } else {
+                        format!("{:.3}", h + 2e7)
+                    }
+                })
+                .collect();
+            raised.push_str(&vals.join(" "));
+        }
+        raised.push('\n');
+    }
+    let input = dir.path().join("raised.asc");
+    std::fs::write(&input, raised).unwrap();
+    let out = dir.path().join("m.obj");
+    let (i, o) = (input.to_str().unwrap(), out.to_str().unwrap());
+    let r = cota(&["mesh", i, "--max-error", "0.5", "-o", o]);
+    assert!(!r.status.success());
+    let e = stderr(&r);
+    for want in ["raised.asc", "within ±12000 m", "found 200", "--any-height"] {
+        assert!(e.contains(want), "{want:?} not in: {e}");
+    }
+    assert!(!out.exists());
+    let r = cota(&["mesh", i, "--any-height", "--max-error", "0.5", "-o", o]);
+    let e = stderr(&r);
+    assert!(r.status.success(), "{e}");
+    assert!(e.contains("held as f32, within 1.00 m"), "{e}");
+    let r = cota(&["info", fixture("hugo_site.asc").to_str().unwrap()]);
+    assert!(r.status.success() && !stderr(&r).contains("held as f32"));
+}

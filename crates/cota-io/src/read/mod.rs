@@ -55,6 +55,7 @@ pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Dem, ReadError> {
         let mut file = std::fs::File::open(path).map_err(|e| wrap(ReadErrorKind::Io(e)))?;
         return pmtiles::decode(&mut file, path, opts)
             .map(with_guessed_crs)
+            .and_then(|d| heights_within(d, opts))
             .map_err(wrap);
     }
     // The size is checked against the budget before anything is read: a
@@ -183,7 +184,35 @@ pub(crate) fn decode_bytes(
             found: format!("{}{}", describe_bytes(bytes), name_hint(path)),
         }),
     }?;
-    Ok(with_guessed_crs(dem))
+    heights_within(with_guessed_crs(dem), opts)
+}
+
+/// Refuses a DEM holding a height beyond [`ReadOptions::max_abs_height_m`]
+/// (never above [`crate::dem::MAX_ABS_HEIGHT_M`]), naming the first such
+/// sample.
+fn heights_within(dem: Dem, opts: &ReadOptions) -> Result<Dem, ReadErrorKind> {
+    let limit = opts.max_abs_height_m.min(crate::dem::MAX_ABS_HEIGHT_M);
+    let g = &dem.grid;
+    let beyond = g
+        .heights()
+        .iter()
+        .position(|h| f64::from(h.abs()) > limit && !h.is_nan());
+    match beyond {
+        None => Ok(dem),
+        Some(i) => Err(ReadErrorKind::AbsurdHeight {
+            found_m: f64::from(g.heights()[i]),
+            col: i % g.width().max(1),
+            row: i / g.width().max(1),
+            limit_m: limit,
+            hint: match dem.format {
+                crate::Format::Png(crate::PngEncoding::Gray16) => {
+                    "a 16-bit gray PNG's levels are metres unless --gray-scale-m says otherwise; \
+                     give its metres per level"
+                }
+                _ => "convert the file or declare its nodata",
+            },
+        }),
+    }
 }
 
 /// Largest expansion of DEFLATE, used to refuse gzip bombs early.

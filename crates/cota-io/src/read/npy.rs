@@ -18,9 +18,14 @@
 //!   ambiguous and refused with the list of names.
 //! * Georeference: arrays carry none. In an `.npz`, companion scalars decide
 //!   when their names do: `cell_size_m` gives the cell size in metres; `dx`,
-//!   `dy`, `xmin` and `ymax` (or `ymin`) give a transform in the data's own
-//!   units (pixel-is-point, `ymin` taken as the southern row) — degrees when
-//!   small enough to be degrees (see `GeoRef::guess_geographic`). Otherwise
+//!   `dy` with `xmin` and `ymax` (or `ymin`) give a transform in the data's
+//!   own units (pixel-is-point, `ymin` taken as the southern row, the steps'
+//!   signs ignored); `dx`, `dy` with `x0` and `y0` (the first sample's
+//!   centre) give one with signed steps, a positive `dy` meaning rows that
+//!   run south to north (flipped north-up). Degrees when small enough to be
+//!   degrees (see `GeoRef::guess_geographic`). Scalars are read as f64 (a
+//!   UTM coordinate keeps its millimetres). `dx` without `dy`, a zero step, or
+//!   steps without an origin are refused. Otherwise
 //!   [`ReadOptions::cell_size_m`].
 //! * Coordinate arrays: 1-D members `x` and `y` (or `lon` and `lat`,
 //!   `longitude` and `latitude`), one value per column and per row, as
@@ -269,24 +274,63 @@ fn companion_georef(
     if let Some(c) = scalar("cell_size_m")?.filter(|c| *c > 0.0 && c.is_finite()) {
         return Ok(GeoRef::unreferenced(c));
     }
-    let (dx, dy, xmin) = (scalar("dx")?, scalar("dy")?, scalar("xmin")?);
-    let (ymin, ymax) = (scalar("ymin")?, scalar("ymax")?);
-    match (dx, dy, xmin) {
-        (Some(dx), Some(dy), Some(x0)) if dx > 0.0 && dy > 0.0 => Ok(GeoRef {
-            crs: cota_core::Crs::Unknown,
-            origin_x: x0,
-            // ymax is the northern row; without it, ymin is placed below (see decode).
-            origin_y: ymax.or(ymin).unwrap_or(0.0),
-            pixel_x: dx,
-            pixel_y: if ymax.is_some() || ymin.is_none() {
-                -dy
-            } else {
-                f64::NAN
-            },
-            pixel_is: PixelIs::Point,
-            known: ymax.is_some() || ymin.is_some(),
+    let (dx, dy) = (scalar("dx")?, scalar("dy")?);
+    let (x0, y0) = (scalar("x0")?, scalar("y0")?);
+    let (xmin, ymin, ymax) = (scalar("xmin")?, scalar("ymin")?, scalar("ymax")?);
+    if dx.is_none() && dy.is_none() {
+        return Ok(GeoRef::unreferenced(opts.cell_size_m));
+    }
+    let (Some(dx), Some(dy)) = (dx, dy) else {
+        return Err(malformed(
+            "both scalars \"dx\" and \"dy\" (the sample spacing)",
+            "only one of them",
+        ));
+    };
+    if !(dx.is_finite() && dy.is_finite() && dx != 0.0 && dy != 0.0) {
+        return Err(malformed(
+            "finite, non-zero scalars \"dx\" and \"dy\"",
+            format!("dx = {dx}, dy = {dy}"),
+        ));
+    }
+    let georef = |origin_x: f64, origin_y: f64, pixel_x: f64, pixel_y: f64| GeoRef {
+        crs: cota_core::Crs::Unknown,
+        origin_x,
+        origin_y,
+        pixel_x,
+        pixel_y,
+        pixel_is: PixelIs::Point,
+        known: true,
+    };
+    // `x0`/`y0`: the centre of the first sample, with signed steps (a
+    // positive `dy`: rows run south to north; a negative `dx`: columns
+    // east to west; flipped north-up on reading).
+    if let (Some(x0), Some(y0)) = (x0, y0) {
+        return Ok(georef(x0, y0, dx, dy));
+    }
+    // Extents: `dx`, `dy` are sizes (their sign is ignored), rows north to south.
+    let (dx, dy) = (dx.abs(), dy.abs());
+    match (xmin.or(x0), ymax, ymin) {
+        (Some(x), Some(top), _) => Ok(georef(x, top, dx, -dy)),
+        // Only the southern row: placed below (see `place_southern`).
+        (Some(x), None, Some(bottom)) => Ok(GeoRef {
+            pixel_y: f64::NAN,
+            ..georef(x, bottom, dx, -dy)
         }),
-        _ => Ok(GeoRef::unreferenced(opts.cell_size_m)),
+        _ => Err(malformed(
+            "with \"dx\" and \"dy\", the scalars \"xmin\" and \"ymax\" (or \"ymin\"), or \"x0\" and \"y0\"",
+            {
+                let given: Vec<&str> = [("xmin", xmin), ("ymin", ymin), ("ymax", ymax), ("x0", x0), ("y0", y0)]
+                    .iter()
+                    .filter(|(_, v)| v.is_some())
+                    .map(|(n, _)| *n)
+                    .collect();
+                if given.is_empty() {
+                    "none of them".to_string()
+                } else {
+                    format!("only {}", given.join(", "))
+                }
+            },
+        )),
     }
 }
 
@@ -297,7 +341,9 @@ fn scalar_value(bytes: &[u8]) -> Option<f64> {
         return None;
     }
     let raw = bytes.get(h.data_offset..h.data_offset + h.size)?;
-    Some(f64::from(convert(raw, &h).first().copied()?))
+    // As f64: a UTM coordinate in f32 would lose decimetres.
+    let first = values(raw, &h).next();
+    first
 }
 
 /// Reads member `NAME.npy` (at most `limit` bytes when given), refusing a
@@ -498,7 +544,8 @@ fn values<'a>(data: &'a [u8], h: &'a Header) -> impl Iterator<Item = f64> + 'a {
             (b'i', _) => i64::from_le_bytes(b) as f64,
             (b'u', 1) => f64::from(b[0]),
             (b'u', 2) => f64::from(u16::from_le_bytes([b[0], b[1]])),
-            (b'u', _) => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            (b'u', 4) => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+            (b'u', _) => u64::from_le_bytes(b) as f64,
             (_, 4) => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
             _ => f64::from_le_bytes(b),
         }

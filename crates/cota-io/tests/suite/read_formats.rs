@@ -339,6 +339,69 @@ fn npz_companion_arrays_give_a_georeference() {
     );
 }
 
+/// Companion scalars: `x0`/`y0` with signed steps (rows stored south to
+/// north with a positive `dy` read north-up at the same place), UTM-sized
+/// origins kept to the millimetre (read as f64, not f32), and incomplete or
+/// zero steps refused naming what is missing.
+#[test]
+fn npz_scalars_signed_steps_precision_and_refusals() {
+    let (h, w, ht) = hugo();
+    let dir = tmp();
+    let s = formats::npy_scalar;
+    let same = |a: &[f32], b: &[f32]| {
+        a.iter()
+            .zip(b)
+            .all(|(a, b)| a == b || (a.is_nan() && b.is_nan()))
+    };
+    let flipped_rows: Vec<f32> = h.chunks(w).rev().flatten().copied().collect();
+    let up = formats::npz(&[
+        ("elevation", formats::npy_f32(&flipped_rows, w, ht)),
+        ("dx", s(30.0)),
+        ("dy", s(30.0)),
+        ("x0", s(500_000.125)),
+        ("y0", s(4_400_000.375 - 30.0 * (ht as f64 - 1.0))),
+    ]);
+    let p = write_file(dir.path(), "up.npz", &up);
+    let dem = read(&p, &ReadOptions::DEFAULT);
+    let g = dem.grid.georef();
+    assert!(g.known && g.pixel_y < 0.0, "{g:?}");
+    assert_eq!(g.sample_xy(0.0, 0.0), (500_000.125, 4_400_000.375));
+    assert!(same(dem.grid.heights(), &h), "rows not flipped north-up");
+    let extents = formats::npz(&[
+        ("elevation", formats::npy_f32(&h, w, ht)),
+        ("dx", s(30.0)),
+        ("dy", s(-30.0)),
+        ("xmin", s(500_000.125)),
+        ("ymax", s(4_400_000.375)),
+    ]);
+    let p = write_file(dir.path(), "extents.npz", &extents);
+    let dem = read(&p, &ReadOptions::DEFAULT);
+    assert_eq!(
+        dem.grid.georef().sample_xy(0.0, 0.0),
+        (500_000.125, 4_400_000.375)
+    );
+    assert!(same(dem.grid.heights(), &h));
+    for (name, members, expect) in [
+        (
+            "onlydx.npz",
+            vec![("dx", s(30.0)), ("xmin", s(0.0))],
+            "\"dx\" and \"dy\"",
+        ),
+        ("zero.npz", vec![("dx", s(0.0)), ("dy", s(30.0))], "dx = 0"),
+        (
+            "noorigin.npz",
+            vec![("dx", s(30.0)), ("dy", s(30.0)), ("ymax", s(1.0))],
+            "only ymax",
+        ),
+    ] {
+        let mut m = vec![("elevation", formats::npy_f32(&h, w, ht))];
+        m.extend(members);
+        let p = write_file(dir.path(), name, &formats::npz(&m));
+        let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
+        assert_contains(&msg, &[name, expect]);
+    }
+}
+
 /// 1-D coordinate arrays give the georeference and the direction: the same
 /// real grid stored north to south (y falling) and south to north (y rising,
 /// rows flipped), or east to west, reads as the same north-up grid at the

@@ -57,8 +57,23 @@ fn shared_pngs_match_data_md() {
     assert_eq!(fuji.grid.void_count(), 0);
     assert_range(&fuji, 13.7, 3751.0, 0.05);
 
-    // 16-bit gray → gray16 by default; raw values, then scaled by 0.1 m.
-    let raw = read_with(&png.join("ps_height_1k.png"), &ReadOptions::DEFAULT);
+    // 16-bit gray → gray16 by default: levels up to 43,798 are no heights
+    // in metres, refused by default naming the flag; raw values when any
+    // height is allowed, then scaled by 0.1 m.
+    let err = cota_io::read_dem(&png.join("ps_height_1k.png"), &ReadOptions::DEFAULT)
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    for want in [
+        "ps_height_1k.png",
+        "within ±12000 m",
+        "--gray-scale-m",
+        "--any-height",
+    ] {
+        assert!(err.contains(want), "{want:?} not in {err:?}");
+    }
+    let any = ReadOptions::DEFAULT.with_max_abs_height_m(f64::INFINITY);
+    let raw = read_with(&png.join("ps_height_1k.png"), &any);
     assert_eq!(raw.format, Format::Png(PngEncoding::Gray16));
     assert_eq!(raw.data_type, DataType::U16);
     assert_eq!((raw.grid.width(), raw.grid.height()), (1025, 1025));
