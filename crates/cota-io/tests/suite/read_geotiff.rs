@@ -38,8 +38,11 @@ fn read(path: &Path) -> Dem {
 }
 
 fn read_bytes(bytes: &[u8], name: &str) -> Result<Dem, ReadError> {
-    // The whole sample range: these tests are about format checks, not the memory budget.
-    let opts = ReadOptions::default().with_max_samples(Some(cota_core::grid::MAX_SAMPLES));
+    // The whole sample range and any height: these tests are about format
+    // checks, not the memory budget or the height limit.
+    let opts = ReadOptions::default()
+        .with_max_samples(Some(cota_core::grid::MAX_SAMPLES))
+        .with_max_abs_height_m(f64::INFINITY);
     read_dem_bytes(bytes, Path::new(name), &opts)
 }
 
