@@ -413,3 +413,169 @@ fn new_output_directories_are_made_not_refused() {
         assert!(out.exists(), "{}", out.display());
     }
 }
+
+/// The commands that read DEMs.
+const READING_COMMANDS: [&[&str]; 7] = [
+    &["info"],
+    &["mesh"],
+    &["compare"],
+    &["pair"],
+    &["stream", "encode"],
+    &["tiles"],
+    &["serve"],
+];
+
+/// One set of reading flags (item 9): every command that reads DEMs lists
+/// the same flags under one heading, `--crop` and `--bbox` included (`pair`
+/// had only `--max-samples`, `--crop` was on `mesh` and `compare` only).
+#[test]
+fn every_command_that_reads_dems_takes_one_set_of_reading_flags() {
+    let flags = [
+        "--encoding",
+        "--gray-scale-m",
+        "--gray-offset-m",
+        "--cell-size-m",
+        "--band",
+        "--array",
+        "--input-zoom",
+        "--bbox",
+        "--crop",
+        "--seam",
+        "--seam-tolerance",
+        "--strict",
+        "--max-samples",
+        "--src-crs",
+    ];
+    for cmd in READING_COMMANDS {
+        let o = cota(&[cmd, &["--help"]].concat());
+        assert!(o.status.success(), "{cmd:?}");
+        let help = stdout(&o);
+        assert!(help.contains("Reading DEMs:"), "{cmd:?}: no heading:\n{help}");
+        let section = help.split("Reading DEMs:").nth(1).unwrap();
+        for f in flags {
+            let listed = [" ", "\n", "="].iter().any(|end| {
+                section.contains(&format!("  {f}{end}")) || section.contains(&format!(", {f}{end}"))
+            });
+            assert!(listed, "{cmd:?} lacks {f} among its reading flags:\n{help}");
+        }
+    }
+}
+
+/// `--crop` keeps the same window on every command: `info` and `stream
+/// encode` report its size, `tiles` makes the tiles of the window only,
+/// `pair` drapes the image on the window.
+#[test]
+fn crop_is_the_same_window_on_every_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let crop = ["--crop", "100,200,65,33"];
+    let o = cota(&[&["info", "--json"][..], &crop].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(65), Some(33))
+    );
+    let cs = dir.path().join("c.cstream");
+    let args = ["stream", "encode", "--max-error", "20", "--json", "-o"];
+    let o = cota(&[&args[..], &[cs.to_str().unwrap()], &crop].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(65), Some(33))
+    );
+    let tiles = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let args = [
+            "tiles",
+            "--max-zoom",
+            "9",
+            "--json",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        let o = cota(&[&args[..], extra].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        v["tiles"].as_u64().unwrap()
+    };
+    let (whole, window) = (tiles("whole", &[]), tiles("window", &crop));
+    assert!(
+        window < whole,
+        "{window} tiles for the window, {whole} for the whole"
+    );
+    let dem = fixture("olinda_dem_utm25s.tif");
+    let img = fixture("L7_ETMs.tif");
+    let pair = |extra: &[&str]| {
+        let args = ["pair", dem.to_str().unwrap(), img.to_str().unwrap()];
+        let more = ["--bands", "3,2,1", "--budget-bytes", "200000", "--json"];
+        let o = cota(&[&args[..], &more, extra].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        v["image"]["texture_size"].clone()
+    };
+    let (full, cut) = (pair(&[]), pair(&["--crop", "0,0,40,30"]));
+    assert_ne!(full, cut);
+    assert!(cut[0].as_u64() < full[0].as_u64(), "{cut} vs {full}");
+}
+
+/// `compare --tolerances`: plain numbers are metres, `%` marks a percentage
+/// of the height range, a list may mix them, and each row says which.
+#[test]
+fn compare_tolerances_are_metres_unless_marked_percent() {
+    let base = [
+        "compare",
+        "--crop",
+        "824,792,65,65",
+        "--modes",
+        "conforming",
+        "--quadtree",
+        "templates",
+        "--tolerances",
+        "5,10%",
+    ];
+    let o = cota(&[&base[..], &["--json"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let range = v["range_m"].as_f64().unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    assert_eq!(rows[1]["label"], "5 m");
+    assert_eq!(rows[1]["tolerance_given_in"], "metres");
+    assert_eq!(rows[1]["tolerance_m"].as_f64(), Some(5.0));
+    assert!((rows[1]["tolerance_pct"].as_f64().unwrap() - 500.0 / range).abs() < 1e-9);
+    assert_eq!(rows[2]["label"], "10%");
+    assert_eq!(rows[2]["tolerance_given_in"], "percent_of_range");
+    assert!((rows[2]["tolerance_m"].as_f64().unwrap() - 0.1 * range).abs() < 1e-9);
+    for e in rows[1]["entries"].as_array().unwrap() {
+        assert!(e["max_error_m"].as_f64().unwrap() <= 5.0);
+    }
+    let o = cota(&base);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let t = stdout(&o);
+    assert!(t.contains("| 5 m | 5.0 |") && t.contains("| 10% |"), "{t}");
+    for bad in ["-1", "5%%", "x", "inf%"] {
+        let o = cota(&["compare", "--tolerances", bad]);
+        assert!(!o.status.success(), "{bad}");
+        let e = stderr(&o);
+        assert!(e.contains("percentage of the height range"), "{bad}: {e}");
+    }
+}
+
+/// `tiles` reads a PMTiles archive's zoom as `--input-zoom`, like every
+/// command; `--zoom` still works there and warns.
+#[test]
+fn tiles_takes_input_zoom_and_warns_on_the_old_name() {
+    let o = cota(&["tiles", "--help"]);
+    assert!(stdout(&o).contains("--input-zoom <Z>"), "{}", stdout(&o));
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t");
+    let args = ["tiles", "--bbox=-72,-29,-71,-28", "--max-zoom", "4", "-o"];
+    let o = cota(&[&args[..], &[out.to_str().unwrap(), "--zoom", "3"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("--zoom is deprecated") && e.contains("--input-zoom"),
+        "{e}"
+    );
+}
