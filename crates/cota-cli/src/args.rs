@@ -1100,6 +1100,11 @@ pub struct TilesArgs {
     /// the records (reads no input: the shards recorded it).
     #[arg(long)]
     pub reduce: bool,
+    /// Make the pyramid even when its estimate (printed before the work
+    /// starts) is past 1,000,000 tiles or more memory than the machine has
+    /// available; refused without it.
+    #[arg(long)]
+    pub yes: bool,
 }
 
 #[derive(Debug, Args)]

@@ -450,7 +450,10 @@ fn every_command_that_reads_dems_takes_one_set_of_reading_flags() {
         let o = cota(&[cmd, &["--help"]].concat());
         assert!(o.status.success(), "{cmd:?}");
         let help = stdout(&o);
-        assert!(help.contains("Reading DEMs:"), "{cmd:?}: no heading:\n{help}");
+        assert!(
+            help.contains("Reading DEMs:"),
+            "{cmd:?}: no heading:\n{help}"
+        );
         let section = help.split("Reading DEMs:").nth(1).unwrap();
         for f in flags {
             let listed = [" ", "\n", "="].iter().any(|end| {
@@ -577,5 +580,75 @@ fn tiles_takes_input_zoom_and_warns_on_the_old_name() {
     assert!(
         e.contains("--zoom is deprecated") && e.contains("--input-zoom"),
         "{e}"
+    );
+}
+
+/// The figures of a `cota tiles --json` estimate line: tiles, memory (MB).
+fn estimate_of(stderr: &str) -> (f64, f64) {
+    assert!(stderr.contains("cota: estimate: "), "no estimate: {stderr}");
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("cota: estimate: "))
+        .unwrap();
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let tiles: f64 = words[2].parse().unwrap();
+    let at = words.iter().position(|w| *w == "memory").unwrap();
+    let (n, unit) = (words[at - 3], words[at - 2]);
+    let scale = if unit == "GB" { 1e3 } else { 1.0 };
+    (tiles, n.parse::<f64>().unwrap() * scale)
+}
+
+/// `tiles` says what it will make before it starts (item 11): the tiles
+/// (here exactly those made), the lattice and the memory; past 10^6 tiles
+/// or the memory available it refuses without `--yes`, naming it, before
+/// any work; `--quiet` silences the estimate.
+#[test]
+fn tiles_estimates_before_it_starts_and_asks_for_yes_past_the_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let o = cota(&["tiles", "--max-zoom", "8", "--json", "-o", &out("a")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let (tiles, mb) = estimate_of(&stderr(&o));
+    assert_eq!(tiles, v["tiles"].as_f64().unwrap());
+    assert!((30.0..200.0).contains(&mb), "{mb} MB");
+    assert!(stderr(&o).contains("tiles at zooms 0 to 8; a lattice of"));
+    // 2.8 M tiles at zoom 18 on one 3" tile.
+    let t0 = std::time::Instant::now();
+    let o = cota(&["tiles", "--max-zoom", "18", "-o", &out("b")]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("M tiles (more than 1.0 M)") && e.contains("--yes"),
+        "{e}"
+    );
+    assert!(
+        t0.elapsed().as_secs() < 30,
+        "refused only after {:?}",
+        t0.elapsed()
+    );
+    assert!(!std::path::Path::new(&out("b")).join("layer.json").exists());
+    // Few tiles, but a lattice of 4096 cells a tile at zoom 14: terabytes.
+    let big = ["tiles", "--max-zoom", "14", "--tile-cells", "4096", "-o"];
+    let o = cota(&[&big[..], &[&out("c")]].concat());
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("of memory (more than the") && e.contains("--yes"),
+        "{e}"
+    );
+    assert!(!e.contains("tiles (more than"), "{e}");
+    // --yes goes on (to the lattice's own size limit here).
+    let o = cota(&[&big[..], &[&out("d"), "--yes"]].concat());
+    let e = stderr(&o);
+    assert!(
+        e.contains("going on past") && !e.contains("expected --yes"),
+        "{e}"
+    );
+    let o = cota(&["--quiet", "tiles", "--max-zoom", "3", "-o", &out("e")]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("estimate"),
+        "{}",
+        stderr(&o)
     );
 }
