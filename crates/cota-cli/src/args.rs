@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use cota_core::compare::Tolerance;
 use cota_core::quadtree::QuadOptions;
 use cota_core::{CriterionKind, Crs, Mode};
 
@@ -38,7 +39,10 @@ pub enum Command {
     Serve(ServeArgs),
 }
 
-/// How to read and combine the input files.
+/// The help heading of the reading flags.
+const READING: &str = "Reading DEMs";
+
+/// The input files and how to read and combine them.
 #[derive(Debug, Clone, Args)]
 pub struct InputArgs {
     /// DEM files: SRTM .hgt/.hgt.zip, GeoTIFF, PNG or WebP terrain tiles
@@ -50,8 +54,18 @@ pub struct InputArgs {
     /// --max-samples.
     #[arg(value_name = "FILE")]
     pub files: Vec<PathBuf>,
+    #[command(flatten)]
+    pub read: ReadArgs,
+}
+
+/// How to read DEMs, combine them and keep a window of them: the one set
+/// of reading flags every command that reads DEMs takes (`info`, `mesh`,
+/// `compare`, `pair`, `stream encode`, `tiles`, `serve`).
+#[derive(Debug, Clone, Args)]
+pub struct ReadArgs {
     /// PNG height encoding. Default: terrain-rgb for colour PNGs, gray16 for grayscale.
     #[arg(long, value_enum)]
+    #[arg(help_heading = READING)]
     pub encoding: Option<Encoding>,
     /// Metres per gray level for --encoding gray16.
     #[arg(
@@ -60,6 +74,7 @@ pub struct InputArgs {
         value_name = "M",
         allow_negative_numbers = true
     )]
+    #[arg(help_heading = READING)]
     pub gray_scale_m: f64,
     /// Metres added to gray levels for --encoding gray16.
     #[arg(
@@ -68,6 +83,7 @@ pub struct InputArgs {
         value_name = "M",
         allow_negative_numbers = true
     )]
+    #[arg(help_heading = READING)]
     pub gray_offset_m: f64,
     /// Cell size in metres for inputs without georeference (PNG).
     #[arg(
@@ -76,13 +92,16 @@ pub struct InputArgs {
         value_name = "M",
         allow_negative_numbers = true
     )]
+    #[arg(help_heading = READING)]
     pub cell_size_m: f64,
     /// Band to read from a multi-band raster (1-based).
     #[arg(long, value_name = "N")]
+    #[arg(help_heading = READING)]
     pub band: Option<u16>,
     /// The array to read from a NumPy .npz (default: the only 2-D array, or
     /// one named elevation, dem, z, height or heights).
     #[arg(long, value_name = "NAME")]
+    #[arg(help_heading = READING)]
     pub array: Option<String>,
     /// PMTiles archives: the zoom level of the tiles to read (with --bbox).
     /// `--zoom` is its former name, still accepted with a warning.
@@ -92,6 +111,7 @@ pub struct InputArgs {
         value_name = "Z",
         requires = "bbox"
     )]
+    #[arg(help_heading = READING)]
     pub zoom: Option<u8>,
     /// The box to read (west, south, east, north). PMTiles archives (with
     /// --input-zoom): in degrees, every tile of that zoom touching it is read and
@@ -105,9 +125,17 @@ pub struct InputArgs {
         value_delimiter = ',',
         allow_hyphen_values = true
     )]
+    #[arg(help_heading = READING)]
     pub bbox: Option<Vec<f64>>,
+    /// Keep only a window of the input (after mosaicking, before the void
+    /// fill): first column, first row (row 0 is the northern row), width,
+    /// height, in samples.
+    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, allow_hyphen_values = true, conflicts_with = "bbox")]
+    #[arg(help_heading = READING)]
+    pub crop: Option<Crop>,
     /// Where adjacent tiles overlap and disagree: their mean, or the first file's value.
     #[arg(long, value_enum, default_value_t = Seam::Mean)]
+    #[arg(help_heading = READING)]
     pub seam: Seam,
     /// Largest disagreement in metres between adjacent tiles where they
     /// overlap; above it the mosaic warns on stderr (or fails with --strict),
@@ -118,15 +146,18 @@ pub struct InputArgs {
         default_value_t = 5.0,
         allow_negative_numbers = true
     )]
+    #[arg(help_heading = READING)]
     pub seam_tolerance_m: f64,
     /// Fail (exit 1) instead of warning when adjacent tiles disagree by more
     /// than --seam-tolerance.
     #[arg(long)]
+    #[arg(help_heading = READING)]
     pub strict: bool,
     /// Largest grid one file may declare, in samples; larger files are refused
     /// before anything is allocated. Default: from the machine's memory (16
     /// bytes per sample, at most 2^30); a gzipped .hgt at most one 3601² tile.
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    #[arg(help_heading = READING)]
     pub max_samples: Option<u64>,
     /// Accept heights beyond ±12,000 m (refused by default: feet,
     /// centimetres or an undeclared nodata, not metres). Heights are held as
@@ -141,7 +172,16 @@ pub struct InputArgs {
     /// grids whose coordinates cota only guessed to be degrees. A file that
     /// declares a different CRS is refused, naming both.
     #[arg(long, value_name = "CRS", value_parser = parse_src_crs)]
+    #[arg(help_heading = READING)]
     pub src_crs: Option<Crs>,
+}
+
+impl ReadArgs {
+    /// True when only a window of the input is kept (`--bbox`, `--crop`,
+    /// or the tiles of `--input-zoom`).
+    pub fn windowed(&self) -> bool {
+        self.bbox.is_some() || self.zoom.is_some() || self.crop.is_some()
+    }
 }
 
 /// `--src-crs`: EPSG:N or a PROJ string, checked (`cota_io::crs::parse_crs`).
@@ -240,11 +280,6 @@ pub struct MeshArgs {
     /// Output coordinates.
     #[arg(long, value_enum, default_value_t = CoordsArg::Local)]
     pub coords: CoordsArg,
-    /// Mesh only a window of the input (after mosaicking, before the void
-    /// fill): first column, first row (row 0 is the northern row), width,
-    /// height, in samples.
-    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, allow_hyphen_values = true, conflicts_with = "bbox")]
-    pub crop: Option<Crop>,
     /// Vertical exaggeration: the heights written (and --base-m) are
     /// multiplied by F; the report's errors stay in true metres. Not with
     /// --quantize.
@@ -683,21 +718,44 @@ fn parse_crop(s: &str) -> Result<Crop, String> {
     }
 }
 
+/// A tolerance of `cota compare`: metres (`5`, `5m`) or a percentage of the
+/// height range (`5%`), 0 or more.
+fn parse_tolerance(s: &str) -> Result<Tolerance, String> {
+    let t = s.trim();
+    let bad = || {
+        format!(
+            "expected metres (5) or a percentage of the height range (5%), 0 or more, found {s:?}"
+        )
+    };
+    let (number, make): (&str, fn(f64) -> Tolerance) = match t.strip_suffix('%') {
+        Some(p) => (p, Tolerance::PercentOfRange),
+        None => (t.strip_suffix('m').unwrap_or(t), Tolerance::Metres),
+    };
+    let v: f64 = number.trim().parse().map_err(|_| bad())?;
+    if !(v.is_finite() && v >= 0.0) {
+        return Err(bad());
+    }
+    Ok(make(v))
+}
+
 #[derive(Debug, Args)]
 pub struct CompareArgs {
     #[command(flatten)]
     pub input: InputArgs,
-    /// Error tolerances in % of the grid's height range (paper 000's Table 1).
+    /// Error tolerances: plain numbers are metres, a number with a `%`
+    /// suffix is a percentage of the grid's height range (paper 000's Table
+    /// 1); lists may mix them (`0%,1%,5,20`). Each row of the report says
+    /// which. Before issue 33 plain numbers were percentages: write `7%`
+    /// for the former `7`.
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "0,1,2,7,10,14,50",
-        value_name = "PCT"
+        default_value = "0%,1%,2%,7%,10%,14%,50%",
+        value_name = "M|PCT%",
+        value_parser = parse_tolerance,
+        allow_hyphen_values = true
     )]
-    pub tolerances: Vec<f64>,
-    /// Compare on a window of the input: first column, first row, width, height.
-    #[arg(long, value_name = "COL,ROW,W,H", value_parser = parse_crop, allow_hyphen_values = true)]
-    pub crop: Option<Crop>,
+    pub tolerances: Vec<Tolerance>,
     /// Bitree modes to compare with the quadtree.
     #[arg(
         long,
@@ -907,11 +965,6 @@ pub struct PairArgs {
     /// The whole GLB must fit in this many bytes.
     #[arg(long, value_name = "N")]
     pub budget_bytes: u64,
-    /// Largest grid the DEM may declare, in samples; larger files are
-    /// refused before anything is allocated. Default: from the machine's
-    /// memory (16 bytes per sample, at most 2^30).
-    #[arg(long, value_name = "N")]
-    pub max_samples: Option<u64>,
     /// Weight of the mesh's distortion D(M) (m2).
     #[arg(long, value_name = "A", default_value_t = 1.0)]
     pub alpha: f64,
@@ -950,6 +1003,8 @@ pub struct PairArgs {
     pub json: bool,
     #[command(flatten)]
     pub image_args: ImageArgs,
+    #[command(flatten)]
+    pub read: ReadArgs,
 }
 
 /// Flags of `cota tiles`.
@@ -1052,6 +1107,11 @@ pub struct TilesArgs {
     /// the records (reads no input: the shards recorded it).
     #[arg(long)]
     pub reduce: bool,
+    /// Make the pyramid even when its estimate (printed before the work
+    /// starts) is past 1,000,000 tiles or more memory than the machine has
+    /// available; refused without it.
+    #[arg(long)]
+    pub yes: bool,
 }
 
 #[derive(Debug, Args)]

@@ -2,9 +2,10 @@
 //! transmitted points, triangles) and Table 2 (separate-triangle references),
 //! bitree against the restricted quadtree of Pajarola 1998, on real data.
 //!
-//! 1. Read (and mosaic) the inputs, apply the void policy, crop if asked.
-//! 2. Count with `cota_core::compare` (tolerances in % of the grid's height
-//!    range; every bitree mode and quadtree variant; optionally every mesh
+//! 1. Read (and mosaic) the inputs, keep the window of `--crop` or `--bbox`,
+//!    apply the void policy.
+//! 2. Count with `cota_core::compare` (tolerances in metres, or with `%` in
+//!    % of the grid's height range; every bitree mode and quadtree variant; optionally every mesh
 //!    through the checker; strip references with `--strip-method`, default
 //!    guided: the mesh as compared; cells re-triangulates unit cells of the
 //!    bitree mesh only, so it is not a like-for-like comparison).
@@ -39,19 +40,13 @@ struct Report<'a> {
 }
 
 pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
-    if let Some(t) = a.tolerances.iter().find(|t| !t.is_finite() || **t < 0.0) {
-        anyhow::bail!("--tolerances: expected percentages of 0 or more, found {t}");
-    }
     crate::input::refuse_hole(a.voids, "compare")?;
     let input = load(&a.input)?;
     let name = crate::input::name(&input.files);
     let mut grid = input.grid;
     crate::input::fill(&mut grid, a.voids)?;
-    if let Some(c) = &a.crop {
-        grid = crate::window::crop(&grid, c)?;
-    }
     let opts = CompareOptions::default()
-        .with_tolerances_pct(a.tolerances.clone())
+        .with_tolerances(a.tolerances.clone())
         .with_modes(a.modes.iter().map(|m| m.mode()).collect())
         .with_quadtree(a.quadtree.iter().map(|q| q.options()).collect())
         .with_check(a.check)
@@ -61,7 +56,12 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
     drop(spinner);
     let report = Report {
         input: name,
-        crop: a.crop.as_ref().map(|c| [c.col, c.row, c.width, c.height]),
+        crop: a
+            .input
+            .read
+            .crop
+            .as_ref()
+            .map(|c| [c.col, c.row, c.width, c.height]),
         width: grid.width(),
         height: grid.height(),
         min_m: c.min_m,
@@ -94,7 +94,7 @@ fn text(r: &Report) -> String {
         .unwrap_or_default();
     let _ = writeln!(
         s,
-        "input: {}{} ({} x {}), heights {:.0} to {:.0} m (range {:.0} m); tolerances in % of the range{}\n",
+        "input: {}{} ({} x {}), heights {:.0} to {:.0} m (range {:.0} m); tolerances as given (% of the range, or m){}\n",
         r.input,
         crop,
         r.width,

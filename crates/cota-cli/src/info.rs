@@ -13,7 +13,8 @@ use crate::input::{load, FileInfo, Input};
 
 pub fn run(a: &InfoArgs) -> anyhow::Result<ExitCode> {
     let files = &a.input.files;
-    if a.input.zoom.is_none() && !files.is_empty() && files.iter().all(|f| is_pmtiles_file(f)) {
+    if a.input.read.zoom.is_none() && !files.is_empty() && files.iter().all(|f| is_pmtiles_file(f))
+    {
         return archives(files, a.json);
     }
     if a.each && files.len() > 1 {

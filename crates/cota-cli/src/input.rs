@@ -14,7 +14,7 @@ use cota_io::{
     ReadOptions, Region, RegionOptions, TileRequest,
 };
 
-use crate::args::{Encoding, InputArgs, Seam, Voids};
+use crate::args::{Encoding, InputArgs, ReadArgs, Seam, Voids};
 use crate::progress;
 
 /// The sample DEM bundled in the repository (SRTM 3", Chilean coast, public domain).
@@ -81,7 +81,7 @@ pub fn fill(grid: &mut HeightGrid, voids: Voids) -> anyhow::Result<FillReport> {
     fill_voids(grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")
 }
 
-fn read_options(a: &InputArgs) -> anyhow::Result<ReadOptions> {
+fn read_options(a: &ReadArgs) -> anyhow::Result<ReadOptions> {
     warn_old_zoom_flag();
     let enc = a.encoding.map(|e| match e {
         Encoding::TerrainRgb => PngEncoding::TerrainRgb,
@@ -142,7 +142,7 @@ pub fn num_short(v: f64) -> String {
 }
 
 /// Refuses non-finite and out-of-range reading options, by name.
-fn check_options(a: &InputArgs) -> anyhow::Result<()> {
+fn check_options(a: &ReadArgs) -> anyhow::Result<()> {
     for (name, v) in [
         ("--gray-scale-m", a.gray_scale_m),
         ("--gray-offset-m", a.gray_offset_m),
@@ -259,11 +259,7 @@ fn path_of(files: &[FileInfo], index: usize) -> String {
 /// Warns on stderr (fails with `--strict`) when overlapping tiles disagree
 /// by more than `--seam-tolerance`, naming the two files and the worst
 /// disagreement.
-fn check_seams(
-    a: &InputArgs,
-    seams: Option<&SeamReport>,
-    files: &[FileInfo],
-) -> anyhow::Result<()> {
+fn check_seams(a: &ReadArgs, seams: Option<&SeamReport>, files: &[FileInfo]) -> anyhow::Result<()> {
     let Some(s) = seams.filter(|s| s.max_abs_diff_m > a.seam_tolerance_m) else {
         return Ok(());
     };
@@ -373,7 +369,7 @@ fn read_files(files: &[PathBuf], opts: &ReadOptions, in_turn: bool) -> anyhow::R
 }
 
 /// How the files are joined (`--seam`).
-pub fn mosaic_options(a: &InputArgs) -> MosaicOptions {
+pub fn mosaic_options(a: &ReadArgs) -> MosaicOptions {
     let policy = match a.seam {
         Seam::Mean => SeamPolicy::Mean,
         Seam::First => SeamPolicy::First,
@@ -382,12 +378,12 @@ pub fn mosaic_options(a: &InputArgs) -> MosaicOptions {
 }
 
 /// Each input file as [`load`] reports it, read one at a time and its
-/// samples dropped (the peak is one file); no mosaic, no `--bbox`.
+/// samples dropped (the peak is one file); no mosaic, no window.
 pub fn summaries(a: &InputArgs) -> anyhow::Result<Vec<FileInfo>> {
-    check_options(a)?;
-    let opts = read_options(a)?;
+    check_options(&a.read)?;
+    let opts = read_options(&a.read)?;
     let mut files = cota_io::tiles::summarize_files(&a.files, &opts)?;
-    if let Some(flag) = &a.src_crs {
+    if let Some(flag) = &a.read.src_crs {
         for f in &mut files {
             f.georef.crs = cota_io::crs::src_crs_for(&f.path, &f.georef, f.width, f.height, flag)?;
         }
@@ -400,14 +396,14 @@ pub fn summaries(a: &InputArgs) -> anyhow::Result<Vec<FileInfo>> {
 /// kind of grid ([`cota_io::read::join_groups`]); voids stay NaN (each
 /// command applies its own policy, [`fill`]).
 fn read_groups(a: &InputArgs, in_turn: bool) -> anyhow::Result<(Vec<Region>, RegionOptions)> {
-    let opts = read_options(a)?;
-    check_options(a)?;
+    let opts = read_options(&a.read)?;
+    check_options(&a.read)?;
     let region_opts = RegionOptions::DEFAULT
         .with_read(opts)
-        .with_mosaic(mosaic_options(a))
+        .with_mosaic(mosaic_options(&a.read))
         .with_fill(None);
     let mut dems = read_files(&a.files, &opts, in_turn)?;
-    if let Some(crs) = a.src_crs.as_ref() {
+    if let Some(crs) = a.read.src_crs.as_ref() {
         for dem in &mut dems {
             cota_io::crs::assign_src_crs(dem, crs)?;
         }
@@ -415,42 +411,60 @@ fn read_groups(a: &InputArgs, in_turn: bool) -> anyhow::Result<(Vec<Region>, Reg
     Ok((cota_io::read::join_groups(dems, &region_opts)?, region_opts))
 }
 
+/// The window the reading flags keep of a region's grid: `--bbox` (in the
+/// input's CRS units; with `--input-zoom` it chose the archive's tiles
+/// instead) or `--crop` (samples); the whole grid otherwise.
+fn window(a: &ReadArgs, grid: HeightGrid, files: &[FileInfo]) -> anyhow::Result<HeightGrid> {
+    match (&a.bbox, a.zoom, &a.crop) {
+        (Some(b), None, _) => crate::window::bbox(&grid, bbox4(b)?).with_context(|| name(files)),
+        (_, _, Some(c)) => crate::window::crop(&grid, c).with_context(|| name(files)),
+        _ => Ok(grid),
+    }
+}
+
+/// A region as an [`Input`], after the seam check and the window.
+fn input_of(a: &ReadArgs, region: Region, read_ms: f64) -> anyhow::Result<Input> {
+    warn_unpositioned(&region.files);
+    warn_storage_precision(&region.grid, &region.files);
+    check_seams(a, region.seams.as_ref(), &region.files)?;
+    check_cell_size(&region.grid, &region.files)?;
+    let grid = window(a, region.grid, &region.files)?;
+    Ok(Input {
+        grid,
+        files: region.files,
+        seams: region.seams,
+        hole_samples: region.hole_samples,
+        seam_tolerance_m: a.seam_tolerance_m,
+        read_ms,
+    })
+}
+
 /// Reads every input (or the bundled sample) and joins it into one input
 /// per kind of grid (CRS, pixel size): the files of each kind mosaicked, or
 /// each alone where they do not mosaic ([`cota_io::read::join_groups`]);
-/// what `cota tiles` takes as its sources. `--bbox` is refused with several.
+/// what `cota tiles` takes as its sources. `--bbox` and `--crop` are
+/// refused with several.
 pub fn load_groups(a: &InputArgs) -> anyhow::Result<Vec<Input>> {
     let t0 = Instant::now();
     let (regions, _) = read_groups(a, false)?;
-    if regions.len() > 1 && a.bbox.is_some() && a.zoom.is_none() {
-        anyhow::bail!("--bbox: expected inputs on one grid (one CRS, one resolution), found {} kinds of grid; crop each file first", regions.len());
+    let flag = match (&a.read.bbox, a.read.zoom, &a.read.crop) {
+        (Some(_), None, _) => Some("--bbox"),
+        (_, _, Some(_)) => Some("--crop"),
+        _ => None,
+    };
+    if let (true, Some(flag)) = (regions.len() > 1, flag) {
+        anyhow::bail!("{flag}: expected inputs on one grid (one CRS, one resolution), found {} kinds of grid; crop each file first", regions.len());
     }
     let read_ms = t0.elapsed().as_secs_f64() * 1e3;
-    let mut out = Vec::with_capacity(regions.len());
-    for region in regions {
-        warn_unpositioned(&region.files);
-        check_seams(a, region.seams.as_ref(), &region.files)?;
-        check_cell_size(&region.grid, &region.files)?;
-        let grid = match (&a.bbox, a.zoom) {
-            (Some(b), None) => {
-                crate::window::bbox(&region.grid, bbox4(b)?).with_context(|| name(&region.files))?
-            }
-            _ => region.grid,
-        };
-        out.push(Input {
-            grid,
-            files: region.files,
-            seams: region.seams,
-            hole_samples: region.hole_samples,
-            seam_tolerance_m: a.seam_tolerance_m,
-            read_ms,
-        });
-    }
-    Ok(out)
+    regions
+        .into_iter()
+        .map(|region| input_of(&a.read, region, read_ms))
+        .collect()
 }
 
 /// Reads every input (or the bundled sample) and mosaics them, then keeps
-/// the `--bbox` window (for inputs other than PMTiles archives).
+/// the window of `--bbox` (for inputs other than PMTiles archives) or
+/// `--crop`.
 pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
     load_with(a, false)
 }
@@ -478,22 +492,5 @@ pub fn load_with(a: &InputArgs, in_turn: bool) -> anyhow::Result<Input> {
         }
         region
     };
-    warn_unpositioned(&region.files);
-    warn_storage_precision(&region.grid, &region.files);
-    check_seams(a, region.seams.as_ref(), &region.files)?;
-    check_cell_size(&region.grid, &region.files)?;
-    let grid = match (&a.bbox, a.zoom) {
-        (Some(b), None) => {
-            crate::window::bbox(&region.grid, bbox4(b)?).with_context(|| name(&region.files))?
-        }
-        _ => region.grid,
-    };
-    Ok(Input {
-        grid,
-        files: region.files,
-        seams: region.seams,
-        hole_samples: region.hole_samples,
-        seam_tolerance_m: a.seam_tolerance_m,
-        read_ms: t0.elapsed().as_secs_f64() * 1e3,
-    })
+    input_of(&a.read, region, t0.elapsed().as_secs_f64() * 1e3)
 }

@@ -28,6 +28,7 @@ mod progress;
 mod serve;
 mod stream;
 mod tiles;
+mod tiles_estimate;
 mod tiles_part;
 mod window;
 

@@ -499,7 +499,7 @@ pub fn run(a: &MeshArgs) -> anyhow::Result<ExitCode> {
     validate(a)?;
     let input = load(&a.input)?;
     let seams = crate::input::seams_json(&input);
-    let mut grid = crate::window::apply(input.grid, a.crop.as_ref())?;
+    let mut grid = input.grid;
     let nodata = grid.void_count();
     let holes = Holes::of(a, &grid);
     let t = Instant::now();

@@ -28,7 +28,9 @@ use cota_io::export::{encode_png, textured_mesh_bytes, write_glb_textured, Expor
 use cota_io::image::{place_on, read_image, Bands, ImageOptions};
 use serde_json::{json, Value};
 
-use crate::args::{Hierarchies, ImageArgs, MeshFormatArg, PairArgs, Pick, TextureArgs};
+use crate::args::{
+    Hierarchies, ImageArgs, InputArgs, MeshFormatArg, PairArgs, Pick, TextureArgs, Voids,
+};
 use crate::input::is_dash;
 
 /// Bytes kept for the GLB's frame (12-byte header, two chunk headers, the
@@ -62,25 +64,17 @@ fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
-/// The DEM (voids filled) and the image draped on it (the texture raster).
-fn read_pair(
-    dem: &Path,
-    image: &Path,
-    a: &ImageArgs,
-    max_samples: Option<u64>,
-) -> anyhow::Result<(HeightGrid, RgbImage, Value)> {
-    let mut opts = cota_io::RegionOptions::DEFAULT;
-    opts.read = opts.read.with_max_samples(max_samples);
-    let region = if is_dash(dem) {
-        let name = Path::new(crate::input::STDIN_NAME);
-        let stdin = std::io::stdin().lock();
-        let one = cota_io::read_dem_from(stdin, name, &opts.read)?;
-        cota_io::read::join(vec![one], &opts)?
-    } else {
-        cota_io::read_region(&[dem], &opts)?
-    };
-    let grid = region.grid;
-    let (texture, about) = drape_image(&grid, image, a)?;
+/// The DEM, read with the reading flags as every command reads its input
+/// (`-`: standard input; the window of `--crop` or `--bbox`), voids filled
+/// harmonically, and the image draped on it (the texture raster).
+fn read_pair(a: &PairArgs) -> anyhow::Result<(HeightGrid, RgbImage, Value)> {
+    let input = crate::input::load(&InputArgs {
+        files: vec![a.dem.clone()],
+        read: a.read.clone(),
+    })?;
+    let mut grid = input.grid;
+    crate::input::fill(&mut grid, Voids::Fill)?;
+    let (texture, about) = drape_image(&grid, &a.image, &a.image_args)?;
     Ok((grid, texture, about))
 }
 
@@ -178,7 +172,7 @@ pub fn run(a: &PairArgs) -> anyhow::Result<ExitCode> {
     validate(a)?;
     let t0 = Instant::now();
     let spinner = crate::progress::spinner("reading");
-    let (grid, texture, about) = read_pair(&a.dem, &a.image, &a.image_args, a.max_samples)?;
+    let (grid, texture, about) = read_pair(a)?;
     drop(spinner);
     let read_ms = ms(t0);
     let t = Instant::now();

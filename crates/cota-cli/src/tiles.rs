@@ -8,8 +8,8 @@ use anyhow::Context;
 use cota_core::tiles::plan::{plan, plan_with};
 use cota_core::tiles::sources::deviation_of;
 use cota_core::tiles::{
-    resampling_deviation, shard_plan, BandCorners, Deviation, Lattice, Prepared, Shard, Source,
-    SourcePart, TilerOptions, ZoomPlan,
+    resampling_deviation, shard_plan, BandCorners, Deviation, Lattice, LatticeFrame, Prepared,
+    Shard, Source, SourcePart, TilerOptions, ZoomPlan,
 };
 use cota_core::{HeightGrid, LonLat};
 use cota_io::tiles::drawn::{Against, SourceGrid};
@@ -21,7 +21,7 @@ use cota_io::tiles::{
 use serde_json::json;
 
 use crate::args::{TileFormatArg, TilesArgs, Voids};
-use crate::{input, progress, tiles_part};
+use crate::{input, progress, tiles_estimate, tiles_part};
 
 /// Runs `cota tiles`.
 pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
@@ -60,13 +60,16 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         Ok(one) => one,
         Err(groups) => return run_sources(a, groups, &opts, t0),
     };
+    let lattice_opts = tiles_part::lattice_options(a);
+    if let Ok(frame) = LatticeFrame::of(&inp.grid, &lattice_opts) {
+        tiles_estimate::check(a, &frame, inp.grid.len() as u64)?;
+    }
     let voids = inp.grid.void_count();
     input::fill(&mut inp.grid, a.voids)?;
     if a.imagery {
         crate::imagery::write(&inp.grid, &a.output)?;
     }
     let name = input::name(&inp.files);
-    let lattice_opts = tiles_part::lattice_options(a);
     let spinner = progress::spinner("resampling");
     let lattice =
         Lattice::resample(&inp.grid, &lattice_opts).with_context(|| format!("tiling {name}"))?;
@@ -169,8 +172,13 @@ fn run_sources(
         .collect();
     let files: Vec<input::FileInfo> = groups.iter().flat_map(|g| g.files.clone()).collect();
     let name = input::name(&files);
+    let lattice_opts = tiles_part::lattice_options(a);
+    if let Ok(frame) = LatticeFrame::for_sources(&sources, &lattice_opts) {
+        let samples = groups.iter().map(|g| g.grid.len() as u64).sum();
+        tiles_estimate::check(a, &frame, samples)?;
+    }
     let spinner = progress::spinner("resampling");
-    let r = Lattice::resample_sources(&sources, &tiles_part::lattice_options(a))
+    let r = Lattice::resample_sources(&sources, &lattice_opts)
         .with_context(|| format!("tiling {name}"))?;
     let deviation = deviation_of(&r.lattice, &r.samples);
     drop(spinner);

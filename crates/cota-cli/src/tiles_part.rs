@@ -34,10 +34,9 @@ pub fn frame_key(a: &TilesArgs) -> String {
 
 /// Where each file's samples lie in the mosaic; empty when a shard must read
 /// every file: a single file, voids to fill, samples no file covers, or a
-/// `--bbox` or `--input-zoom` crop.
+/// window (`--bbox`, `--crop`, `--input-zoom`).
 pub fn file_extents(a: &TilesArgs, inp: &input::Input, voids: usize) -> Vec<(String, [usize; 4])> {
-    let crop = a.input.bbox.is_some() || a.input.zoom.is_some();
-    if voids > 0 || inp.hole_samples > 0 || crop {
+    if voids > 0 || inp.hole_samples > 0 || a.input.read.windowed() {
         return Vec::new();
     }
     cota_io::tiles::file_extents(&inp.files, inp.grid.georef())
@@ -121,13 +120,13 @@ pub fn load_part(
 pub fn layout(a: &TilesArgs, opts: &TilerOptions) -> anyhow::Result<Option<ShardFrame>> {
     let make = || -> anyhow::Result<Option<ShardFrame>> {
         let inp = &a.input;
-        let crop = inp.bbox.is_some() || inp.zoom.is_some();
-        if crop || inp.files.len() < 2 || inp.files.iter().any(|f| input::is_dash(f)) {
+        if inp.read.windowed() || inp.files.len() < 2 || inp.files.iter().any(|f| input::is_dash(f))
+        {
             return Ok(None);
         }
         let files = input::summaries(inp)?;
         let lattice = lattice_options(a);
-        let mosaic = input::mosaic_options(inp);
+        let mosaic = input::mosaic_options(&inp.read);
         let Some(m) = cota_io::tiles::mosaic_frame(&files, &lattice, &mosaic)? else {
             return Ok(None);
         };

@@ -73,11 +73,3 @@ pub fn bbox(g: &HeightGrid, b: [f64; 4]) -> anyhow::Result<HeightGrid> {
         ),
     }
 }
-
-/// Applies `--crop` (when given) to `g`.
-pub fn apply(g: HeightGrid, c: Option<&Crop>) -> anyhow::Result<HeightGrid> {
-    match c {
-        Some(c) => crop(&g, c),
-        None => Ok(g),
-    }
-}

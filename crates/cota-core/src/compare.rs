@@ -3,8 +3,9 @@
 //! one strip): the bitree against the restricted quadtree of Pajarola 1998,
 //! counted the paper's way on one grid.
 //!
-//! 1. Tolerances are in % of the grid's height range, as in the paper; the
-//!    "full" row is the full grid (every sample, `2·(W−1)·(H−1)` triangles).
+//! 1. Tolerances are in metres or in % of the grid's height range (as in
+//!    the paper), [`Tolerance`]; the "full" row is the full grid (every
+//!    sample, `2·(W−1)·(H−1)` triangles).
 //! 2. For each tolerance, every bitree mode ([`Mode::Conforming`]: the error
 //!    map's extraction; the fictitious modes: the refinement) and every
 //!    quadtree variant is meshed with the exact max-error criterion, all from
@@ -31,13 +32,57 @@ use crate::quadtree::QuadOptions;
 use crate::refine::Mode;
 use crate::strip::{full_bitree_mesh, stripify_bitree_with, stripify_quadtree, StripMethod};
 
+/// One tolerance of a comparison: a vertical bound in metres, or a
+/// percentage of the grid's height range (paper 000's Table 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tolerance {
+    /// A bound in metres (at least 0).
+    Metres(f64),
+    /// A percentage of the grid's height range (at least 0).
+    PercentOfRange(f64),
+}
+
+impl Tolerance {
+    /// The bound in metres on a grid whose height range is `range_m`.
+    pub fn metres(self, range_m: f64) -> f64 {
+        match self {
+            Tolerance::Metres(m) => m,
+            Tolerance::PercentOfRange(p) => p / 100.0 * range_m,
+        }
+    }
+
+    /// The percentage of `range_m` it is (`None` for metres on a flat grid).
+    pub fn percent(self, range_m: f64) -> Option<f64> {
+        match self {
+            Tolerance::Metres(m) => (range_m > 0.0).then(|| 100.0 * m / range_m),
+            Tolerance::PercentOfRange(p) => Some(p),
+        }
+    }
+
+    /// The label of its row: `7%` or `5 m`.
+    pub fn label(self) -> String {
+        match self {
+            Tolerance::Metres(m) => format!("{m} m"),
+            Tolerance::PercentOfRange(p) => format!("{p}%"),
+        }
+    }
+
+    /// What it was given in: `percent_of_range` or `metres`.
+    pub fn given_in(self) -> &'static str {
+        match self {
+            Tolerance::Metres(_) => "metres",
+            Tolerance::PercentOfRange(_) => "percent_of_range",
+        }
+    }
+}
+
 /// What to compare.
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub struct CompareOptions {
-    /// Tolerances in % of the grid's height range (each at least 0). Default:
-    /// paper 000's 0, 1, 2, 7, 10, 14, 50.
-    pub tolerances_pct: Vec<f64>,
+    /// Tolerances, each at least 0. Default: paper 000's 0, 1, 2, 7, 10,
+    /// 14, 50 % of the height range.
+    pub tolerances: Vec<Tolerance>,
     /// Bitree modes; repeats are dropped. Default: all three.
     pub modes: Vec<Mode>,
     /// Restricted-quadtree variants; repeats are dropped. Default: the
@@ -53,7 +98,9 @@ pub struct CompareOptions {
 impl Default for CompareOptions {
     fn default() -> Self {
         CompareOptions {
-            tolerances_pct: vec![0.0, 1.0, 2.0, 7.0, 10.0, 14.0, 50.0],
+            tolerances: [0.0, 1.0, 2.0, 7.0, 10.0, 14.0, 50.0]
+                .map(Tolerance::PercentOfRange)
+                .to_vec(),
             modes: Mode::ALL.to_vec(),
             quadtree: vec![
                 QuadOptions::DEFAULT,
@@ -66,10 +113,15 @@ impl Default for CompareOptions {
 }
 
 impl CompareOptions {
-    /// Sets [`CompareOptions::tolerances_pct`].
-    pub fn with_tolerances_pct(mut self, t: Vec<f64>) -> Self {
-        self.tolerances_pct = t;
+    /// Sets [`CompareOptions::tolerances`].
+    pub fn with_tolerances(mut self, t: Vec<Tolerance>) -> Self {
+        self.tolerances = t;
         self
+    }
+
+    /// Sets [`CompareOptions::tolerances`], all in % of the height range.
+    pub fn with_tolerances_pct(self, t: Vec<f64>) -> Self {
+        self.with_tolerances(t.into_iter().map(Tolerance::PercentOfRange).collect())
     }
 
     /// Sets [`CompareOptions::modes`].
@@ -168,9 +220,13 @@ pub struct Saving {
 #[cfg_attr(feature = "serde", derive(serde::Serialize))]
 #[non_exhaustive]
 pub struct Row {
-    /// "full" or the tolerance as "7%".
+    /// "full", or the tolerance as given: "7%" or "5 m".
     pub label: String,
-    /// The tolerance in % of the height range (`None` for the full row).
+    /// What the tolerance was given in: `percent_of_range` or `metres`
+    /// (`None` for the full row).
+    pub tolerance_given_in: Option<&'static str>,
+    /// The tolerance in % of the height range (`None` for the full row, and
+    /// for metres on a flat grid).
     pub tolerance_pct: Option<f64>,
     /// The tolerance in metres.
     pub tolerance_m: Option<f64>,
@@ -221,8 +277,8 @@ pub fn compare(grid: &HeightGrid, opts: &CompareOptions) -> Result<Comparison, C
         opts,
     };
     let mut rows = vec![c.full_row()];
-    for &p in &opts.tolerances_pct {
-        rows.push(c.row(p, p / 100.0 * range)?);
+    for &t in &opts.tolerances {
+        rows.push(c.row(t, range)?);
     }
     Ok(Comparison {
         min_m: lo as f64,
@@ -292,8 +348,9 @@ impl Comparer<'_, '_> {
         with_savings("full".into(), None, None, entries)
     }
 
-    /// Every entry at `pct` % of the range, `e` metres.
-    fn row(&self, pct: f64, e: f64) -> Result<Row, CompareError> {
+    /// Every entry at tolerance `t` on a height range of `range_m`.
+    fn row(&self, t: Tolerance, range_m: f64) -> Result<Row, CompareError> {
+        let e = t.metres(range_m);
         let crit = MaxVerticalError { max_error_m: e };
         let mut entries = Vec::new();
         for &mode in self.modes {
@@ -310,7 +367,9 @@ impl Comparer<'_, '_> {
             let m = self.mesher.mesh(&plan)?;
             entries.push(self.quadtree_entry(q, &m, e)?);
         }
-        Ok(with_savings(format!("{pct}%"), Some(pct), Some(e), entries))
+        let mut row = with_savings(t.label(), t.percent(range_m), Some(e), entries);
+        row.tolerance_given_in = Some(t.given_in());
+        Ok(row)
     }
 
     /// A bitree mode's entry: the conforming extraction counts selected,
@@ -407,6 +466,7 @@ fn with_savings(
     }
     Row {
         label,
+        tolerance_given_in: None,
         tolerance_pct,
         tolerance_m,
         entries,

@@ -512,3 +512,242 @@ fn absurd_heights_are_refused_naming_the_file_and_the_flag() {
     let r = cota(&["info", fixture("hugo_site.asc").to_str().unwrap()]);
     assert!(r.status.success() && !stderr(&r).contains("held as f32"));
 }
+
+/// The commands that read DEMs.
+const READING_COMMANDS: [&[&str]; 7] = [
+    &["info"],
+    &["mesh"],
+    &["compare"],
+    &["pair"],
+    &["stream", "encode"],
+    &["tiles"],
+    &["serve"],
+];
+
+/// One set of reading flags (item 9): every command that reads DEMs lists
+/// the same flags under one heading, `--crop` and `--bbox` included (`pair`
+/// had only `--max-samples`, `--crop` was on `mesh` and `compare` only).
+#[test]
+fn every_command_that_reads_dems_takes_one_set_of_reading_flags() {
+    let flags = [
+        "--encoding",
+        "--gray-scale-m",
+        "--gray-offset-m",
+        "--cell-size-m",
+        "--band",
+        "--array",
+        "--input-zoom",
+        "--bbox",
+        "--crop",
+        "--seam",
+        "--seam-tolerance",
+        "--strict",
+        "--max-samples",
+        "--src-crs",
+    ];
+    for cmd in READING_COMMANDS {
+        let o = cota(&[cmd, &["--help"]].concat());
+        assert!(o.status.success(), "{cmd:?}");
+        let help = stdout(&o);
+        assert!(
+            help.contains("Reading DEMs:"),
+            "{cmd:?}: no heading:\n{help}"
+        );
+        let section = help.split("Reading DEMs:").nth(1).unwrap();
+        for f in flags {
+            let listed = [" ", "\n", "="].iter().any(|end| {
+                section.contains(&format!("  {f}{end}")) || section.contains(&format!(", {f}{end}"))
+            });
+            assert!(listed, "{cmd:?} lacks {f} among its reading flags:\n{help}");
+        }
+    }
+}
+
+/// `--crop` keeps the same window on every command: `info` and `stream
+/// encode` report its size, `tiles` makes the tiles of the window only,
+/// `pair` drapes the image on the window.
+#[test]
+fn crop_is_the_same_window_on_every_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let crop = ["--crop", "100,200,65,33"];
+    let o = cota(&[&["info", "--json"][..], &crop].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(65), Some(33))
+    );
+    let cs = dir.path().join("c.cstream");
+    let args = ["stream", "encode", "--max-error", "20", "--json", "-o"];
+    let o = cota(&[&args[..], &[cs.to_str().unwrap()], &crop].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(65), Some(33))
+    );
+    let tiles = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let args = [
+            "tiles",
+            "--max-zoom",
+            "9",
+            "--json",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        let o = cota(&[&args[..], extra].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        v["tiles"].as_u64().unwrap()
+    };
+    let (whole, window) = (tiles("whole", &[]), tiles("window", &crop));
+    assert!(
+        window < whole,
+        "{window} tiles for the window, {whole} for the whole"
+    );
+    let dem = fixture("olinda_dem_utm25s.tif");
+    let img = fixture("L7_ETMs.tif");
+    let pair = |extra: &[&str]| {
+        let args = ["pair", dem.to_str().unwrap(), img.to_str().unwrap()];
+        let more = ["--bands", "3,2,1", "--budget-bytes", "200000", "--json"];
+        let o = cota(&[&args[..], &more, extra].concat());
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+        v["image"]["texture_size"].clone()
+    };
+    let (full, cut) = (pair(&[]), pair(&["--crop", "0,0,40,30"]));
+    assert_ne!(full, cut);
+    assert!(cut[0].as_u64() < full[0].as_u64(), "{cut} vs {full}");
+}
+
+/// `compare --tolerances`: plain numbers are metres, `%` marks a percentage
+/// of the height range, a list may mix them, and each row says which.
+#[test]
+fn compare_tolerances_are_metres_unless_marked_percent() {
+    let base = [
+        "compare",
+        "--crop",
+        "824,792,65,65",
+        "--modes",
+        "conforming",
+        "--quadtree",
+        "templates",
+        "--tolerances",
+        "5,10%",
+    ];
+    let o = cota(&[&base[..], &["--json"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let range = v["range_m"].as_f64().unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    assert_eq!(rows[1]["label"], "5 m");
+    assert_eq!(rows[1]["tolerance_given_in"], "metres");
+    assert_eq!(rows[1]["tolerance_m"].as_f64(), Some(5.0));
+    assert!((rows[1]["tolerance_pct"].as_f64().unwrap() - 500.0 / range).abs() < 1e-9);
+    assert_eq!(rows[2]["label"], "10%");
+    assert_eq!(rows[2]["tolerance_given_in"], "percent_of_range");
+    assert!((rows[2]["tolerance_m"].as_f64().unwrap() - 0.1 * range).abs() < 1e-9);
+    for e in rows[1]["entries"].as_array().unwrap() {
+        assert!(e["max_error_m"].as_f64().unwrap() <= 5.0);
+    }
+    let o = cota(&base);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let t = stdout(&o);
+    assert!(t.contains("| 5 m | 5.0 |") && t.contains("| 10% |"), "{t}");
+    for bad in ["-1", "5%%", "x", "inf%"] {
+        let o = cota(&["compare", "--tolerances", bad]);
+        assert!(!o.status.success(), "{bad}");
+        let e = stderr(&o);
+        assert!(e.contains("percentage of the height range"), "{bad}: {e}");
+    }
+}
+
+/// `tiles` reads a PMTiles archive's zoom as `--input-zoom`, like every
+/// command; `--zoom` still works there and warns.
+#[test]
+fn tiles_takes_input_zoom_and_warns_on_the_old_name() {
+    let o = cota(&["tiles", "--help"]);
+    assert!(stdout(&o).contains("--input-zoom <Z>"), "{}", stdout(&o));
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t");
+    let args = ["tiles", "--bbox=-72,-29,-71,-28", "--max-zoom", "4", "-o"];
+    let o = cota(&[&args[..], &[out.to_str().unwrap(), "--zoom", "3"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(
+        e.contains("--zoom is deprecated") && e.contains("--input-zoom"),
+        "{e}"
+    );
+}
+
+/// The figures of a `cota tiles --json` estimate line: tiles, memory (MB).
+fn estimate_of(stderr: &str) -> (f64, f64) {
+    assert!(stderr.contains("cota: estimate: "), "no estimate: {stderr}");
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("cota: estimate: "))
+        .unwrap();
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let tiles: f64 = words[2].parse().unwrap();
+    let at = words.iter().position(|w| *w == "memory").unwrap();
+    let (n, unit) = (words[at - 3], words[at - 2]);
+    let scale = if unit == "GB" { 1e3 } else { 1.0 };
+    (tiles, n.parse::<f64>().unwrap() * scale)
+}
+
+/// `tiles` says what it will make before it starts (item 11): the tiles
+/// (here exactly those made), the lattice and the memory; past 10^6 tiles
+/// or the memory available it refuses without `--yes`, naming it, before
+/// any work; `--quiet` silences the estimate.
+#[test]
+fn tiles_estimates_before_it_starts_and_asks_for_yes_past_the_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = |n: &str| dir.path().join(n).to_str().unwrap().to_string();
+    let o = cota(&["tiles", "--max-zoom", "8", "--json", "-o", &out("a")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).unwrap();
+    let (tiles, mb) = estimate_of(&stderr(&o));
+    assert_eq!(tiles, v["tiles"].as_f64().unwrap());
+    assert!((30.0..200.0).contains(&mb), "{mb} MB");
+    assert!(stderr(&o).contains("tiles at zooms 0 to 8; a lattice of"));
+    // 2.8 M tiles at zoom 18 on one 3" tile.
+    let t0 = std::time::Instant::now();
+    let o = cota(&["tiles", "--max-zoom", "18", "-o", &out("b")]);
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("M tiles (more than 1.0 M)") && e.contains("--yes"),
+        "{e}"
+    );
+    assert!(
+        t0.elapsed().as_secs() < 30,
+        "refused only after {:?}",
+        t0.elapsed()
+    );
+    assert!(!std::path::Path::new(&out("b")).join("layer.json").exists());
+    // Few tiles, but a lattice of 4096 cells a tile at zoom 14: terabytes.
+    let big = ["tiles", "--max-zoom", "14", "--tile-cells", "4096", "-o"];
+    let o = cota(&[&big[..], &[&out("c")]].concat());
+    assert!(!o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("of memory (more than the") && e.contains("--yes"),
+        "{e}"
+    );
+    assert!(!e.contains("tiles (more than"), "{e}");
+    // --yes goes on (to the lattice's own size limit here).
+    let o = cota(&[&big[..], &[&out("d"), "--yes"]].concat());
+    let e = stderr(&o);
+    assert!(
+        e.contains("going on past") && !e.contains("expected --yes"),
+        "{e}"
+    );
+    let o = cota(&["--quiet", "tiles", "--max-zoom", "3", "-o", &out("e")]);
+    assert!(
+        o.status.success() && !stderr(&o).contains("estimate"),
+        "{}",
+        stderr(&o)
+    );
+}

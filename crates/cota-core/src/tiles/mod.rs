@@ -47,6 +47,7 @@ pub mod coverage;
 pub mod cut;
 pub mod drawn;
 mod error;
+pub mod estimate;
 pub mod fit;
 pub mod lattice;
 pub mod merge;
@@ -63,6 +64,7 @@ pub use coverage::Coverage;
 pub use cut::{Prepared, TileMesh, WaterMask, NORMAL_REACH_CELLS};
 pub use drawn::{DrawnBound, LevelStats};
 pub use error::TilesError;
+pub use estimate::{estimate, Estimate};
 pub use lattice::{
     resampling_deviation, Deviation, Lattice, LatticeFrame, LatticeOptions, SourcePart,
 };

@@ -97,38 +97,13 @@ impl Lattice {
         sources: &[Source<'_>],
         opts: &LatticeOptions,
     ) -> Result<Resampled, TilesError> {
-        let Some(first) = sources.first() else {
-            return Err(TilesError::BadOptions(
-                "expected at least one source, found none".into(),
-            ));
-        };
         for s in sources {
             if let Some((col, row)) = s.grid.first_void() {
                 return Err(TilesError::Voids { col, row });
             }
         }
-        let pixel_deg = sources
-            .iter()
-            .map(pixel_deg)
-            .collect::<Result<Vec<f64>, TilesError>>()?;
-        let finest = pixel_deg.iter().copied().fold(f64::INFINITY, f64::min);
-        let scheme = scheme_for_pixel(finest, opts)?;
-        let placed = sources
-            .iter()
-            .zip(&pixel_deg)
-            .map(|(s, &p)| place(*s, p, &scheme))
-            .collect::<Result<Vec<Placed<'_>>, TilesError>>()?;
-        let fp = bounds(&placed, &scheme)?;
-        let (align_zoom, window) = choose_window(&scheme, fp);
-        let frame = LatticeFrame {
-            scheme,
-            footprint: fp,
-            window,
-            align_zoom,
-            source_georef: first.grid.georef().clone(),
-            source_size: [first.grid.width(), first.grid.height()],
-            fit_m: fit_tolerance_m(&scheme, finest, opts),
-        };
+        let (frame, placed) = frame_of(sources, opts)?;
+        let window = frame.window;
         let (w, h) = (window[2] - window[0] + 1, window[3] - window[1] + 1);
         if w.checked_mul(h).is_none_or(|n| n > MAX_SAMPLES) {
             return Err(TilesError::TooLarge {
@@ -137,7 +112,7 @@ impl Lattice {
             });
         }
         let mut heights = fill(&placed, &frame);
-        let samples = Listed::new(sample_positions(&placed, &scheme));
+        let samples = Listed::new(sample_positions(&placed, &frame.scheme));
         let fitted = fit(
             &mut heights,
             [w as usize, h as usize],
@@ -152,6 +127,56 @@ impl Lattice {
         let lattice = Lattice::from_heights(frame, heights, fitted.residual_m, coverage)?;
         Ok(Resampled { lattice, samples })
     }
+}
+
+impl LatticeFrame {
+    /// The frame [`Lattice::resample_sources`] resamples `sources` (finest
+    /// first) in, without resampling: what the lattice's size depends on
+    /// ([`super::estimate`]).
+    ///
+    /// # Errors
+    /// As [`Lattice::resample_sources`], but for voids.
+    pub fn for_sources(
+        sources: &[Source<'_>],
+        opts: &LatticeOptions,
+    ) -> Result<LatticeFrame, TilesError> {
+        frame_of(sources, opts).map(|(frame, _)| frame)
+    }
+}
+
+/// The frame of `sources` and each placed on the scheme.
+fn frame_of<'a>(
+    sources: &[Source<'a>],
+    opts: &LatticeOptions,
+) -> Result<(LatticeFrame, Vec<Placed<'a>>), TilesError> {
+    let Some(first) = sources.first() else {
+        return Err(TilesError::BadOptions(
+            "expected at least one source, found none".into(),
+        ));
+    };
+    let pixel_deg = sources
+        .iter()
+        .map(pixel_deg)
+        .collect::<Result<Vec<f64>, TilesError>>()?;
+    let finest = pixel_deg.iter().copied().fold(f64::INFINITY, f64::min);
+    let scheme = scheme_for_pixel(finest, opts)?;
+    let placed = sources
+        .iter()
+        .zip(&pixel_deg)
+        .map(|(s, &p)| place(*s, p, &scheme))
+        .collect::<Result<Vec<Placed<'_>>, TilesError>>()?;
+    let fp = bounds(&placed, &scheme)?;
+    let (align_zoom, window) = choose_window(&scheme, fp);
+    let frame = LatticeFrame {
+        scheme,
+        footprint: fp,
+        window,
+        align_zoom,
+        source_georef: first.grid.georef().clone(),
+        source_size: [first.grid.width(), first.grid.height()],
+        fit_m: fit_tolerance_m(&scheme, finest, opts),
+    };
+    Ok((frame, placed))
 }
 
 /// A pixel's ground size, in degrees of latitude (the smaller of its two
