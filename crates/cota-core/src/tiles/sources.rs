@@ -132,7 +132,7 @@ impl Lattice {
 impl LatticeFrame {
     /// The frame [`Lattice::resample_sources`] resamples `sources` (finest
     /// first) in, without resampling: what the lattice's size depends on
-    /// ([`super::estimate`]).
+    /// ([`mod@super::estimate`]).
     ///
     /// # Errors
     /// As [`Lattice::resample_sources`], but for voids.
