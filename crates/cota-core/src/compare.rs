@@ -30,7 +30,7 @@ use crate::mesh::Mesh;
 use crate::mesher::{HierarchyKind, MeshPlan, Meshed, Mesher};
 use crate::quadtree::QuadOptions;
 use crate::refine::Mode;
-use crate::strip::{full_bitree_mesh, stripify_bitree_with, stripify_quadtree, StripMethod};
+use crate::strip::{bitree_strip_refs, full_bitree_mesh, quadtree_strip_refs, StripMethod};
 
 /// One tolerance of a comparison: a vertical bound in metres, or a
 /// percentage of the grid's height range (paper 000's Table 1).
@@ -316,9 +316,10 @@ impl Comparer<'_, '_> {
         let g = self.mesher.grid();
         let (w, h) = (g.width(), g.height());
         let triangles = 2 * (w - 1) * (h - 1);
-        let full = full_bitree_mesh(w as u32, h as u32);
-        let strip_bt = self.bitree_strip_refs(&full);
-        let strip_qt = Some(stripify_quadtree(&full).refs());
+        // The full mesh is made once for each strip (each consumes it).
+        let full = || full_bitree_mesh(w as u32, h as u32);
+        let strip_bt = self.bitree_strip_refs(full());
+        let strip_qt = Some(quadtree_strip_refs(full()));
         let entry = |hierarchy, mode, strip_refs| Entry {
             hierarchy,
             mode,
@@ -360,12 +361,12 @@ impl Comparer<'_, '_> {
                 .with_mode(mode)
                 .with_extend_odd_spans(false);
             let m = self.mesher.mesh(&plan)?;
-            entries.push(self.bitree_entry(mode, &m, e)?);
+            entries.push(self.bitree_entry(mode, m, e)?);
         }
         for &q in self.quads {
             let plan = MeshPlan::new(&crit).with_hierarchy(HierarchyKind::Quadtree(q));
             let m = self.mesher.mesh(&plan)?;
-            entries.push(self.quadtree_entry(q, &m, e)?);
+            entries.push(self.quadtree_entry(q, m, e)?);
         }
         let mut row = with_savings(t.label(), t.percent(range_m), Some(e), entries);
         row.tolerance_given_in = Some(t.given_in());
@@ -374,9 +375,10 @@ impl Comparer<'_, '_> {
 
     /// A bitree mode's entry: the conforming extraction counts selected,
     /// added and base points; the fictitious modes count their fictitious
-    /// points as added.
-    fn bitree_entry(&self, mode: Mode, m: &Meshed, e: f64) -> Result<Entry, CompareError> {
+    /// points as added. The mesh is consumed by its strip, last.
+    fn bitree_entry(&self, mode: Mode, m: Meshed, e: f64) -> Result<Entry, CompareError> {
         let triangles = m.mesh.triangle_count();
+        let max_error_m = self.max_error(&m)?;
         let mut entry = Entry {
             hierarchy: "bitree",
             mode: mode.name(),
@@ -390,8 +392,8 @@ impl Comparer<'_, '_> {
             added_by_forced_splits: None,
             line_triangles: m.line_triangles,
             separate_refs: 3 * triangles,
-            strip_refs: self.bitree_strip_refs(&m.mesh),
-            max_error_m: self.max_error(m)?,
+            strip_refs: None,
+            max_error_m,
         };
         if mode == Mode::Conforming {
             let c = self.mesher.bitree()?.point_counts(&m.mesh, e);
@@ -399,12 +401,16 @@ impl Comparer<'_, '_> {
             entry.selected = Some(c.selected);
             entry.base = Some(c.base);
         }
+        entry.strip_refs = self.bitree_strip_refs(m.mesh);
         Ok(entry)
     }
 
-    /// A quadtree variant's entry, its points counted as the bitree's.
-    fn quadtree_entry(&self, q: QuadOptions, m: &Meshed, e: f64) -> Result<Entry, CompareError> {
+    /// A quadtree variant's entry, its points counted as the bitree's; the
+    /// mesh is consumed by its strip, last.
+    fn quadtree_entry(&self, q: QuadOptions, m: Meshed, e: f64) -> Result<Entry, CompareError> {
         let c = self.mesher.bitree()?.point_counts(&m.mesh, e);
+        let max_error_m = self.max_error(&m)?;
+        let added_by_forced_splits = m.split_points.map(|p| p.added);
         Ok(Entry {
             hierarchy: "quadtree",
             mode: q.name(),
@@ -415,11 +421,11 @@ impl Comparer<'_, '_> {
             selected: Some(c.selected),
             base: Some(c.base),
             fictitious: 0,
-            added_by_forced_splits: m.split_points.map(|p| p.added),
+            added_by_forced_splits,
             line_triangles: 0,
             separate_refs: 3 * c.triangles,
-            strip_refs: Some(stripify_quadtree(&m.mesh).refs()),
-            max_error_m: self.max_error(m)?,
+            strip_refs: Some(quadtree_strip_refs(m.mesh)),
+            max_error_m,
         })
     }
 
@@ -436,11 +442,10 @@ impl Comparer<'_, '_> {
         })
     }
 
-    /// The strip references of a bitree mesh (`None` if it cannot be stripped).
-    fn bitree_strip_refs(&self, mesh: &Mesh) -> Option<usize> {
-        stripify_bitree_with(mesh, self.opts.strip_method)
-            .ok()
-            .map(|s| s.strip.refs())
+    /// The strip references of a bitree mesh, which is consumed (`None` if
+    /// it cannot be stripped).
+    fn bitree_strip_refs(&self, mesh: Mesh) -> Option<usize> {
+        bitree_strip_refs(mesh, self.opts.strip_method).ok()
     }
 }
 

@@ -395,25 +395,38 @@ impl Emitter {
     }
 }
 
-/// Numbers the used samples row-major and rewrites the triangles.
+/// Numbers the used samples row-major and rewrites the triangles: a bit per
+/// sample marks the used ones, and a vertex's number is the count of used
+/// samples before it.
 fn compact(grid: &HeightGrid, mut tris: Vec<[u32; 3]>) -> Mesh {
-    let mut used: Vec<u32> = tris.iter().flatten().copied().collect();
-    used.sort_unstable();
-    used.dedup();
+    let mut bits = vec![0u64; grid.len().div_ceil(64)];
+    for &i in tris.iter().flatten() {
+        bits[(i / 64) as usize] |= 1u64 << (i % 64);
+    }
+    let mut before = Vec::with_capacity(bits.len());
+    let mut total = 0u32;
+    for &word in &bits {
+        before.push(total);
+        total += word.count_ones();
+    }
     let w = grid.width() as u32;
     let heights = grid.heights();
-    let vertices = used
-        .iter()
-        .map(|&i| MeshVertex {
-            col: i % w,
-            row: i / w,
-            z_m: heights[i as usize],
-        })
-        .collect();
-    for t in &mut tris {
-        for i in t.iter_mut() {
-            *i = used.partition_point(|&u| u < *i) as u32;
+    let mut vertices = Vec::with_capacity(total as usize);
+    for (k, &word) in bits.iter().enumerate() {
+        let mut rest = word;
+        while rest != 0 {
+            let i = k as u32 * 64 + rest.trailing_zeros();
+            rest &= rest - 1;
+            vertices.push(MeshVertex {
+                col: i % w,
+                row: i / w,
+                z_m: heights[i as usize],
+            });
         }
+    }
+    for i in tris.iter_mut().flatten() {
+        let (word, bit) = ((*i / 64) as usize, *i % 64);
+        *i = before[word] + (bits[word] & ((1u64 << bit) - 1)).count_ones();
     }
     Mesh {
         vertices,

@@ -71,19 +71,19 @@ pub(super) fn leaves(grid: &HeightGrid, marks: &Marks) -> (Vec<Leaf>, Vec<f32>) 
     (v.leaves, v.z)
 }
 
-/// Builds the mesh from the leaves; returns it with the counts of real and
-/// fictitious vertices.
+/// Builds the mesh from the leaves (dropped once their triangles are made);
+/// returns it with the counts of real and fictitious vertices.
 pub(super) fn emit(
     grid: &HeightGrid,
     marks: &Marks,
     z: &[f32],
-    leaves: &[Leaf],
+    leaves: Vec<Leaf>,
 ) -> (Mesh, usize, usize) {
     let hier = marks.hierarchy();
     let n = grid.len();
     let mut bits = vec![0u64; n.div_ceil(64)];
     let mut tris = Vec::with_capacity(leaves.len());
-    for l in leaves {
+    for l in &leaves {
         let t = l.tri;
         let (a, b, c) = if orient_up(t.a, t.b, t.c) > 0 {
             (t.a, t.b, t.c)
@@ -100,6 +100,7 @@ pub(super) fn emit(
         }
         tris.push(ids);
     }
+    drop(leaves);
     let mut prefix = Vec::with_capacity(bits.len());
     let mut total = 0u32;
     for &word in &bits {

@@ -94,19 +94,97 @@ pub fn validate_indices(indices: &[u32], mesh: &Mesh) -> Result<(), StripMismatc
     })
 }
 
+/// Where a strip is written while it is made: its indices
+/// ([`Vec<u32>`]), or only their count and the last few ([`Tail`]), which
+/// is all the writing reads back.
+pub(crate) trait StripSink {
+    /// Indices written so far.
+    fn len(&self) -> usize;
+    /// The index `k` places before the end (0: the last); `len() > k`.
+    fn back(&self, k: usize) -> u32;
+    /// Appends an index.
+    fn push(&mut self, v: u32);
+    /// Removes the last index (`len() > 0`).
+    fn pop(&mut self);
+    /// The last index, if any.
+    fn last(&self) -> Option<u32> {
+        (self.len() > 0).then(|| self.back(0))
+    }
+}
+
+impl StripSink for Vec<u32> {
+    fn len(&self) -> usize {
+        Vec::len(self)
+    }
+    fn back(&self, k: usize) -> u32 {
+        self[Vec::len(self) - 1 - k]
+    }
+    fn push(&mut self, v: u32) {
+        Vec::push(self, v);
+    }
+    fn pop(&mut self) {
+        Vec::pop(self);
+    }
+}
+
+/// A strip's length and its last [`Tail::KEPT`] indices: the strip as
+/// [`continue_run`] and [`start_run`] read it, without its indices (for
+/// counting references in a fixed amount of memory).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Tail {
+    len: usize,
+    /// The last indices, the newest at `(len − 1) % KEPT`.
+    ring: [u32; Tail::KEPT],
+}
+
+impl Tail {
+    /// Indices kept: the writing reads at most three back, after at most
+    /// one pop.
+    const KEPT: usize = 8;
+}
+
+impl StripSink for Tail {
+    fn len(&self) -> usize {
+        self.len
+    }
+    fn back(&self, k: usize) -> u32 {
+        debug_assert!(k < Tail::KEPT && k < self.len);
+        self.ring[(self.len - 1 - k) % Tail::KEPT]
+    }
+    fn push(&mut self, v: u32) {
+        self.ring[self.len % Tail::KEPT] = v;
+        self.len += 1;
+    }
+    fn pop(&mut self) {
+        self.len -= 1;
+    }
+}
+
 /// Writes triangles, given in visit order and counter-clockwise, as one
 /// standard strip (step 3 of the module docs). Works for any order; the
 /// fewer consecutive triangles share an edge, the more connectors it needs.
 pub(crate) fn strip_from_order(order: &[[u32; 3]]) -> Strip {
     let mut s: Vec<u32> = Vec::with_capacity(order.len() * 3 / 2 + 8);
+    write_in_order(order, &mut s);
+    finish(s)
+}
+
+/// [`strip_from_order`]'s references, counted without the strip.
+pub(crate) fn refs_in_order(order: &[[u32; 3]]) -> usize {
+    let mut s = Tail::default();
+    write_in_order(order, &mut s);
+    s.len()
+}
+
+/// Writes `order` into `s` as [`strip_from_order`] does.
+fn write_in_order(order: &[[u32; 3]], s: &mut impl StripSink) {
     for (k, &t) in order.iter().enumerate() {
         let next = order.get(k + 1).copied();
-        if s.len() >= 3 && continue_run(&mut s, t) {
+        if s.len() >= 3 && continue_run(s, t) {
             continue;
         }
-        start_run(&mut s, t, next);
+        start_run(s, t, next);
     }
-    finish(s)
 }
 
 /// Builds the [`Strip`] counts from its indices.
@@ -145,9 +223,9 @@ fn drawn(len: usize, x: u32, y: u32, z: u32) -> (u32, u32, u32) {
 
 /// Appends `t` as a natural continuation or a swap; false (and `s` unchanged)
 /// when neither keeps the orientation.
-pub(crate) fn continue_run(s: &mut Vec<u32>, t: [u32; 3]) -> bool {
+pub(crate) fn continue_run(s: &mut impl StripSink, t: [u32; 3]) -> bool {
     let n = s.len();
-    let (o, p, q) = (s[n - 3], s[n - 2], s[n - 1]);
+    let (o, p, q) = (s.back(2), s.back(1), s.back(0));
     let has = |v: u32| t.contains(&v);
     let third = |u: u32, v: u32| t.iter().copied().find(|&x| x != u && x != v);
     if p != q && has(p) && has(q) {
@@ -178,7 +256,7 @@ pub(crate) fn continue_run(s: &mut Vec<u32>, t: [u32; 3]) -> bool {
 /// Starts a new run with `t`: connectors, then `t` rotated so that its last
 /// two vertices are the edge it shares with `next` (when it shares one) and
 /// ordered to be drawn counter-clockwise at the current parity.
-pub(crate) fn start_run(s: &mut Vec<u32>, t: [u32; 3], next: Option<[u32; 3]>) {
+pub(crate) fn start_run(s: &mut impl StripSink, t: [u32; 3], next: Option<[u32; 3]>) {
     // The vertex not on the edge shared with `next`.
     let lead = next
         .and_then(|nx| {
@@ -189,11 +267,11 @@ pub(crate) fn start_run(s: &mut Vec<u32>, t: [u32; 3], next: Option<[u32; 3]>) {
                 None
             }
         })
-        .or_else(|| s.last().and_then(|q| t.iter().position(|v| v == q)))
+        .or_else(|| s.last().and_then(|q| t.iter().position(|&v| v == q)))
         .unwrap_or(0);
     let u = t[lead];
     let (a, b) = (t[(lead + 1) % 3], t[(lead + 2) % 3]);
-    if let Some(&q) = s.last() {
+    if let Some(q) = s.last() {
         if q != u {
             s.push(q);
             s.push(u);

@@ -4,7 +4,7 @@
 //! vocabulary after Evans, Skiena & Varshney (1996); the order is that of
 //! papers `000_ebf7e3a88dffd361.txt` §4 and `001_49f2c365e8c41172.txt`.
 
-use super::emit::{continue_run, finish, start_run, Strip};
+use super::emit::{continue_run, finish, start_run, Strip, StripSink, Tail};
 
 /// Triangles around each vertex (compressed rows) and the neighbour across
 /// each edge.
@@ -66,17 +66,32 @@ impl Adjacency {
 /// tie rules, the shorter strip).
 pub(crate) fn stripify_guided(order: &[[u32; 3]]) -> Strip {
     let adj = Adjacency::new(order);
-    let (plain, ahead) = rayon::join(|| grow(order, &adj, false), || grow(order, &adj, true));
-    if ahead.indices.len() < plain.indices.len() {
+    let capacity = order.len() * 3 / 2 + 8;
+    let (plain, ahead) = rayon::join(
+        || grow(order, &adj, false, Vec::with_capacity(capacity)),
+        || grow(order, &adj, true, Vec::with_capacity(capacity)),
+    );
+    finish(if ahead.len() < plain.len() {
         ahead
     } else {
         plain
-    }
+    })
 }
 
-/// One greedy growth; `lookahead` breaks ties between the natural and the
-/// swap neighbour by the unvisited neighbours of their unvisited neighbours.
-fn grow(order: &[[u32; 3]], adj: &Adjacency, lookahead: bool) -> Strip {
+/// [`stripify_guided`]'s references, counted without writing the strip.
+pub(crate) fn guided_refs(order: &[[u32; 3]]) -> usize {
+    let adj = Adjacency::new(order);
+    let (plain, ahead) = rayon::join(
+        || grow(order, &adj, false, Tail::default()),
+        || grow(order, &adj, true, Tail::default()),
+    );
+    plain.len().min(ahead.len())
+}
+
+/// One greedy growth into `s`; `lookahead` breaks ties between the natural
+/// and the swap neighbour by the unvisited neighbours of their unvisited
+/// neighbours.
+fn grow<S: StripSink>(order: &[[u32; 3]], adj: &Adjacency, lookahead: bool, mut s: S) -> S {
     let nb = &adj.nb;
     let (fan_start, fan) = (&adj.fan_start, &adj.fan);
     let mut visited = vec![false; order.len()];
@@ -93,13 +108,11 @@ fn grow(order: &[[u32; 3]], adj: &Adjacency, lookahead: bool) -> Strip {
             })
             .map_or(u32::MAX, |k| nb[t][k])
     };
-    let mut s: Vec<u32> = Vec::with_capacity(order.len() * 3 / 2 + 8);
     let mut cursor = 0usize;
     let mut cur: Option<usize> = None;
     loop {
         if let Some(t) = cur {
-            let n = s.len();
-            let (o, p, q) = (s[n - 3], s[n - 2], s[n - 1]);
+            let (o, p, q) = (s.back(2), s.back(1), s.back(0));
             let nat = across(t, p, q);
             let swp = across(t, o, q);
             let nat_ok = free(&visited, nat);
@@ -137,7 +150,7 @@ fn grow(order: &[[u32; 3]], adj: &Adjacency, lookahead: bool) -> Strip {
         }
         // Restart: an unvisited triangle around the last vertex (one
         // connector index), else the first unvisited one in `order`.
-        let around_last = s.last().and_then(|&q| {
+        let around_last = s.last().and_then(|q| {
             let (lo, hi) = (fan_start[q as usize], fan_start[q as usize + 1]);
             fan[lo as usize..hi as usize]
                 .iter()
@@ -172,5 +185,5 @@ fn grow(order: &[[u32; 3]], adj: &Adjacency, lookahead: bool) -> Strip {
         start_run(&mut s, tri, exit);
         cur = Some(t);
     }
-    finish(s)
+    s
 }

@@ -97,11 +97,12 @@ use std::borrow::Cow;
 
 use crate::mesh::Mesh;
 use cells::{stripify_cells, CellOptions};
-use guided::stripify_guided;
-use traversal::bitree_order_ids;
+use emit::refs_in_order;
+use guided::{guided_refs, stripify_guided};
+use traversal::{bitree_order_ids, into_bitree_order};
 
 pub use emit::{drawn_triangles, validate_indices, Strip, StripMismatch};
-pub use quadtree::stripify_quadtree;
+pub use quadtree::{quadtree_strip_refs, stripify_quadtree};
 pub use traversal::{bitree_order, StripError};
 
 pub(crate) use emit::strip_from_order;
@@ -215,6 +216,25 @@ pub fn stripify_bitree_with(mesh: &Mesh, method: StripMethod) -> Result<MeshStri
                 same(guided)
             }
         }
+    })
+}
+
+/// The references of the strip [`stripify_bitree_with`] makes of `mesh`,
+/// counted in less memory: the mesh is consumed (its triangles put in the
+/// hierarchy's order in place, its vertices dropped before the strip is
+/// grown) and the strip's indices are never written. [`StripMethod::Cells`]
+/// needs the mesh and its strip, and counts them as [`stripify_bitree_with`].
+///
+/// # Errors
+/// As [`stripify_bitree`].
+pub fn bitree_strip_refs(mesh: Mesh, method: StripMethod) -> Result<usize, StripError> {
+    if method == StripMethod::Cells {
+        return stripify_bitree_with(&mesh, method).map(|s| s.strip.refs());
+    }
+    let order = into_bitree_order(mesh)?;
+    Ok(match method {
+        StripMethod::Traversal => refs_in_order(&order),
+        _ => guided_refs(&order),
     })
 }
 

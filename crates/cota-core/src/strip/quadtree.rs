@@ -24,23 +24,41 @@
 //! `O(T log T)` for the sort, then linear.
 
 use super::emit::Strip;
-use super::guided::stripify_guided;
-use crate::mesh::Mesh;
+use super::guided::{guided_refs, stripify_guided};
+use crate::mesh::{Mesh, MeshVertex};
 
 /// Strips `mesh` (steps 1–2 of the module docs).
 pub fn stripify_quadtree(mesh: &Mesh) -> Strip {
     let mut order = mesh.triangles.clone();
-    let nv = mesh.vertices.len();
+    sweep(&mut order, &mesh.vertices);
+    stripify_guided(&order)
+}
+
+/// The references of [`stripify_quadtree`]'s strip of `mesh`, which is
+/// consumed: its triangles sorted in place, its vertices dropped before the
+/// strip is grown, and the strip counted, not written.
+pub fn quadtree_strip_refs(mesh: Mesh) -> usize {
+    let Mesh {
+        vertices,
+        mut triangles,
+    } = mesh;
+    sweep(&mut triangles, &vertices);
+    drop(vertices);
+    guided_refs(&triangles)
+}
+
+/// Step 1: the triangles west to east within rows, north to south, by
+/// their centroids (stable); left as they are when an index is out of
+/// range (the validator will show the strip as it is).
+fn sweep(order: &mut [[u32; 3]], vertices: &[MeshVertex]) {
+    let nv = vertices.len();
     if order.iter().flatten().any(|&i| i as usize >= nv) {
-        // Out-of-range indices: keep the given order (the validator will
-        // show the strip as it is).
-        return stripify_guided(&order);
+        return;
     }
     order.sort_by_key(|t| {
-        let v = t.map(|i| mesh.vertices[i as usize]);
+        let v = t.map(|i| vertices[i as usize]);
         let row: u64 = v.iter().map(|x| x.row as u64).sum();
         let col: u64 = v.iter().map(|x| x.col as u64).sum();
         (row, col)
     });
-    stripify_guided(&order)
 }

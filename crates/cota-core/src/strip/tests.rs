@@ -105,3 +105,62 @@ fn full_mesh_helper_matches_extraction() {
     want.sort_unstable();
     assert_eq!(got, want);
 }
+
+/// The counting paths (`bitree_strip_refs`, `quadtree_strip_refs`: the mesh
+/// consumed, triangles reordered in place, the strip never written) give
+/// the references of the strips themselves, for every method, on full,
+/// adaptive and fictitious (faithful: hanging vertices) bitree meshes and on
+/// restricted-quadtree meshes of the real tile's windows.
+#[test]
+fn counted_references_are_the_strips_own() {
+    use crate::criteria::MaxVerticalError;
+    use crate::mesher::{HierarchyKind, MeshPlan, Mesher};
+    use crate::quadtree::QuadOptions;
+    let tile = crate::testing::fixture("S29W072.hgt.zip");
+    let grids = [
+        rough(65, 33),
+        tile.window(824, 792, 65, 65).unwrap(),
+        tile.window(300, 500, 129, 100).unwrap(),
+    ];
+    let methods = [
+        StripMethod::Traversal,
+        StripMethod::Guided,
+        StripMethod::Cells,
+    ];
+    for g in &grids {
+        let mesher = Mesher::new(g);
+        let mut meshes = vec![full_bitree_mesh(g.width() as u32, g.height() as u32)];
+        for e in [0.0, 2.0, 20.0] {
+            let crit = MaxVerticalError { max_error_m: e };
+            for mode in crate::refine::Mode::ALL {
+                let plan = MeshPlan::new(&crit)
+                    .with_mode(mode)
+                    .with_extend_odd_spans(false);
+                meshes.push(mesher.mesh(&plan).unwrap().mesh);
+            }
+        }
+        for m in &meshes {
+            for method in methods {
+                let want = stripify_bitree_with(m, method).unwrap().strip.refs();
+                assert_eq!(bitree_strip_refs(m.clone(), method).unwrap(), want);
+            }
+            assert_eq!(quadtree_strip_refs(m.clone()), stripify_quadtree(m).refs());
+        }
+        for q in [
+            QuadOptions::DEFAULT,
+            QuadOptions::DEFAULT.with_centre_when_needed(true),
+        ] {
+            for e in [0.0, 5.0] {
+                let crit = MaxVerticalError { max_error_m: e };
+                let plan = MeshPlan::new(&crit).with_hierarchy(HierarchyKind::Quadtree(q));
+                let m = mesher.mesh(&plan).unwrap().mesh;
+                assert_eq!(quadtree_strip_refs(m.clone()), stripify_quadtree(&m).refs());
+            }
+        }
+    }
+    // A mesh that is not the bitree's: refused alike.
+    let mut bad = full_bitree_mesh(9, 9);
+    bad.triangles[0] = [0, 1, 20];
+    assert!(bitree_strip_refs(bad.clone(), StripMethod::Guided).is_err());
+    assert!(stripify_bitree_with(&bad, StripMethod::Guided).is_err());
+}

@@ -43,6 +43,60 @@ pub fn bitree_order(mesh: &Mesh) -> Result<Vec<[u32; 3]>, StripError> {
         .collect())
 }
 
+/// The triangles of `mesh`, which is consumed, in [`bitree_order`]: moved
+/// into that order in place, the vertices dropped first (the order needs
+/// only the triangles' indices), so the peak is the mesh and the order's
+/// indices, not a second copy of the triangles.
+///
+/// # Errors
+/// As [`super::stripify_bitree`].
+pub(crate) fn into_bitree_order(mesh: Mesh) -> Result<Vec<[u32; 3]>, StripError> {
+    let mut ids = bitree_order_ids(&mesh)?;
+    let Mesh {
+        vertices,
+        mut triangles,
+    } = mesh;
+    drop(vertices);
+    if !is_permutation(&ids) {
+        // A triangle reached twice (and another not at all): as bitree_order.
+        return Ok(ids.into_iter().map(|k| triangles[k as usize]).collect());
+    }
+    // Cycle by cycle: position i takes triangle ids[i]; a done entry of
+    // `ids` is set to u32::MAX.
+    for i in 0..ids.len() {
+        if ids[i] == u32::MAX {
+            continue;
+        }
+        let first = triangles[i];
+        let mut j = i;
+        loop {
+            let k = ids[j] as usize;
+            ids[j] = u32::MAX;
+            if k == i {
+                triangles[j] = first;
+                break;
+            }
+            triangles[j] = triangles[k];
+            j = k;
+        }
+    }
+    Ok(triangles)
+}
+
+/// True when `ids` holds each of `0..ids.len()` once.
+fn is_permutation(ids: &[u32]) -> bool {
+    let mut seen = vec![0u64; ids.len().div_ceil(64)];
+    ids.iter().all(|&k| {
+        let k = k as usize;
+        let (word, bit) = (k / 64, 1u64 << (k % 64));
+        let fresh = k < ids.len() && seen[word] & bit == 0;
+        if fresh {
+            seen[word] |= bit;
+        }
+        fresh
+    })
+}
+
 /// [`bitree_order`] as indices into `mesh.triangles`.
 ///
 /// # Errors
@@ -181,21 +235,24 @@ impl Leaves {
                     vertices: nv,
                 })
         };
-        let mut apex_of = Vec::with_capacity(mesh.triangles.len());
-        let mut start = vec![0u32; nv + 1];
-        for (k, t) in mesh.triangles.iter().enumerate() {
+        // Triangle k: its right-angle vertex and its hypotenuse's ends
+        // (found twice, once to count and once to place, rather than kept).
+        let apex_of = |k: usize, t: &[u32; 3]| -> Result<(u32, Pt, Pt), StripError> {
             let p = [pos(t[0])?, pos(t[1])?, pos(t[2])?];
             let apex = right_angle(p).ok_or(StripError::NotBitree(k))?;
-            let (a, b) = (p[(apex + 1) % 3], p[(apex + 2) % 3]);
-            apex_of.push((t[apex], a, b));
-            start[t[apex] as usize + 1] += 1;
+            Ok((t[apex], p[(apex + 1) % 3], p[(apex + 2) % 3]))
+        };
+        let mut start = vec![0u32; nv + 1];
+        for (k, t) in mesh.triangles.iter().enumerate() {
+            start[apex_of(k, t)?.0 as usize + 1] += 1;
         }
         for i in 0..nv {
             start[i + 1] += start[i];
         }
         let mut fill = start.clone();
         let mut by_apex: Vec<(Pt, Pt, u32)> = vec![([0, 0], [0, 0], 0); mesh.triangles.len()];
-        for (k, &(c, a, b)) in apex_of.iter().enumerate() {
+        for (k, t) in mesh.triangles.iter().enumerate() {
+            let (c, a, b) = apex_of(k, t)?;
             by_apex[fill[c as usize] as usize] = (a, b, k as u32);
             fill[c as usize] += 1;
         }
