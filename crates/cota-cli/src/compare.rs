@@ -15,7 +15,7 @@
 use std::fmt::Write as _;
 use std::process::ExitCode;
 
-use cota_core::compare::{compare, CompareOptions, Row};
+use cota_core::compare::{compare_with_progress, CompareOptions, Row};
 use cota_core::strip::StripMethod;
 use serde::Serialize;
 
@@ -51,9 +51,9 @@ pub fn run(a: &CompareArgs) -> anyhow::Result<ExitCode> {
         .with_quadtree(a.quadtree.iter().map(|q| q.options()).collect())
         .with_check(a.check)
         .with_strip_method(a.strip_method.method());
-    let spinner = crate::progress::spinner("comparing");
-    let c = compare(&grid, &opts)?;
-    drop(spinner);
+    let pb = crate::progress::bar(0, "comparing");
+    let c = compare_with_progress(&grid, &opts, &pb.report())?;
+    drop(pb);
     let report = Report {
         input: name,
         crop: a

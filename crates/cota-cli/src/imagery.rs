@@ -17,10 +17,20 @@ pub fn write(grid: &HeightGrid, out: &Path) -> anyhow::Result<()> {
     let relief =
         Relief::new(Arc::new(grid.clone()), &ReliefOptions::DEFAULT).context("--imagery")?;
     let dir = out.join("imagery");
-    let pb = crate::progress::spinner("imagery");
-    let n = cota_io::relief::write_relief_tiles(&relief, &dir, relief.max_zoom(), &|_| {})
-        .context("--imagery")?;
+    // At most these: a tile without data is not written.
+    let most: usize = (0..=relief.max_zoom())
+        .map(|z| relief.tiles_at(z).count())
+        .sum();
+    let pb = crate::progress::bar(most as u64, "imagery");
+    let n = cota_io::relief::write_relief_tiles(&relief, &dir, relief.max_zoom(), &|n| {
+        pb.set_position(n as u64)
+    })
+    .context("--imagery")?;
+    pb.set_position(most as u64);
     drop(pb);
+    if crate::progress::quiet() {
+        return Ok(());
+    }
     eprintln!(
         "imagery     {n} shaded-relief tiles, zooms 0..={} in {} ({:.1} s)",
         relief.max_zoom(),

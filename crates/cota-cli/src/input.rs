@@ -7,11 +7,13 @@ use std::time::Instant;
 
 use anyhow::Context;
 use cota_core::grid::mosaic::{MosaicOptions, SeamPolicy, SeamReport};
-use cota_core::grid::voids::{fill_voids, FillMethod, FillOptions, FillReport, VoidPolicy};
+use cota_core::grid::voids::{
+    fill_voids, fill_voids_with_progress, FillMethod, FillOptions, FillReport, VoidPolicy,
+};
 use cota_core::HeightGrid;
 use cota_io::{
-    read_dem, read_dem_bytes, read_dem_from, read_dems_with_progress, ArrayName, Dem, PngEncoding,
-    ReadOptions, Region, RegionOptions, TileRequest,
+    read_dem_bytes, read_dem_from, read_dems_counted, ArrayName, Dem, PngEncoding, ReadOptions,
+    Region, RegionOptions, TileRequest,
 };
 
 use crate::args::{Encoding, InputArgs, ReadArgs, Seam, Voids};
@@ -77,8 +79,13 @@ pub fn fill(grid: &mut HeightGrid, voids: Voids) -> anyhow::Result<FillReport> {
         Voids::Idw => VoidPolicy::Fill(FillMethod::InverseDistance),
         Voids::Refuse => VoidPolicy::Refuse,
     };
-    let _spinner = (grid.void_count() > 0).then(|| progress::spinner("filling voids"));
-    fill_voids(grid, &FillOptions::DEFAULT.with_policy(policy)).context("void policy")
+    let opts = FillOptions::DEFAULT.with_policy(policy);
+    if grid.void_count() == 0 || matches!(voids, Voids::Refuse) {
+        return fill_voids(grid, &opts).context("void policy");
+    }
+    let pb = progress::bar(grid.void_count() as u64, "filling voids");
+    let filled = fill_voids_with_progress(grid, &opts, &pb.report());
+    filled.context("void policy")
 }
 
 fn read_options(a: &ReadArgs) -> anyhow::Result<ReadOptions> {
@@ -354,16 +361,11 @@ fn read_files(files: &[PathBuf], opts: &ReadOptions, in_turn: bool) -> anyhow::R
             "-: standard input must be the only FILE (it holds one DEM), found {} files",
             files.len()
         ),
-        _ if in_turn => Ok(files
-            .iter()
-            .map(|f| read_dem(f, opts))
-            .collect::<Result<Vec<_>, _>>()?),
         _ => {
-            let pb = progress::bar(files.len() as u64, "reading");
-            let dems =
-                read_dems_with_progress(files, opts, &|done, _| pb.set_position(done as u64))?;
-            pb.finish_and_clear();
-            Ok(dems)
+            let pb = progress::bytes(0, "reading");
+            Ok(read_dems_counted(files, opts, in_turn, &|done, total| {
+                pb.set(done, total)
+            })?)
         }
     }
 }

@@ -9,10 +9,12 @@ use std::time::Instant;
 use anyhow::Context;
 use cota_core::criteria::AvoidVoids;
 use cota_core::criteria::{Criterion, CriterionError};
+use cota_core::mesh::check::check_mesh_with_progress;
+use cota_core::mesh::metrics::measure_with_progress;
 use cota_core::strip::{stripify_bitree_with, MeshStrip};
 use cota_core::{
-    check_mesh, measure, CriterionOptions, HeightGrid, HierarchyKind, Mesh, MeshPlan, Meshed,
-    Mesher, Metrics, Mode,
+    check_mesh, CriterionOptions, HeightGrid, HierarchyKind, Mesh, MeshPlan, Meshed, Mesher,
+    Metrics, Mode,
 };
 use cota_io::export::{write_mesh_to, Coords, ExportOptions, GlbQuantization, MeshFormat};
 use serde_json::json;
@@ -265,15 +267,9 @@ fn mesh_grid(
         );
     let criterion_ms = ms(t);
     let t = Instant::now();
-    if plan.error_map_bound_m().is_some() {
-        let pb = progress::bar(0, "building");
-        mesher.prepare(&plan, &|done, total| {
-            progress::set_progress(&pb, done as u64, total as u64);
-        })?;
-        pb.finish_and_clear();
-    } else {
-        mesher.prepare(&plan, &|_, _| {})?;
-    }
+    let pb = progress::bar(0, "building");
+    mesher.prepare(&plan, &pb.report())?;
+    drop(pb);
     let build_ms = ms(t);
     let t = Instant::now();
     let mut meshed = mesher.mesh(&plan).map_err(|e| match e {
@@ -327,6 +323,7 @@ fn measure_mesh(
     grid: &HeightGrid,
     m: &mut Meshed,
     quant: Option<&GlbQuantization>,
+    pb: &progress::Bar,
 ) -> anyhow::Result<Metrics> {
     let half_step = quant.map(|q| q.z_step_m() / 2.0);
     let check_opts = match half_step {
@@ -338,11 +335,12 @@ fn measure_mesh(
     };
     with_written_heights(&mut m.mesh, quant, |mesh| {
         Ok(if a.check {
-            check_mesh(grid, mesh, &check_opts)
+            check_mesh_with_progress(grid, mesh, &check_opts, &pb.report())
                 .context("the invariant checker rejected the mesh (this is a bug in cota)")?
                 .metrics
         } else {
-            measure(grid, mesh).within_rounding_of(check_opts.max_error_m, grid)
+            measure_with_progress(grid, mesh, &pb.report())
+                .within_rounding_of(check_opts.max_error_m, grid)
         })
     })
 }
@@ -440,8 +438,8 @@ fn measure_first(
         return Ok(None);
     }
     let t = Instant::now();
-    let _spinner = progress::spinner(if a.check { "checking" } else { "measuring" });
-    let metrics = measure_mesh(a, grid, m, quant)?;
+    let pb = progress::bar(0, if a.check { "checking" } else { "measuring" });
+    let metrics = measure_mesh(a, grid, m, quant, &pb)?;
     Ok(Some((metrics, ms(t))))
 }
 
@@ -459,12 +457,8 @@ fn strip_and_write<'m>(
     quant: Option<&GlbQuantization>,
     measured: Option<(Metrics, f64)>,
 ) -> anyhow::Result<Finished<'m>> {
-    let what = match (measured.is_some(), a.output.is_some()) {
-        (true, _) => "writing",
-        (false, true) => "measuring, writing",
-        (false, false) => "measuring",
-    };
-    let _spinner = progress::spinner(what);
+    // The measure by rows while the writer writes; else writing alone.
+    let _spinner = measured.is_some().then(|| progress::spinner("writing"));
     let strip_then_write = || -> anyhow::Result<_> {
         let t = Instant::now();
         let strip = strip(a, grid, m)?;
@@ -477,8 +471,12 @@ fn strip_and_write<'m>(
         None => std::thread::scope(|s| -> anyhow::Result<_> {
             let writer = s.spawn(strip_then_write);
             let t = Instant::now();
-            let metrics = measure(grid, &m.mesh).within_rounding_of(m.check.max_error_m, grid);
+            let pb = progress::bar(0, "measuring");
+            let metrics = measure_with_progress(grid, &m.mesh, &pb.report())
+                .within_rounding_of(m.check.max_error_m, grid);
             let measure_ms = ms(t);
+            drop(pb);
+            let _spinner = a.output.is_some().then(|| progress::spinner("writing"));
             let written = writer
                 .join()
                 .map_err(|_| anyhow::anyhow!("the writer thread stopped (a bug in cota)"))??;

@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use cota_core::pair::{
-    choose, mesh_list, Candidate, Choice, MeshCandidate, MeshListOptions, PairOptions,
+    choose, mesh_list_with_progress, Candidate, Choice, MeshCandidate, MeshListOptions, PairOptions,
 };
 use cota_core::quadtree::QuadOptions;
 use cota_core::texture::{drape, DrapeOptions, RgbImage, TextureQuadtree};
@@ -74,6 +74,7 @@ fn read_pair(a: &PairArgs) -> anyhow::Result<(HeightGrid, RgbImage, Value)> {
     })?;
     let mut grid = input.grid;
     crate::input::fill(&mut grid, Voids::Fill)?;
+    let _spinner = crate::progress::spinner("draping");
     let (texture, about) = drape_image(&grid, &a.image, &a.image_args)?;
     Ok((grid, texture, about))
 }
@@ -110,9 +111,13 @@ pub fn drape_image(
 
 /// The texture list: the quadtree at each tolerance, rendered and encoded.
 fn texture_list(texture: &RgbImage, tolerances: &[f64]) -> anyhow::Result<Vec<TextureCandidate>> {
+    // The tree's build counts as one tolerance.
+    let pb = crate::progress::bar(tolerances.len() as u64 + 1, "listing textures");
     let tree = TextureQuadtree::build(texture);
+    pb.set_position(1);
     let mut out: Vec<TextureCandidate> = Vec::new();
-    for &tol in tolerances {
+    for (k, &tol) in tolerances.iter().enumerate() {
+        pb.set_position(k as u64 + 1);
         if !(tol >= 0.0 && tol.is_finite()) {
             anyhow::bail!("--texture-tolerances: expected 0 or more levels, found {tol}");
         }
@@ -131,6 +136,7 @@ fn texture_list(texture: &RgbImage, tolerances: &[f64]) -> anyhow::Result<Vec<Te
             png: encode_png(&x.render())?,
         });
     }
+    pb.set_position(tolerances.len() as u64 + 1);
     Ok(out)
 }
 
@@ -147,7 +153,9 @@ fn meshes(a: &PairArgs, mesher: &Mesher<'_>) -> anyhow::Result<Vec<MeshCandidate
         Hierarchies::Quadtree => vec![quadtree],
     };
     let bytes = |m: &Mesh| textured_mesh_bytes(m.vertex_count(), m.triangle_count());
-    mesh_list(mesher, &opts, &bytes).context("the mesh list")
+    let pb = crate::progress::bar(0, "listing meshes");
+    let list = mesh_list_with_progress(mesher, &opts, &bytes, &pb.report());
+    list.context("the mesh list")
 }
 
 /// Every distinct pair total up to the largest, each chosen again: the
@@ -171,18 +179,12 @@ fn sweep(ms_: &[Candidate], ts: &[Candidate], opts: &PairOptions) -> (usize, f64
 pub fn run(a: &PairArgs) -> anyhow::Result<ExitCode> {
     validate(a)?;
     let t0 = Instant::now();
-    let spinner = crate::progress::spinner("reading");
     let (grid, texture, about) = read_pair(a)?;
-    drop(spinner);
     let read_ms = ms(t0);
     let t = Instant::now();
-    let spinner = crate::progress::spinner("listing textures");
     let textures = texture_list(&texture, &a.texture_tolerances)?;
-    drop(spinner);
-    let spinner = crate::progress::spinner("listing meshes");
     let mesher = Mesher::new(&grid);
     let meshes = meshes(a, &mesher)?;
-    drop(spinner);
     let lists_ms = ms(t);
     let (mc, tc): (Vec<Candidate>, Vec<Candidate>) = (
         meshes.iter().map(|m| m.candidate()).collect(),

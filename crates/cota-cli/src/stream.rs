@@ -15,11 +15,14 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::stream::{encode, encode_marks_progressive, StreamOptions};
+use cota_core::stream::{
+    encode_marks_progressive_with_progress, encode_with_progress, StreamOptions,
+};
 use cota_core::HeightGrid;
 use cota_io::export::{write_mesh_to, Coords, ExportOptions};
 use cota_io::stream_file::{
-    read_stream, read_stream_from, step_end_offsets, stream_bytes, DecodedStream, StreamLimit,
+    read_stream_from, read_stream_with_progress, step_end_offsets, stream_bytes, DecodedStream,
+    StreamLimit,
 };
 use serde_json::json;
 
@@ -47,10 +50,10 @@ fn encode_grid(
     mode: StreamModeArg,
     opts: &StreamOptions,
 ) -> anyhow::Result<cota_core::stream::EncodedStream> {
-    let _spinner = crate::progress::spinner("encoding");
+    let pb = crate::progress::bar(0, "encoding");
     Ok(match mode.mode() {
-        None => encode(grid, opts)?,
-        Some(mode) => encode_marks_progressive(grid, mode, opts)?,
+        None => encode_with_progress(grid, opts, &pb.report())?,
+        Some(mode) => encode_marks_progressive_with_progress(grid, mode, opts, &pb.report())?,
     })
 }
 
@@ -234,7 +237,10 @@ fn write_decoded(
 /// Reads the stream of `input` (`-`: standard input) up to `limit`.
 fn decode_input(input: &Path, limit: &StreamLimit) -> anyhow::Result<DecodedStream> {
     if !crate::input::is_dash(input) {
-        return Ok(read_stream(input, limit)?);
+        let pb = crate::progress::bytes(0, "decoding");
+        return Ok(read_stream_with_progress(input, limit, &|d, t| {
+            pb.set(d, t)
+        })?);
     }
     let stdin = std::io::stdin();
     if stdin.is_terminal() {
@@ -243,6 +249,7 @@ fn decode_input(input: &Path, limit: &StreamLimit) -> anyhow::Result<DecodedStre
         );
     }
     let name = Path::new(crate::input::STDIN_NAME);
+    let _spinner = crate::progress::spinner("decoding");
     Ok(read_stream_from(stdin.lock(), name, limit)?)
 }
 
@@ -260,10 +267,7 @@ fn run_decode(a: &StreamDecodeArgs) -> anyhow::Result<ExitCode> {
         .with_max_error_m(a.max_error)
         .with_max_samples(a.max_samples)
         .with_partial(!a.strict);
-    let d = {
-        let _spinner = crate::progress::spinner("decoding");
-        decode_input(&a.input, &limit)?
-    };
+    let d = decode_input(&a.input, &limit)?;
     warn_truncated(&a.input, &d);
     let h = d.decoder.header().clone();
     let mesh = d.decoder.mesh();

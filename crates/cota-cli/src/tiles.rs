@@ -6,9 +6,10 @@ use std::time::Instant;
 
 use anyhow::Context;
 use cota_core::tiles::plan::{plan, plan_with};
-use cota_core::tiles::sources::deviation_of;
+use cota_core::tiles::sources::deviation_of_with_progress;
 use cota_core::tiles::{
-    resampling_deviation, shard_plan, BandCorners, Deviation, Lattice, LatticeFrame, Prepared,
+    resampling_deviation_with_progress, shard_plan, BandCorners, Deviation, Lattice, LatticeFrame,
+    Prepared,
     Shard, Source, SourcePart, TilerOptions, ZoomPlan,
 };
 use cota_core::{HeightGrid, LonLat};
@@ -70,11 +71,7 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         crate::imagery::write(&inp.grid, &a.output)?;
     }
     let name = input::name(&inp.files);
-    let spinner = progress::spinner("resampling");
-    let lattice =
-        Lattice::resample(&inp.grid, &lattice_opts).with_context(|| format!("tiling {name}"))?;
-    let deviation = resampling_deviation(&inp.grid, &lattice);
-    drop(spinner);
+    let (lattice, deviation) = resample(a, &inp.grid, &name)?;
     let files = if a.plan {
         tiles_part::file_extents(a, &inp, voids)
     } else {
@@ -85,10 +82,10 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         return plan_step(a, &lattice, &opts, files);
     }
     let t_prep = Instant::now();
-    let spinner = progress::spinner("preparing");
-    let prepared =
-        Prepared::new(&lattice, &inp.grid, &opts).with_context(|| format!("tiling {name}"))?;
-    drop(spinner);
+    let pb = progress::bar(0, "preparing");
+    let prepared = Prepared::new_with_progress(&lattice, &inp.grid, &opts, &pb.report())
+        .with_context(|| format!("tiling {name}"))?;
+    drop(pb);
     warn_source_floor(&prepared);
     // With --check, the source stays to check every tile against it as drawn.
     let source = a.check.then_some(inp.grid);
@@ -98,6 +95,19 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     let times = [prep_s, t0.elapsed().as_secs_f64()];
     finish(a, &name, &prepared, &deviation, &report, times, json!(null));
     Ok(std::process::ExitCode::SUCCESS)
+}
+
+/// The lattice of one geographic grid and its deviation from the grid's
+/// samples, each with a bar.
+fn resample(a: &TilesArgs, grid: &HeightGrid, name: &str) -> anyhow::Result<(Lattice, Deviation)> {
+    let pb = progress::bar(0, "resampling");
+    let lattice =
+        Lattice::resample_with_progress(grid, &tiles_part::lattice_options(a), &pb.report())
+            .with_context(|| format!("tiling {name}"))?;
+    drop(pb);
+    let pb = progress::bar(0, "deviation");
+    let deviation = resampling_deviation_with_progress(grid, &lattice, &pb.report());
+    Ok((lattice, deviation))
 }
 
 /// An `.mbtiles` output with what only a directory takes, or --meshopt
@@ -177,14 +187,18 @@ fn run_sources(
         let samples = groups.iter().map(|g| g.grid.len() as u64).sum();
         tiles_estimate::check(a, &frame, samples)?;
     }
-    let spinner = progress::spinner("resampling");
-    let r = Lattice::resample_sources(&sources, &lattice_opts)
+    let pb = progress::bar(0, "resampling");
+    let r = Lattice::resample_sources_with_progress(&sources, &lattice_opts, &pb.report())
         .with_context(|| format!("tiling {name}"))?;
-    let deviation = deviation_of(&r.lattice, &r.samples);
-    drop(spinner);
+    drop(pb);
+    let pb = progress::bar(0, "deviation");
+    let deviation = deviation_of_with_progress(&r.lattice, &r.samples, &pb.report());
+    drop(pb);
     let t_prep = Instant::now();
-    let prepared = Prepared::new_sampled(&r.lattice, &r.samples, opts)
+    let pb = progress::bar(0, "preparing");
+    let prepared = Prepared::new_sampled_with_progress(&r.lattice, &r.samples, opts, &pb.report())
         .with_context(|| format!("tiling {name}"))?;
+    drop(pb);
     warn_source_floor(&prepared);
     let prep_s = t_prep.elapsed().as_secs_f64();
     let against = a.check.then(|| against_sources(&sources, &r.lattice));
@@ -329,8 +343,16 @@ fn run_part(
     let name = part.files_read.join(" + ");
     let t_prep = Instant::now();
     let source = part.source_part();
-    let prepared = Prepared::new_part(&part.lattice, source, part.zooms.clone(), &part.stats)
-        .with_context(|| format!("tiling {name}"))?;
+    let pb = progress::bar(0, "preparing");
+    let prepared = Prepared::new_part_with_progress(
+        &part.lattice,
+        source,
+        part.zooms.clone(),
+        &part.stats,
+        &pb.report(),
+    )
+    .with_context(|| format!("tiling {name}"))?;
+    drop(pb);
     let prep_s = t_prep.elapsed().as_secs_f64();
     let report = write(a, &prepared, Some((part.shard.clone(), f, source)), None)?;
     let times = [prep_s, t0.elapsed().as_secs_f64()];
@@ -499,6 +521,7 @@ fn write(
         .as_ref()
         .map_or(prepared.tile_count(), Shard::tile_count);
     let pb = progress::bar(total, "tiles");
+    let pb = &pb;
     let report = match &shard {
         Some(s) => write_shard(prepared, &a.output, &pyramid, s, frame, &|n| {
             pb.set_position(n)
@@ -518,7 +541,6 @@ fn write(
         }),
     }
     .with_context(|| format!("writing {}", a.output.display()))?;
-    pb.finish_and_clear();
     Ok(report)
 }
 
@@ -531,7 +553,7 @@ fn reduce(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     let pb = progress::bar(coarse, "coarse tiles");
     let r = reduce_shards(&a.output, a.shards, a.force, &|n| pb.set_position(n))
         .with_context(|| format!("reducing {}", a.output.display()))?;
-    pb.finish_and_clear();
+    drop(pb);
     if a.json {
         println!(
             "{}",

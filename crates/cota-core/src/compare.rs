@@ -21,6 +21,8 @@
 //! 5. Savings: `(QT − BT) / QT` in % for every bitree mode against every
 //!    quadtree variant.
 
+use crate::bitree::error_code::decode;
+use crate::bitree::Bitree;
 use crate::criteria::MaxVerticalError;
 use crate::error::MeshError;
 use crate::grid::HeightGrid;
@@ -28,6 +30,7 @@ use crate::mesh::check::{check_mesh, CheckError};
 use crate::mesh::metrics::measure;
 use crate::mesh::Mesh;
 use crate::mesher::{HierarchyKind, MeshPlan, Meshed, Mesher};
+use crate::progress::{Counter, Progress, Stages};
 use crate::quadtree::QuadOptions;
 use crate::refine::Mode;
 use crate::strip::{bitree_strip_refs, full_bitree_mesh, quadtree_strip_refs, StripMethod};
@@ -263,13 +266,43 @@ pub struct Comparison {
 /// [`CompareError::Mesh`] for a grid that cannot be meshed or a negative
 /// tolerance, [`CompareError::Check`] when a mesh fails the checker.
 pub fn compare(grid: &HeightGrid, opts: &CompareOptions) -> Result<Comparison, CompareError> {
-    let mesher = Mesher::new(grid);
-    mesher.bitree()?;
-    mesher.quadtree()?;
-    let (lo, hi) = grid.valid_range().unwrap_or((0.0, 0.0));
-    let range = (hi - lo) as f64;
+    compare_with_progress(grid, opts, crate::progress::NONE)
+}
+
+/// [`compare`], telling `progress(done, total)` as it goes: the bitree's
+/// levels, the quadtree's, the full row, then each mesh of each tolerance
+/// (every mode and quadtree variant), weighted by their expected share of
+/// the time (in thousandths, [`crate::progress`]; a tolerance's meshes by
+/// how many split points exceed it).
+///
+/// # Errors
+/// As [`compare`].
+pub fn compare_with_progress(
+    grid: &HeightGrid,
+    opts: &CompareOptions,
+    progress: Progress<'_>,
+) -> Result<Comparison, CompareError> {
     let modes = distinct(&opts.modes, |m| m.name());
     let quads = distinct(&opts.quadtree, QuadOptions::name);
+    let stages = Stages::new(progress, &OUTER_WEIGHTS);
+    let mesher = Mesher::new(grid);
+    // The hierarchies the rows mesh: the bitree's error map (no extension
+    // for odd spans, as the rows), the quadtree.
+    let any = MaxVerticalError { max_error_m: 0.0 };
+    let bitree = MeshPlan::new(&any).with_extend_odd_spans(false);
+    mesher.prepare(&bitree, &stages.stage(0))?;
+    stages.finish(0);
+    let quadtree =
+        MeshPlan::new(&any).with_hierarchy(HierarchyKind::Quadtree(QuadOptions::DEFAULT));
+    mesher.prepare(&quadtree, &stages.stage(1))?;
+    stages.finish(1);
+    let (lo, hi) = grid.valid_range().unwrap_or((0.0, 0.0));
+    let range = (hi - lo) as f64;
+    let tolerances_m: Vec<f64> = opts.tolerances.iter().map(|t| t.metres(range)).collect();
+    let entries = modes.len() + quads.len();
+    let weights = row_weights(mesher.bitree()?, &tolerances_m, entries, opts.check);
+    let rest = stages.stage(2);
+    let rows_done = Stages::new(&rest, &weights);
     let c = Comparer {
         mesher: &mesher,
         modes: &modes,
@@ -277,9 +310,13 @@ pub fn compare(grid: &HeightGrid, opts: &CompareOptions) -> Result<Comparison, C
         opts,
     };
     let mut rows = vec![c.full_row()];
-    for &t in &opts.tolerances {
-        rows.push(c.row(t, range)?);
+    rows_done.finish(0);
+    for (k, &t) in opts.tolerances.iter().enumerate() {
+        let row = rows_done.stage(k + 1);
+        rows.push(c.row(t, range, &Counter::new(&row, entries))?);
+        rows_done.finish(k + 1);
     }
+    stages.finish(2);
     Ok(Comparison {
         min_m: lo as f64,
         max_m: hi as f64,
@@ -289,6 +326,40 @@ pub fn compare(grid: &HeightGrid, opts: &CompareOptions) -> Result<Comparison, C
         strip_method: opts.strip_method.name(),
         rows,
     })
+}
+
+/// The relative times of [`compare_with_progress`]'s builds of the bitree
+/// and the quadtree, and of its rows (with the default tolerances, measured
+/// on an SRTM 1" tile).
+const OUTER_WEIGHTS: [usize; 3] = [2, 20, 978];
+
+/// The relative times of the full row and of each tolerance's row: each
+/// mesh a base cost plus one about proportional to its points, taken from
+/// the share of the split points whose error exceeds the tolerance; the
+/// full row strips the full grid's meshes (measured on an SRTM 1" tile).
+fn row_weights(tree: &Bitree<'_>, tolerances_m: &[f64], entries: usize, check: bool) -> Vec<usize> {
+    const BASE: f64 = 100.0;
+    const FULL: f64 = 4000.0;
+    let mut counts = vec![0usize; 1 << 16];
+    for &c in tree.error_codes() {
+        counts[usize::from(c)] += 1;
+    }
+    let n = tree.error_codes().len().max(1) as f64;
+    let share = |e: f64| {
+        let above: usize = (0..=u16::MAX)
+            .filter(|&c| f64::from(decode(c)) > e)
+            .map(|c| counts[usize::from(c)])
+            .sum();
+        above as f64 / n
+    };
+    let per_mesh = if check { 2.0 } else { 1.0 };
+    let mut w = vec![(0.15 * FULL * entries as f64) as usize];
+    w.extend(
+        tolerances_m
+            .iter()
+            .map(|&e| (per_mesh * entries as f64 * (BASE + FULL * share(e))) as usize),
+    );
+    w
 }
 
 /// The items of `all` whose names are not repeats, in order.
@@ -350,7 +421,7 @@ impl Comparer<'_, '_> {
     }
 
     /// Every entry at tolerance `t` on a height range of `range_m`.
-    fn row(&self, t: Tolerance, range_m: f64) -> Result<Row, CompareError> {
+    fn row(&self, t: Tolerance, range_m: f64, done: &Counter<'_>) -> Result<Row, CompareError> {
         let e = t.metres(range_m);
         let crit = MaxVerticalError { max_error_m: e };
         let mut entries = Vec::new();
@@ -362,11 +433,13 @@ impl Comparer<'_, '_> {
                 .with_extend_odd_spans(false);
             let m = self.mesher.mesh(&plan)?;
             entries.push(self.bitree_entry(mode, m, e)?);
+            done.add(1);
         }
         for &q in self.quads {
             let plan = MeshPlan::new(&crit).with_hierarchy(HierarchyKind::Quadtree(q));
             let m = self.mesher.mesh(&plan)?;
             entries.push(self.quadtree_entry(q, m, e)?);
+            done.add(1);
         }
         let mut row = with_savings(t.label(), t.percent(range_m), Some(e), entries);
         row.tolerance_given_in = Some(t.given_in());

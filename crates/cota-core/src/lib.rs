@@ -28,7 +28,9 @@
 //! * [`tin`]: an irregular triangulation (TIN) with the same guaranteed
 //!   error and fewer triangles ([`tin::build`]);
 //! * [`tiles`]: web-map tile pyramids cut from one hierarchy over the
-//!   tiling's lattice, each tile within its zoom's bound.
+//!   tiling's lattice, each tile within its zoom's bound;
+//! * [`progress`]: the `(done, total)` callbacks the long entry points
+//!   (`*_with_progress`) report to.
 //!
 //! ```
 //! use cota_core::{check_mesh, GeoRef, HeightGrid, MaxVerticalError, MeshPlan, Mesher, Mode};
@@ -62,6 +64,7 @@ pub mod mesh;
 pub mod mesher;
 pub mod pair;
 mod par;
+pub mod progress;
 pub mod quadtree;
 pub mod refine;
 pub mod relief;

@@ -262,14 +262,15 @@ impl<'g> Mesher<'g> {
     }
 
     /// Builds now what `plan` will need (the error map, reporting
-    /// `progress(levels_done, levels_total)`, or the quadtree), so that
+    /// `progress(levels_done, levels_total)`, or the quadtree, reporting
+    /// its levels by their work), so that
     /// [`Mesher::mesh`] only refines or extracts.
     ///
     /// # Errors
     /// As [`Bitree::build`] and [`QuadTree::build`].
     pub fn prepare(&self, plan: &MeshPlan<'_>, progress: Progress<'_>) -> Result<()> {
         match plan.hierarchy {
-            HierarchyKind::Quadtree(_) => self.quadtree().map(|_| ()),
+            HierarchyKind::Quadtree(_) => self.quadtree_with(progress).map(|_| ()),
             HierarchyKind::Bitree if plan.extension_for(self.grid).is_some() => {
                 self.extended_with(plan, progress).map(|_| ())
             }
@@ -324,10 +325,14 @@ impl<'g> Mesher<'g> {
     /// # Errors
     /// As [`QuadTree::build`].
     pub fn quadtree(&self) -> Result<&QuadTree<'g>> {
+        self.quadtree_with(crate::progress::NONE)
+    }
+
+    fn quadtree_with(&self, progress: Progress<'_>) -> Result<&QuadTree<'g>> {
         if let Some(t) = self.quadtree.get() {
             return Ok(t);
         }
-        let t = QuadTree::build(self.grid)?;
+        let t = QuadTree::build_with_progress(self.grid, progress)?;
         Ok(self.quadtree.get_or_init(|| t))
     }
 

@@ -38,6 +38,6 @@ pub use dem::{
 };
 pub use error::{ReadError, ReadErrorKind, RegionError};
 pub use read::{
-    read_dem, read_dem_bytes, read_dem_from, read_dems_with_progress, read_region,
-    read_region_in_turn, read_region_with_progress, Region, RegionOptions,
+    read_dem, read_dem_bytes, read_dem_from, read_dems_counted, read_dems_with_progress,
+    read_region, read_region_in_turn, read_region_with_progress, Region, RegionOptions,
 };

@@ -673,13 +673,39 @@ pub struct Truncation {
 /// truncation (also when `max_bytes` is too small for the head and step 0),
 /// a grid over the sample limit, or a step the core decoder rejects.
 pub fn read_stream(path: &Path, limit: &StreamLimit) -> Result<DecodedStream, StreamReadError> {
+    read_stream_with_progress(path, limit, &|_, _| {})
+}
+
+/// [`read_stream`], telling `progress(bytes_read, bytes)` as the steps are
+/// read and decoded (`bytes`: the file's size, or `max_bytes` when
+/// smaller; `(bytes, bytes)` at the end, wherever the limits stopped).
+///
+/// # Errors
+/// As [`read_stream`].
+pub fn read_stream_with_progress(
+    path: &Path,
+    limit: &StreamLimit,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<DecodedStream, StreamReadError> {
     let err = |kind: StreamReadErrorKind| StreamReadError {
         path: path.to_path_buf(),
         kind,
     };
     let file = std::fs::File::open(path).map_err(|e| err(e.into()))?;
     let size = file.metadata().map_err(|e| err(e.into()))?.len();
-    let mut d = decode_stream_from(std::io::BufReader::new(file), limit, false).map_err(err)?;
+    let total = size.min(limit.max_bytes.unwrap_or(u64::MAX));
+    let done = std::sync::atomic::AtomicU64::new(0);
+    progress(0, total);
+    let counted = |n: u64| {
+        let d = done.fetch_add(n, std::sync::atomic::Ordering::Relaxed) + n;
+        progress(d.min(total), total);
+    };
+    let reader = crate::read::Counted {
+        inner: file,
+        counted: &counted,
+    };
+    let mut d = decode_stream_from(std::io::BufReader::new(reader), limit, false).map_err(err)?;
+    progress(total, total);
     d.file_bytes = size;
     Ok(d)
 }

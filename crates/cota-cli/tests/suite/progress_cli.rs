@@ -8,7 +8,7 @@ use crate::common;
 
 use std::process::Command;
 
-use common::{cota, stderr};
+use common::{cota, stderr, stdout};
 
 /// Words the bars and spinners of `cota mesh` show.
 const PHASES: [&str; 4] = ["building", "measuring", "writing", "checking"];
@@ -163,4 +163,154 @@ fn binary_output_is_refused_on_a_terminal() {
     assert!(!glb.contains("glTF"), "{glb:?}");
     let obj = on_terminal(&["mesh", "--max-error", "50", "-o", "-", "--format", "obj"]).unwrap();
     assert!(obj.lines().any(|l| l.starts_with("f ")), "{obj:?}");
+}
+
+/// Runs `cota ARGS` with the hidden `COTA_PROGRESS=plain`: progress as
+/// lines `PHASE DONE/TOTAL` on stderr, terminal or not.
+fn cota_plain(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_cota"))
+        .args(args)
+        .env("COTA_PROGRESS", "plain")
+        .output()
+        .expect("run the cota binary")
+}
+
+/// The plain progress lines of `err`, per phase in the order they began:
+/// each phase's `(done, total)` in order (other lines, warnings, skipped).
+fn phases(err: &str) -> Vec<(String, Vec<(u64, u64)>)> {
+    let mut out: Vec<(String, Vec<(u64, u64)>)> = Vec::new();
+    for line in err.lines() {
+        let Some((phase, fraction)) = line.rsplit_once(' ') else {
+            continue;
+        };
+        let Some((d, t)) = fraction.split_once('/') else {
+            continue;
+        };
+        let (Ok(d), Ok(t)) = (d.parse::<u64>(), t.parse::<u64>()) else {
+            continue;
+        };
+        match out.iter_mut().find(|(p, _)| p == phase) {
+            Some((_, v)) => v.push((d, t)),
+            None => out.push((phase.to_string(), vec![(d, t)])),
+        }
+    }
+    out
+}
+
+/// Each of `expected` reported, in that order among the phases, with
+/// fractions that only increase, over one total, up to that total.
+fn reports_each_phase_to_the_end(args: &[&str], expected: &[&str]) {
+    let o = cota_plain(args);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{args:?}: {err}");
+    let seen = phases(&err);
+    let names: Vec<&str> = seen.iter().map(|(p, _)| p.as_str()).collect();
+    let mut at = 0;
+    for want in expected {
+        let Some(k) = names[at..].iter().position(|p| p == want) else {
+            panic!(
+                "{args:?}: no phase {want:?} after {:?} in {names:?}:\n{err}",
+                &names[..at]
+            );
+        };
+        at += k + 1;
+        let steps = &seen[at - 1].1;
+        let total = steps[0].1;
+        assert!(total > 0, "{want}: total 0: {steps:?}");
+        assert!(
+            steps.iter().all(|s| s.1 == total),
+            "{want}: the total changed: {steps:?}"
+        );
+        assert!(
+            steps.windows(2).all(|w| w[0].0 < w[1].0),
+            "{want}: not increasing: {steps:?}"
+        );
+        assert_eq!(steps.last().map(|s| s.0), Some(total), "{want}: {steps:?}");
+        assert!(steps.len() >= 2, "{want}: one report only: {steps:?}");
+    }
+}
+
+#[test]
+fn every_phase_of_tiles_reports_its_fraction_to_the_end() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("tiles");
+    let sample = common::fixture("S29W072.hgt.zip");
+    reports_each_phase_to_the_end(
+        &[
+            "tiles",
+            sample.to_str().unwrap(),
+            "--max-zoom",
+            "8",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        &[
+            "reading",
+            "filling voids",
+            "resampling",
+            "deviation",
+            "preparing",
+            "tiles",
+        ],
+    );
+}
+
+#[test]
+fn compare_mesh_check_and_the_stream_report_their_fractions_on_a_real_dem() {
+    // Real SRTM with 7652 voids (the Pyrenees).
+    let Some(dem) = common::shared("srtm/N42E001.hgt.zip") else {
+        return;
+    };
+    let d = dem.to_str().unwrap();
+    let crop = ["--crop", "300,300,513,513"];
+    let compare = [&["compare", d, "--tolerances", "1,10"][..], &crop].concat();
+    reports_each_phase_to_the_end(&compare, &["reading", "filling voids", "comparing"]);
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("m.obj");
+    let o = obj.to_str().unwrap();
+    let mesh = ["mesh", d, "--max-error", "2", "--check", "-o", o];
+    reports_each_phase_to_the_end(&mesh, &["reading", "filling voids", "building", "checking"]);
+    let cs = dir.path().join("s.cstream");
+    let c = cs.to_str().unwrap();
+    let encode = ["stream", "encode", d, "--max-error", "5", "-o", c];
+    reports_each_phase_to_the_end(&encode, &["reading", "filling voids", "encoding"]);
+    let ply = dir.path().join("d.ply");
+    let decode = ["stream", "decode", c, "-o", ply.to_str().unwrap()];
+    reports_each_phase_to_the_end(&decode, &["decoding"]);
+}
+
+#[test]
+fn quiet_prints_nothing_on_stderr_even_with_plain_progress() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("tiles");
+    let sample = common::fixture("S29W072.hgt.zip");
+    let args = [
+        "tiles",
+        sample.to_str().unwrap(),
+        "--max-zoom",
+        "7",
+        "--imagery",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    // The control: the same run without --quiet reports its phases.
+    let shown = cota_plain(&args);
+    assert!(shown.status.success(), "{}", stderr(&shown));
+    assert!(!phases(&stderr(&shown)).is_empty(), "{}", stderr(&shown));
+    let out2 = dir.path().join("tiles2");
+    let quiet = cota_plain(&[&args[..6], &[out2.to_str().unwrap(), "--quiet"]].concat());
+    assert!(quiet.status.success(), "{}", stderr(&quiet));
+    assert!(quiet.stderr.is_empty(), "--quiet: {:?}", stderr(&quiet));
+    assert!(quiet.stdout.is_empty(), "--quiet: {:?}", stdout(&quiet));
+    // --json still reports, on stdout only.
+    let out3 = dir.path().join("tiles3");
+    let json = cota_plain(&[&args[..6], &[out3.to_str().unwrap(), "--quiet", "--json"]].concat());
+    assert!(json.status.success(), "{}", stderr(&json));
+    assert!(
+        json.stderr.is_empty(),
+        "--quiet --json: {:?}",
+        stderr(&json)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert!(v["tiles"].as_u64().is_some_and(|n| n > 0), "{v}");
 }

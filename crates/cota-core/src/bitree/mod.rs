@@ -126,8 +126,9 @@ pub struct Bitree<'g> {
     inside: Vec<Tri>,
 }
 
-/// A callback told `(levels_done, levels_total)` as the build progresses.
-pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
+/// A callback told `(levels_done, levels_total)` as the build progresses
+/// ([`crate::progress`]).
+pub use crate::progress::Progress;
 
 impl<'g> Bitree<'g> {
     /// Builds the exact error of every split point of `grid`.

@@ -31,6 +31,7 @@ use super::raster::{for_each_span, for_each_span_in, Plane};
 use super::Mesh;
 use crate::grid::HeightGrid;
 use crate::hierarchy::Pt;
+use crate::progress::{Counter, Progress};
 
 /// Exact error statistics of a mesh over the grid's samples.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -116,16 +117,19 @@ fn corners(grid: &HeightGrid, mesh: &Mesh, t: &[u32; 3]) -> Option<([Pt; 3], [f6
 /// Folds `f(acc, col, row, Δz)` over every valid sample covered by `mesh`,
 /// once each, with `Δz = mesh − grid` from the first triangle (in mesh order)
 /// containing it: bands of rows in parallel, each from `init()`, then the
-/// bands' results combined in row order by `combine`.
+/// bands' results combined in row order by `combine`; tells
+/// `progress(rows_done, rows)` as each band is done.
 fn fold_samples<A: Send>(
     grid: &HeightGrid,
     mesh: &Mesh,
     init: impl Fn() -> A + Sync,
     f: impl Fn(&mut A, u32, u32, f64) + Sync,
     combine: impl Fn(A, A) -> A,
+    progress: Progress<'_>,
 ) -> A {
     let (w, h) = (grid.width(), grid.height());
     let cull = Cull::new(grid, mesh);
+    let rows = Counter::new(progress, h);
     let band = |b: usize| {
         let (y0, y1) = (b * BAND_ROWS, ((b + 1) * BAND_ROWS).min(h) - 1);
         let keep = cull.band(y0 as u32, y1 as u32);
@@ -160,6 +164,7 @@ fn fold_samples<A: Send>(
                 });
             }
         }
+        rows.add(y1 - y0 + 1);
         acc
     };
     let parts: Vec<A> = (0..h.div_ceil(BAND_ROWS))
@@ -282,6 +287,12 @@ fn trapezoid_share(grid: &HeightGrid, x: u32, y: u32) -> f64 {
 /// # Runtime
 /// `O(W·H + triangles)`, plus `W·H` bits of memory.
 pub fn measure(grid: &HeightGrid, mesh: &Mesh) -> Metrics {
+    measure_with_progress(grid, mesh, crate::progress::NONE)
+}
+
+/// [`measure`], telling `progress(rows_done, rows)` of the grid's rows as
+/// it goes.
+pub fn measure_with_progress(grid: &HeightGrid, mesh: &Mesh, progress: Progress<'_>) -> Metrics {
     let (w, h) = (grid.width(), grid.height());
     let [dx, dy] = grid.cell_size_m();
     let cell_m2 = dx * dy;
@@ -302,6 +313,7 @@ pub fn measure(grid: &HeightGrid, mesh: &Mesh) -> Metrics {
                 s.samples += 1;
             },
             Sums::then,
+            progress,
         )
     });
     let mut m = Metrics {
@@ -395,6 +407,7 @@ pub fn weighted_volume_m3(
             || 0f64,
             |v, x, y, d| *v += d.abs() * trapezoid_share(grid, x, y) * dx * dy * weight(x, y),
             |a, b| a + b,
+            crate::progress::NONE,
         )
     })
 }

@@ -20,6 +20,7 @@ use crate::error::{MeshError, Result};
 use crate::mesh::metrics::distortion_m2;
 use crate::mesh::Mesh;
 use crate::mesher::{HierarchyKind, MeshPlan, Mesher};
+use crate::progress::Progress;
 
 /// One mesh of the list.
 #[derive(Debug, Clone)]
@@ -106,9 +107,27 @@ pub fn mesh_list(
     opts: &MeshListOptions,
     bytes: &dyn Fn(&Mesh) -> u64,
 ) -> Result<Vec<MeshCandidate>> {
+    mesh_list_with_progress(mesher, opts, bytes, crate::progress::NONE)
+}
+
+/// [`mesh_list`], telling `progress(meshes_done, meshes)` after each
+/// hierarchy and tolerance (the first mesh of each hierarchy includes its
+/// build).
+///
+/// # Errors
+/// As [`mesh_list`].
+pub fn mesh_list_with_progress(
+    mesher: &Mesher<'_>,
+    opts: &MeshListOptions,
+    bytes: &dyn Fn(&Mesh) -> u64,
+    progress: Progress<'_>,
+) -> Result<Vec<MeshCandidate>> {
     let mut out: Vec<MeshCandidate> = Vec::new();
-    for &hierarchy in &opts.hierarchies {
-        for &tol in &opts.tolerances_m {
+    let total = opts.hierarchies.len() * opts.tolerances_m.len();
+    progress(0, total);
+    for (h, &hierarchy) in opts.hierarchies.iter().enumerate() {
+        for (t, &tol) in opts.tolerances_m.iter().enumerate() {
+            progress(h * opts.tolerances_m.len() + t, total);
             let bound = MaxVerticalError::new(tol).map_err(|_| MeshError::BadMaxError(tol))?;
             let plan = MeshPlan::new(&bound).with_hierarchy(hierarchy);
             let meshed = mesher.mesh(&plan)?;
@@ -131,5 +150,6 @@ pub fn mesh_list(
             }
         }
     }
+    progress(total, total);
     Ok(out)
 }

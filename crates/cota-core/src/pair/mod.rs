@@ -15,4 +15,4 @@ pub mod choice;
 pub mod lists;
 
 pub use choice::{choose, greedy, optimum, Candidate, Choice, Pair, PairError, PairOptions};
-pub use lists::{mesh_list, MeshCandidate, MeshListOptions};
+pub use lists::{mesh_list, mesh_list_with_progress, MeshCandidate, MeshListOptions};

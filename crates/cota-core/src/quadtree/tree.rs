@@ -11,6 +11,7 @@ use crate::error::MeshError;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{Hierarchy, Pt};
 use crate::mesh::raster::max_deviation;
+use crate::progress::Progress;
 
 /// Per-level data: block counts and the 8 side errors of every block.
 #[derive(Debug, Clone)]
@@ -51,9 +52,27 @@ impl<'g> QuadTree<'g> {
     /// [`MeshError::GridTooSmall`], [`MeshError::GridTooLarge`], or
     /// [`MeshError::Voids`] when a sample is NaN (fill voids first).
     pub fn build(grid: &'g HeightGrid) -> Result<Self, MeshError> {
+        QuadTree::build_with_progress(grid, crate::progress::NONE)
+    }
+
+    /// [`QuadTree::build`], telling `progress(done, total)` after each
+    /// level, each level counted by its work (a level of blocks of side
+    /// `s` visits about `1/s` of the samples' sides).
+    ///
+    /// # Errors
+    /// As [`QuadTree::build`].
+    pub fn build_with_progress(
+        grid: &'g HeightGrid,
+        progress: Progress<'_>,
+    ) -> Result<Self, MeshError> {
         let hier = crate::error::hierarchy_for(grid)?;
         let mut levels = Vec::new();
         let mut size = hier.size();
+        // Level of side s: work size / s (their sum size - 1); the sides 1
+        // have none.
+        let total = hier.size().saturating_sub(1).max(1) as usize;
+        let mut done = 0;
+        progress(0, total);
         loop {
             let cols = (hier.width() - 1).div_ceil(size);
             let rows = (hier.height() - 1).div_ceil(size);
@@ -76,8 +95,11 @@ impl<'g> QuadTree<'g> {
             if size == 1 {
                 break;
             }
+            done += (hier.size() / size) as usize;
+            progress(done.min(total), total);
             size /= 2;
         }
+        progress(total, total);
         Ok(QuadTree { grid, hier, levels })
     }
 

@@ -78,6 +78,7 @@ use crate::grid::{GeoRef, HeightGrid};
 use crate::hierarchy::{walk, Hierarchy, Pt, Tri, Visitor};
 use crate::mesh::metrics::measure;
 use crate::mesh::Mesh;
+use crate::progress::{Counter, Progress, Stages};
 use crate::refine::{refine_marks_from, triangulate, Marks, Mode, RefineOptions};
 
 /// Per-sample flags of the walk: selected (in this step's marks).
@@ -387,6 +388,21 @@ pub fn encode_marks_progressive(
     mode: Mode,
     opts: &StreamOptions,
 ) -> Result<EncodedStream, StreamError> {
+    encode_marks_progressive_with_progress(grid, mode, opts, crate::progress::NONE)
+}
+
+/// [`encode_marks_progressive`], telling `progress(done, total)` as it
+/// goes: each tolerance refined, then the steps encoded, weighted by their
+/// share of the time (in thousandths, [`crate::progress`]).
+///
+/// # Errors
+/// As [`encode_marks_progressive`].
+pub fn encode_marks_progressive_with_progress(
+    grid: &HeightGrid,
+    mode: Mode,
+    opts: &StreamOptions,
+    progress: Progress<'_>,
+) -> Result<EncodedStream, StreamError> {
     let e_last = opts.max_error_m;
     if e_last.is_nan() || e_last < 0.0 {
         return Err(StreamError::BadMaxError(e_last));
@@ -399,13 +415,22 @@ pub fn encode_marks_progressive(
     let emax = measure(&qgrid, &coarse).max_error_m;
     let refine_opts = RefineOptions::DEFAULT.with_mode(mode);
     let mut steps = vec![(f64::from(f32::MAX), marks.clone())];
-    for t in thresholds(opts, emax, f64::INFINITY) {
+    // The refinements, then the encoding: about half each.
+    let stages = Stages::new(progress, &[1, 1]);
+    let tolerances = thresholds(opts, emax, f64::INFINITY);
+    let first = stages.stage(0);
+    let refined = Counter::new(&first, tolerances.len());
+    for t in tolerances {
         let crit = MaxVerticalError { max_error_m: t };
         let (_, next) = refine_marks_from(&qgrid, &crit, &refine_opts, marks)?;
         marks = next.clone();
         steps.push((t, next));
+        refined.add(1);
     }
-    encode_marks_steps(grid, &steps, mode, opts)
+    stages.finish(0);
+    let encoded = encode_marks_steps_with(grid, &steps, mode, opts, &stages.stage(1));
+    stages.finish(1);
+    encoded
 }
 
 /// Encodes nested closed marks of refinements of `grid` in `mode`, coarse to
@@ -424,6 +449,17 @@ pub fn encode_marks_steps(
     steps: &[(f64, Marks)],
     mode: Mode,
     opts: &StreamOptions,
+) -> Result<EncodedStream, StreamError> {
+    encode_marks_steps_with(grid, steps, mode, opts, crate::progress::NONE)
+}
+
+/// [`encode_marks_steps`], telling `progress(steps_done, steps)`.
+fn encode_marks_steps_with(
+    grid: &HeightGrid,
+    steps: &[(f64, Marks)],
+    mode: Mode,
+    opts: &StreamOptions,
+    progress: Progress<'_>,
 ) -> Result<EncodedStream, StreamError> {
     let (qgrid, lattice_exact) = quantize(grid, opts.quantum_m)?;
     let Some((_, first)) = steps.first() else {
@@ -480,6 +516,7 @@ pub fn encode_marks_steps(
             new_points,
         });
         prev = Some(derived);
+        progress(k + 1, steps.len());
     }
     Ok(EncodedStream {
         header,

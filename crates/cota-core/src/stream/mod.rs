@@ -83,8 +83,11 @@ pub use format::{
     quantize, EncodedStep, EncodedStream, StreamError, StreamHeader, StreamKind, StreamOptions,
     HEADER_BYTES,
 };
-pub use marks::{encode_marks, encode_marks_progressive, encode_marks_steps};
-pub use steps::encode;
+pub use marks::{
+    encode_marks, encode_marks_progressive, encode_marks_progressive_with_progress,
+    encode_marks_steps,
+};
+pub use steps::{encode, encode_with_progress};
 
 #[cfg(test)]
 #[allow(clippy::unwrap_used, reason = "tests")]

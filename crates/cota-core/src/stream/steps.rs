@@ -19,6 +19,7 @@ use crate::bitree::error_code::{decode, SplitRule, INFINITE};
 use crate::bitree::Bitree;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{walk, Tri, Visitor};
+use crate::progress::{Counter, Progress, Stages};
 
 /// Encodes `grid` as a progressive stream.
 ///
@@ -27,19 +28,39 @@ use crate::hierarchy::{walk, Tri, Visitor};
 /// [`StreamError::HeightOutOfRange`], or [`StreamError::Mesh`] for grids the
 /// bitree refuses (voids, too small).
 pub fn encode(grid: &HeightGrid, opts: &StreamOptions) -> Result<EncodedStream, StreamError> {
+    encode_with_progress(grid, opts, crate::progress::NONE)
+}
+
+/// [`encode`], telling `progress(done, total)` as it goes: the bitree's
+/// levels, then each step, weighted by their share of the time (in
+/// thousandths, [`crate::progress`]).
+///
+/// # Errors
+/// As [`encode`].
+pub fn encode_with_progress(
+    grid: &HeightGrid,
+    opts: &StreamOptions,
+    progress: Progress<'_>,
+) -> Result<EncodedStream, StreamError> {
     let e_last = opts.max_error_m;
     if e_last.is_nan() || e_last < 0.0 {
         return Err(StreamError::BadMaxError(e_last));
     }
     let (qgrid, lattice_exact) = quantize(grid, opts.quantum_m)?;
-    let tree = Bitree::build(&qgrid)?;
+    // The error map, then the steps: about a third and two thirds.
+    let stages = Stages::new(progress, &[1, 2]);
+    let tree = Bitree::build_with_progress(&qgrid, &stages.stage(0))?;
+    stages.finish(0);
     let q = lattice(&qgrid, opts.quantum_m);
     let hier = *tree.hierarchy();
     let header = StreamHeader::new(&hier, opts.quantum_m, &q, StreamKind::ErrorSteps);
     let mut state = State::new(&header);
     let mut models = Models::new();
     let mut steps = Vec::new();
-    for (k, thr) in schedule(&tree, opts).into_iter().enumerate() {
+    let schedule = schedule(&tree, opts);
+    let second = stages.stage(1);
+    let done = Counter::new(&second, schedule.len());
+    for (k, thr) in schedule.into_iter().enumerate() {
         let answers = ErrorMap {
             tree: &tree,
             rule: SplitRule::new(thr),
@@ -61,7 +82,9 @@ pub fn encode(grid: &HeightGrid, opts: &StreamOptions) -> Result<EncodedStream, 
             vertices,
             new_points,
         });
+        done.add(1);
     }
+    stages.finish(1);
     Ok(EncodedStream {
         header,
         steps,

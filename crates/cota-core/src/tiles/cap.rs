@@ -33,6 +33,7 @@ use crate::bitree::error_code;
 use crate::bitree::{round_up_f32, Bitree};
 use crate::hierarchy::{Pt, RowSpans, Tri};
 use crate::mesh::raster::Plane;
+use crate::progress::Progress;
 
 /// The errors of the coarse split points (absent: 0).
 #[derive(Debug, Clone, Default)]
@@ -58,28 +59,31 @@ impl Cap {
     }
 
     /// The coarse levels of `lattice`, whose window bitree is `tree`.
-    pub(crate) fn build(lattice: &Lattice, tree: &Bitree<'_>) -> Cap {
+    pub(crate) fn build(lattice: &Lattice, tree: &Bitree<'_>, progress: Progress<'_>) -> Cap {
         let s = lattice.scheme();
         let top = s.cells_at(lattice.align_zoom());
         let window = lattice.window();
         let own = |t: &Tri| own_error(lattice, t);
         let below = |m: Pt| bitree_error(lattice, tree, m);
-        Cap::build_with(s.root_cells(), window, top, own, below)
+        Cap::build_with(s.root_cells(), window, top, own, below, progress)
     }
 
     /// The coarse levels above squares of side `top` over `window`, on a
     /// world of `root_cells` rows: `own(T)` the own error of a coarse
     /// triangle, `below(m)` the error of a split point of the level `top`
-    /// (the window's bitree).
+    /// (the window's bitree); tells `progress(levels_done, levels)`.
     pub(crate) fn build_with(
         root_cells: u64,
         window: [u64; 4],
         top: u64,
         own: impl Fn(&Tri) -> f32 + Sync,
         below: impl Fn(Pt) -> f32 + Sync,
+        progress: Progress<'_>,
     ) -> Cap {
         let mut cap = Cap::default();
         let mut size = 2 * top;
+        let levels = (root_cells / top.max(1)).max(1).ilog2() as usize;
+        let mut done = 0;
         while size <= root_cells {
             let child = |cap: &Cap, m: Pt| {
                 if size / 2 > top {
@@ -90,7 +94,10 @@ impl Cap {
             };
             cap.add_level(root_cells, window, size, &own, &child);
             size *= 2;
+            done += 1;
+            progress(done.min(levels), levels);
         }
+        progress(levels, levels);
         cap
     }
 

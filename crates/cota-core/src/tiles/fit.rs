@@ -50,7 +50,13 @@
 //! One pass over the region's samples for the residuals, then per round
 //! only the samples beyond `τ` and those next to the corners they moved.
 
+use rayon::prelude::*;
+
 use super::samples::SampleSet;
+use crate::progress::{Counter, Progress, Stages};
+
+/// Samples whose residuals are computed together (one progress count).
+const CHUNK: usize = 4096;
 
 /// The rounds of the fit.
 pub const ROUNDS: usize = 12;
@@ -91,7 +97,9 @@ fn unit_triangle(x: f64, y: f64, w: usize, h: usize, even0: bool) -> ([usize; 3]
 /// Fits `heights` (a `w × h` region whose sample (0, 0) is global lattice
 /// `origin`) to the samples `at` inside it (see the module docs), down to
 /// residuals of `tau_m`; the residual is reported over the samples inside
-/// `inner` (global `[x0, y0, x1, y1]`).
+/// `inner` (global `[x0, y0, x1, y1]`); tells `progress(done, total)` as
+/// the residuals are computed, then after each round (in thousandths,
+/// [`crate::progress`]).
 pub(crate) fn fit(
     heights: &mut [f32],
     [w, h]: [usize; 2],
@@ -99,6 +107,7 @@ pub(crate) fn fit(
     at: &impl SampleSet,
     tau_m: f64,
     inner: [u64; 4],
+    progress: Progress<'_>,
 ) -> Fitted {
     if w < 2 || h < 2 || at.is_empty() {
         return Fitted::default();
@@ -116,10 +125,24 @@ pub(crate) fn fit(
                 .map(|i| wt[i] * f64::from(heights[c[i]]))
                 .sum::<f64>()
     };
-    let mut r: Vec<f64> = (0..at.len()).map(|k| residual(heights, k)).collect();
+    // The residuals, then the rounds: about half the time each.
+    let stages = Stages::new(progress, &[1, 1]);
+    let chunks = at.len().div_ceil(CHUNK);
+    let first = stages.stage(0);
+    let done = Counter::new(&first, chunks);
+    let shared: &[f32] = heights;
+    let mut r: Vec<f64> = (0..chunks)
+        .into_par_iter()
+        .flat_map_iter(|c| {
+            done.add(1);
+            (c * CHUNK..((c + 1) * CHUNK).min(at.len())).map(|k| residual(shared, k))
+        })
+        .collect();
+    stages.finish(0);
     let mut corr = vec![0f64; w * h];
     let mut weight = vec![0f64; w * h];
-    for _ in 0..ROUNDS {
+    for round in 0..ROUNDS {
+        stages.report(1, round, ROUNDS);
         let hot: Vec<usize> = (0..r.len()).filter(|&k| r[k].abs() > tau_m).collect();
         if hot.is_empty() {
             break;
@@ -156,6 +179,7 @@ pub(crate) fn fit(
         })
         .map(|k| r[k].abs())
         .fold(0.0, f64::max);
+    stages.finish(1);
     Fitted { residual_m }
 }
 
@@ -211,7 +235,15 @@ mod test {
         );
         let (w, h) = (13, 13);
         let mut heights = vec![100f32; w * h];
-        let f = fit(&mut heights, [w, h], [0, 0], &at, 0.5, [0, 0, 12, 12]);
+        let f = fit(
+            &mut heights,
+            [w, h],
+            [0, 0],
+            &at,
+            0.5,
+            [0, 0, 12, 12],
+            crate::progress::NONE,
+        );
         assert!(f.residual_m <= 2.0, "{f:?}");
         assert!(heights.iter().any(|&z| z > 150.0));
     }

@@ -36,6 +36,7 @@ use super::samples::Samples;
 pub use super::samples::SourcePart;
 use super::scheme::{ErrorSchedule, GeographicScheme};
 use crate::grid::{Crs, GeoRef, HeightGrid, PixelIs, MAX_SAMPLES};
+use crate::progress::{Counter, Progress, Stages};
 
 /// The alignment zoom is the coarsest whose window is at most this many
 /// times the window aligned to maximum-zoom tiles.
@@ -217,13 +218,27 @@ impl Lattice {
     /// # Runtime
     /// `O(window samples)`, in parallel over rows.
     pub fn resample(source: &HeightGrid, opts: &LatticeOptions) -> Result<Lattice, TilesError> {
+        Lattice::resample_with_progress(source, opts, crate::progress::NONE)
+    }
+
+    /// [`Lattice::resample`], telling `progress(done, total)` as it goes:
+    /// the lattice's rows interpolated, then the fit's rounds, weighted by
+    /// their share of the time (in thousandths, [`crate::progress`]).
+    ///
+    /// # Errors
+    /// As [`Lattice::resample`].
+    pub fn resample_with_progress(
+        source: &HeightGrid,
+        opts: &LatticeOptions,
+        progress: Progress<'_>,
+    ) -> Result<Lattice, TilesError> {
         let frame = LatticeFrame::of(source, opts)?;
         let window = frame.window;
         let part = SourcePart {
             grid: source,
             offset: [0, 0],
         };
-        Lattice::resample_part(&frame, part, window)
+        Lattice::resample_part_with(&frame, part, window, progress)
     }
 
     /// Resamples only `region` (global lattice `[x0, y0, x1, y1]`, inside the
@@ -239,6 +254,20 @@ impl Lattice {
         frame: &LatticeFrame,
         source: SourcePart<'_>,
         region: [u64; 4],
+    ) -> Result<Lattice, TilesError> {
+        Lattice::resample_part_with(frame, source, region, crate::progress::NONE)
+    }
+
+    /// [`Lattice::resample_part`], telling `progress` as
+    /// [`Lattice::resample_with_progress`] does.
+    ///
+    /// # Errors
+    /// As [`Lattice::resample_part`].
+    pub fn resample_part_with(
+        frame: &LatticeFrame,
+        source: SourcePart<'_>,
+        region: [u64; 4],
+        progress: Progress<'_>,
     ) -> Result<Lattice, TilesError> {
         let (win, s) = (frame.window, &frame.scheme);
         let [sw, sh] = frame.source_size;
@@ -271,7 +300,7 @@ impl Lattice {
                 height: h,
             });
         }
-        let (heights, residual_m) = fitted(frame, source, region)?;
+        let (heights, residual_m) = fitted(frame, source, region, progress)?;
         let d = frame.scheme.cell_deg();
         let georef = GeoRef {
             crs: Crs::WGS84,
@@ -665,9 +694,13 @@ fn fitted(
     frame: &LatticeFrame,
     source: SourcePart<'_>,
     region: Window,
+    progress: Progress<'_>,
 ) -> Result<(Vec<f32>, f64), TilesError> {
+    // Interpolation, the fit, the crop: their shares of the time.
+    let stages = Stages::new(progress, &RESAMPLE_WEIGHTS);
     let grown = frame.fit_region(region);
-    let mut heights = fill(frame, source, grown)?;
+    let mut heights = fill(frame, source, grown, &stages.stage(0))?;
+    stages.finish(0);
     let (w, h) = (
         (grown[2] - grown[0] + 1) as usize,
         (grown[3] - grown[1] + 1) as usize,
@@ -680,7 +713,9 @@ fn fitted(
         &at,
         frame.fit_m,
         region,
+        &stages.stage(1),
     );
+    stages.finish(1);
     let [ox, oy] = [
         (region[0] - grown[0]) as usize,
         (region[1] - grown[1]) as usize,
@@ -694,8 +729,14 @@ fn fitted(
             })
             .collect()
     };
-    Ok((crop(&heights), f.residual_m))
+    let cropped = crop(&heights);
+    stages.finish(2);
+    Ok((cropped, f.residual_m))
 }
+
+/// The relative times of [`fitted`]'s stages: the interpolation, the fit,
+/// the crop (measured on an SRTM 1" tile).
+const RESAMPLE_WEIGHTS: [usize; 3] = [12, 85, 3];
 
 /// The heights of `region`: bilinear inside the footprint, the edge value
 /// ramped to 0 at the window's border outside it.
@@ -703,6 +744,7 @@ fn fill(
     frame: &LatticeFrame,
     source: SourcePart<'_>,
     region: Window,
+    progress: Progress<'_>,
 ) -> Result<Vec<f32>, TilesError> {
     let (cols, rows) = axes(frame, region);
     let (sw, sh) = (source.grid.width(), source.grid.height());
@@ -719,7 +761,9 @@ fn fill(
     let src = source.grid.heights();
     let w = cols.len();
     let mut out = vec![0f32; w * rows.len()];
+    let done = Counter::new(progress, rows.len());
     out.par_chunks_mut(w).zip(&rows).for_each(|(line, ry)| {
+        done.add(1);
         if ry.ramp == 0.0 {
             return;
         }
@@ -760,6 +804,16 @@ pub struct Deviation {
 /// are linear on each unit triangle of the lattice. For a part
 /// ([`Lattice::resample_part`]), over the source samples inside it.
 pub fn resampling_deviation(source: &HeightGrid, lattice: &Lattice) -> Deviation {
+    resampling_deviation_with_progress(source, lattice, crate::progress::NONE)
+}
+
+/// [`resampling_deviation`], telling `progress(rows_done, rows)` of the
+/// source's rows as it goes.
+pub fn resampling_deviation_with_progress(
+    source: &HeightGrid,
+    lattice: &Lattice,
+    progress: Progress<'_>,
+) -> Deviation {
     let g = source.georef();
     let s = lattice.scheme();
     let d = s.cell_deg();
@@ -769,9 +823,11 @@ pub fn resampling_deviation(source: &HeightGrid, lattice: &Lattice) -> Deviation
     let (gw, gh) = ((grid.width() - 1) as f64, (grid.height() - 1) as f64);
     // A part's lattice: only the source samples inside it.
     let part = lattice.is_part();
+    let rows = Counter::new(progress, source.height());
     let (max, sum, n) = (0..source.height())
         .into_par_iter()
         .map(|row| {
+            rows.add(1);
             let (mut max, mut sum, mut n) = (0f64, 0f64, 0);
             for col in 0..sw {
                 let (lon, lat) = g.sample_xy(col as f64, row as f64);

@@ -243,7 +243,14 @@ impl CoarseHierarchy {
                 }
             }
         };
-        let cap = Cap::build_with(s.root_cells(), window, top, own_of, below);
+        let cap = Cap::build_with(
+            s.root_cells(),
+            window,
+            top,
+            own_of,
+            below,
+            crate::progress::NONE,
+        );
         let missing = missing.into_inner().unwrap_or(None);
         match missing {
             Some(m) => Err(incomplete(format!("the split point {m:?}"))),

@@ -66,7 +66,8 @@ pub use drawn::{DrawnBound, LevelStats};
 pub use error::TilesError;
 pub use estimate::{estimate, Estimate};
 pub use lattice::{
-    resampling_deviation, Deviation, Lattice, LatticeFrame, LatticeOptions, SourcePart,
+    resampling_deviation, resampling_deviation_with_progress, Deviation, Lattice, LatticeFrame,
+    LatticeOptions, SourcePart,
 };
 pub use merge::CoarseHierarchy;
 pub use partial::{BandCorners, CoarsePartial, FinePoint, WATER_UNKNOWN};

@@ -28,6 +28,7 @@ use crate::bitree::error_code::encode_up;
 use crate::bitree::round_up_f32;
 use crate::hierarchy::{Pt, Tri};
 use crate::mesh::raster::Plane;
+use crate::progress::{Counter, Progress};
 
 /// The largest |plane − h| over the samples of `s` inside triangle `t`
 /// (corner heights `z`) and inside `clip` (global, inclusive), rounded up
@@ -99,6 +100,11 @@ fn span_at(p: &[Pt; 3], y: f64) -> Option<(f64, f64)> {
 /// and each holds a few samples); larger ones triangle by triangle, row
 /// spans of samples ([`triangle_error`], as the reduce of a sharded run
 /// computes them: `by_sample_below` must not exceed its band squares).
+/// Tells `progress(done, total)`: each sample-by-sample size, then the rest.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the region, the sizes, the heights and the reporting"
+)]
 pub fn own_errors(
     s: &impl SampleSet,
     origin: [u64; 2],
@@ -107,6 +113,7 @@ pub fn own_errors(
     by_sample_below: u64,
     height: &(impl Fn(u64, u64) -> f32 + Sync),
     skip: Option<&Skip<'_>>,
+    progress: Progress<'_>,
 ) -> Vec<u16> {
     let region = [
         origin[0],
@@ -126,7 +133,11 @@ pub fn own_errors(
     };
     let split = below.clamp(first, last.max(first));
     let small: Vec<u64> = pow2(first, split / 2).collect();
-    let mut out = by_sample(s, region, &small, height, &at, w * h, skip);
+    // The sample-by-sample sizes (the most time: one share each), then
+    // the levels by rows (one share together).
+    let shares = small.len() + 1;
+    let sizes_done = Counter::new(progress, shares);
+    let mut out = by_sample(s, region, &small, height, &at, skip, &sizes_done);
     if let Some(axes) = s.separable() {
         for size in pow2(split, last) {
             for (m, code) in level_errors(axes, region, size, height, skip) {
@@ -135,6 +146,7 @@ pub fn own_errors(
             }
         }
     }
+    sizes_done.add(1);
     if let Some(k) = skip {
         // Measured or not, an error that decides nothing is stored as 0, so
         // the codes do not depend on which squares were skipped.
@@ -183,12 +195,17 @@ fn by_sample(
     sizes: &[u64],
     height: &(impl Fn(u64, u64) -> f32 + Sync),
     at: &(impl Fn(Pt) -> usize + Sync),
-    n: usize,
     skip: Option<&Skip<'_>>,
+    done: &Counter<'_>,
 ) -> Vec<u16> {
+    let n = ((region[2] - region[0] + 1) * (region[3] - region[1] + 1)) as usize;
     let per_size: Vec<(u64, SizeCodes)> = sizes
         .par_iter()
-        .map(|&size| (size, size_codes(s, region, size, height, skip)))
+        .map(|&size| {
+            let codes = size_codes(s, region, size, height, skip);
+            done.add(1);
+            (size, codes)
+        })
         .collect();
     let mut codes = vec![0u16; n];
     for (size, c) in per_size {

@@ -50,6 +50,7 @@ use super::lattice::{
 use super::samples::{Listed, SampleSet};
 use super::scheme::GeographicScheme;
 use crate::grid::{GeoRef, GeoTransform, HeightGrid, MAX_SAMPLES};
+use crate::progress::{Counter, Progress, Stages};
 
 /// One input DEM placed on the Earth.
 #[derive(Debug, Clone, Copy)]
@@ -97,6 +98,21 @@ impl Lattice {
         sources: &[Source<'_>],
         opts: &LatticeOptions,
     ) -> Result<Resampled, TilesError> {
+        Lattice::resample_sources_with_progress(sources, opts, crate::progress::NONE)
+    }
+
+    /// [`Lattice::resample_sources`], telling `progress(done, total)` as it
+    /// goes: the lattice's rows interpolated, the samples listed, the fit's
+    /// rounds, weighted by their share of the time (in thousandths,
+    /// [`crate::progress`]).
+    ///
+    /// # Errors
+    /// As [`Lattice::resample_sources`].
+    pub fn resample_sources_with_progress(
+        sources: &[Source<'_>],
+        opts: &LatticeOptions,
+        progress: Progress<'_>,
+    ) -> Result<Resampled, TilesError> {
         for s in sources {
             if let Some((col, row)) = s.grid.first_void() {
                 return Err(TilesError::Voids { col, row });
@@ -111,8 +127,11 @@ impl Lattice {
                 height: h,
             });
         }
-        let mut heights = fill(&placed, &frame);
+        let stages = Stages::new(progress, &SOURCES_WEIGHTS);
+        let mut heights = fill(&placed, &frame, &stages.stage(0));
+        stages.finish(0);
         let samples = Listed::new(sample_positions(&placed, &frame.scheme));
+        stages.finish(1);
         let fitted = fit(
             &mut heights,
             [w as usize, h as usize],
@@ -120,7 +139,9 @@ impl Lattice {
             &samples,
             frame.fit_m,
             window,
+            &stages.stage(2),
         );
+        stages.finish(2);
         let coverage = Coverage {
             polygons: placed.into_iter().map(|p| p.polygon).collect(),
         };
@@ -337,15 +358,22 @@ fn bounds(placed: &[Placed<'_>], scheme: &GeographicScheme) -> Result<[f64; 4], 
     ])
 }
 
-/// The heights of the window (see the module docs), in parallel over rows.
-fn fill(placed: &[Placed<'_>], frame: &LatticeFrame) -> Vec<f32> {
+/// The relative times of [`Lattice::resample_sources_with_progress`]'s
+/// stages: the interpolation, the samples' list, the fit (estimated).
+const SOURCES_WEIGHTS: [usize; 3] = [50, 20, 30];
+
+/// The heights of the window (see the module docs), in parallel over rows,
+/// telling `progress(rows_done, rows)`.
+fn fill(placed: &[Placed<'_>], frame: &LatticeFrame, progress: Progress<'_>) -> Vec<f32> {
     let win = frame.window;
     let s = &frame.scheme;
     let w = (win[2] - win[0] + 1) as usize;
     let h = (win[3] - win[1] + 1) as usize;
     let ramp = ramp_cells(s);
     let mut out = vec![0f32; w * h];
+    let rows = Counter::new(progress, h);
     out.par_chunks_mut(w).enumerate().for_each(|(j, line)| {
+        rows.add(1);
         let y = (win[1] + j as u64) as f64;
         for (i, o) in line.iter_mut().enumerate() {
             let x = (win[0] + i as u64) as f64;
@@ -451,12 +479,34 @@ fn sample_positions(placed: &[Placed<'_>], scheme: &GeographicScheme) -> Vec<[f6
 /// The largest and the root mean square |lattice − sample| over `samples`
 /// (the lattice's unit-triangle surface at each sample).
 pub fn deviation_of(lattice: &Lattice, samples: &impl SampleSet) -> super::lattice::Deviation {
-    let (max, sum, n) = (0..samples.len())
+    deviation_of_with_progress(lattice, samples, crate::progress::NONE)
+}
+
+/// Samples [`deviation_of_with_progress`] counts at a time.
+const DEVIATION_CHUNK: usize = 4096;
+
+/// [`deviation_of`], telling `progress(chunks_done, chunks)` as it goes
+/// (chunks of a few thousand samples).
+pub fn deviation_of_with_progress(
+    lattice: &Lattice,
+    samples: &impl SampleSet,
+    progress: Progress<'_>,
+) -> super::lattice::Deviation {
+    let n = samples.len();
+    let chunks = Counter::new(progress, n.div_ceil(DEVIATION_CHUNK));
+    let (max, sum, n) = (0..n.div_ceil(DEVIATION_CHUNK))
         .into_par_iter()
-        .map(|k| {
-            let [x, y, h] = samples.sample(k);
-            let d = lattice.unit_surface_at(x, y) - h;
-            (d.abs(), d * d, 1usize)
+        .map(|c| {
+            chunks.add(1);
+            (c * DEVIATION_CHUNK..((c + 1) * DEVIATION_CHUNK).min(n))
+                .map(|k| {
+                    let [x, y, h] = samples.sample(k);
+                    let d = lattice.unit_surface_at(x, y) - h;
+                    (d.abs(), d * d, 1usize)
+                })
+                .fold((0.0, 0.0, 0), |a: (f64, f64, usize), b| {
+                    (a.0.max(b.0), a.1 + b.1, a.2 + b.2)
+                })
         })
         .reduce(
             || (0.0, 0.0, 0),

@@ -49,14 +49,26 @@ use crate::error::{ReadError, ReadErrorKind, RegionError};
 /// # Errors
 /// A [`ReadError`] naming `path` and saying what was expected and found.
 pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Dem, ReadError> {
+    read_dem_counted(path, opts, &|_| {})
+}
+
+/// [`read_dem`], telling `counted(bytes)` of each read from the file as
+/// it arrives (a PMTiles archive, read in parts, once at the end: its size).
+fn read_dem_counted(
+    path: &Path,
+    opts: &ReadOptions,
+    counted: &(dyn Fn(u64) + Sync),
+) -> Result<Dem, ReadError> {
     let wrap = |kind| ReadError::new(path, kind);
     if pmtiles::is_pmtiles_file(path) {
         // An archive may be far larger than memory: read only what is asked.
         let mut file = std::fs::File::open(path).map_err(|e| wrap(ReadErrorKind::Io(e)))?;
-        return pmtiles::decode(&mut file, path, opts)
+        let dem = pmtiles::decode(&mut file, path, opts)
             .map(with_guessed_crs)
             .and_then(|d| heights_within(d, opts))
             .map_err(wrap);
+        counted(file.metadata().map_or(0, |m| m.len()));
+        return dem;
     }
     // The size is checked against the budget before anything is read: a
     // file larger than any DEM within the sample limit is refused unread.
@@ -66,7 +78,30 @@ pub fn read_dem(path: &Path, opts: &ReadOptions) -> Result<Dem, ReadError> {
         .map_err(|e| wrap(ReadErrorKind::Io(e)))?
         .len();
     crate::limits::check_file_bytes(len, opts).map_err(wrap)?;
-    read_dem_from(file, path, opts)
+    read_dem_from(
+        Counted {
+            inner: file,
+            counted,
+        },
+        path,
+        opts,
+    )
+}
+
+/// A reader that tells `counted(bytes)` of each read.
+pub(crate) struct Counted<'a, R> {
+    /// The reader.
+    pub(crate) inner: R,
+    /// Told the bytes of each read.
+    pub(crate) counted: &'a (dyn Fn(u64) + Sync),
+}
+
+impl<R: std::io::Read> std::io::Read for Counted<'_, R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        (self.counted)(n as u64);
+        Ok(n)
+    }
 }
 
 /// Reads one DEM from `reader` (standard input, a pipe, an open file),
@@ -330,15 +365,15 @@ pub fn read_region_in_turn<P: AsRef<Path>>(
     join(dems, opts)
 }
 
-/// [`read_region`], calling `progress(files_read, files)` as each file is
-/// read (from the reading threads, in any order).
+/// [`read_region`], calling `progress(bytes_read, bytes)` as the files are
+/// read (from the reading threads; `bytes` the files' sizes).
 ///
 /// # Errors
 /// As [`read_region`].
 pub fn read_region_with_progress<P: AsRef<Path> + Sync>(
     paths: &[P],
     opts: &RegionOptions,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Region, RegionError> {
     if paths.is_empty() {
         return Err(RegionError::NoFiles);
@@ -348,27 +383,47 @@ pub fn read_region_with_progress<P: AsRef<Path> + Sync>(
 }
 
 /// Reads each file on rayon's pool (one file per task), calling
-/// `progress(files_read, files)` as each is read: the files
-/// [`read_region_with_progress`] joins, for a caller that looks at each
-/// (sets its CRS, say: [`crate::crs::assign_src_crs`]) before [`join`].
+/// `progress(bytes_read, bytes)` as their bytes arrive (`bytes`: the files'
+/// sizes; `(bytes, bytes)` at the end, whatever was read): the
+/// files [`read_region_with_progress`] joins, for a caller that looks at
+/// each (sets its CRS, say: [`crate::crs::assign_src_crs`]) before [`join`].
 ///
 /// # Errors
 /// The [`ReadError`] of the first file (in input order) that cannot be read.
 pub fn read_dems_with_progress<P: AsRef<Path> + Sync>(
     paths: &[P],
     opts: &ReadOptions,
-    progress: &(dyn Fn(usize, usize) + Sync),
+    progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<Vec<Dem>, ReadError> {
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    let read: Vec<Result<Dem, ReadError>> = paths
-        .par_iter()
-        .with_max_len(1)
-        .map(|p| {
-            let dem = read_dem(p.as_ref(), opts);
-            let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress(n, paths.len());
-            dem
-        })
-        .collect();
+    read_dems_counted(paths, opts, false, progress)
+}
+
+/// [`read_dems_with_progress`], the files read in parallel or (`in_turn`)
+/// one after the other on the calling thread (see [`read_region_in_turn`]).
+///
+/// # Errors
+/// As [`read_dems_with_progress`].
+pub fn read_dems_counted<P: AsRef<Path> + Sync>(
+    paths: &[P],
+    opts: &ReadOptions,
+    in_turn: bool,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<Vec<Dem>, ReadError> {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let size = |p: &P| std::fs::metadata(p.as_ref()).map_or(0, |m| m.len());
+    let total: u64 = paths.iter().map(size).sum();
+    let done = AtomicU64::new(0);
+    progress(0, total);
+    let counted = |n: u64| {
+        let d = done.fetch_add(n, Ordering::Relaxed) + n;
+        progress(d.min(total), total);
+    };
+    let one = |p: &P| read_dem_counted(p.as_ref(), opts, &counted);
+    let read: Vec<Result<Dem, ReadError>> = if in_turn {
+        paths.iter().map(one).collect()
+    } else {
+        paths.par_iter().with_max_len(1).map(one).collect()
+    };
+    progress(total, total);
     read.into_iter().collect()
 }

@@ -29,8 +29,14 @@ pub(super) struct Solved {
 /// multigrid start, then multigrid cycles until the estimated remaining
 /// error is below the tolerance (metres), or the changes are down to the
 /// `f32` rounding of the heights, or after `max_iterations` cycles; a
-/// component too small to coarsen is solved directly.
-pub(super) fn harmonic(fine: &mut Fine<'_>, tolerance_m: f64, max_iterations: usize) -> Solved {
+/// component too small to coarsen is solved directly. `on_cycle(cycles)`
+/// after each cycle.
+pub(super) fn harmonic(
+    fine: &mut Fine<'_>,
+    tolerance_m: f64,
+    max_iterations: usize,
+    on_cycle: &dyn Fn(usize),
+) -> Solved {
     let mut s = Solved::default();
     if fine.unknowns() <= COARSEST_UNKNOWNS {
         s.iterations = 1;
@@ -64,6 +70,7 @@ pub(super) fn harmonic(fine: &mut Fine<'_>, tolerance_m: f64, max_iterations: us
         s.coarsest_failed |= !ok;
         changes = [f64::from(change), changes[0], changes[1]];
         s.iterations += 1;
+        on_cycle(s.iterations);
     }
     s.last_change_m = if s.iterations == 0 { 0.0 } else { changes[0] };
     s.converged = !s.coarsest_failed && remaining_error(&changes, floor) < tolerance_m;

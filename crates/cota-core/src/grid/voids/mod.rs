@@ -101,6 +101,7 @@ mod interp;
 use rayon::prelude::*;
 
 use crate::grid::{GridError, HeightGrid};
+use crate::progress::{Counter, Progress};
 use components::{find_components, BoxArea, Component};
 use fine::Fine;
 use harmonic::{harmonic, Solved};
@@ -236,6 +237,19 @@ pub struct FillReport {
 /// levels; a component whose box has at most 65 536 samples also works on a
 /// copy of it (4 bytes per sample).
 pub fn fill_voids(grid: &mut HeightGrid, opts: &FillOptions) -> Result<FillReport, VoidError> {
+    fill_voids_with_progress(grid, opts, crate::progress::NONE)
+}
+
+/// [`fill_voids`], telling `progress(voids_filled, voids)` as each
+/// component of voids is filled.
+///
+/// # Errors
+/// As [`fill_voids`].
+pub fn fill_voids_with_progress(
+    grid: &mut HeightGrid,
+    opts: &FillOptions,
+    progress: Progress<'_>,
+) -> Result<FillReport, VoidError> {
     let method = match opts.policy {
         VoidPolicy::Refuse => {
             grid.require_no_voids().map_err(VoidError::Refused)?;
@@ -259,6 +273,7 @@ pub fn fill_voids(grid: &mut HeightGrid, opts: &FillOptions) -> Result<FillRepor
             height: grid.height(),
         });
     }
+    let filled = Counter::new(progress, voids);
     let components = find_components(grid);
     let (small, large): (Vec<&Component>, Vec<&Component>) = components
         .iter()
@@ -266,7 +281,11 @@ pub fn fill_voids(grid: &mut HeightGrid, opts: &FillOptions) -> Result<FillRepor
     let shared: &HeightGrid = grid;
     let solved_small: Vec<(Vec<f32>, Solved)> = small
         .par_iter()
-        .map(|c| solve_on_copy(shared, c, method, opts))
+        .map(|c| {
+            let solved = solve_on_copy(shared, c, method, opts);
+            filled.add(c.cells);
+            solved
+        })
         .collect();
     let mut report = FillReport {
         filled: voids,
@@ -283,8 +302,15 @@ pub fn fill_voids(grid: &mut HeightGrid, opts: &FillOptions) -> Result<FillRepor
         }
     }
     for c in large {
-        let s = solve_in_place(grid, c, method, opts);
+        // Credited cycle by cycle, up to the usual count; the rest at the end.
+        let credited = std::cell::Cell::new(0);
+        let on_cycle = |k: usize| {
+            let share = c.cells * k.min(USUAL_CYCLES) / (USUAL_CYCLES + 1);
+            filled.add(share.saturating_sub(credited.replace(share)));
+        };
+        let s = solve_in_place(grid, c, method, opts, &on_cycle);
         report.add(c, &s);
+        filled.add(c.cells - credited.get());
     }
     Ok(report)
 }
@@ -293,6 +319,10 @@ pub fn fill_voids(grid: &mut HeightGrid, opts: &FillOptions) -> Result<FillRepor
 /// copy of their box, many at once; larger ones in place, one at a time,
 /// each in parallel over bands of rows.
 const LOCAL_CELLS: usize = 1 << 16;
+
+/// The multigrid cycles a component usually takes (see [`fill_voids`]'s
+/// runtime): what its progress is counted against.
+const USUAL_CYCLES: usize = 8;
 
 impl FillReport {
     /// Counts one solved component.
@@ -321,7 +351,7 @@ fn solve_on_copy(
         copy.extend_from_slice(&grid.heights()[start..start + area.w]);
     }
     let rows: Vec<&mut [f32]> = copy.chunks_mut(area.w).collect();
-    let s = solve(grid, c, &area, rows, method, opts);
+    let s = solve_rows(c, &area, rows, pixel_size(grid, c), method, opts, &|_| {});
     let values = c
         .runs
         .iter()
@@ -340,6 +370,7 @@ fn solve_in_place(
     c: &Component,
     method: FillMethod,
     opts: &FillOptions,
+    on_cycle: &dyn Fn(usize),
 ) -> Solved {
     let (width, height) = (grid.width(), grid.height());
     let area = c.area(width, height);
@@ -349,24 +380,13 @@ fn solve_in_place(
         .chunks_mut(width)
         .map(|r| &mut r[area.x0..area.x0 + area.w])
         .collect();
-    solve_rows(c, &area, rows, cell, method, opts)
-}
-
-/// Fills one component whose box rows are `rows`.
-fn solve(
-    grid: &HeightGrid,
-    c: &Component,
-    area: &BoxArea,
-    rows: Vec<&mut [f32]>,
-    method: FillMethod,
-    opts: &FillOptions,
-) -> Solved {
-    solve_rows(c, area, rows, pixel_size(grid, c), method, opts)
+    solve_rows(c, &area, rows, cell, method, opts, on_cycle)
 }
 
 /// The solve proper: the fine level over `rows`, the method, then the clamp
 /// to the border range (the exact solution lies in it; this only removes
-/// what is left of the iteration's overshoot).
+/// what is left of the iteration's overshoot). `on_cycle(cycles)` after
+/// each multigrid cycle.
 fn solve_rows(
     c: &Component,
     area: &BoxArea,
@@ -374,6 +394,7 @@ fn solve_rows(
     (dx, dy): (f64, f64),
     method: FillMethod,
     opts: &FillOptions,
+    on_cycle: &dyn Fn(usize),
 ) -> Solved {
     let wx = (1.0 / (dx * dx)) as f32;
     let wy = (1.0 / (dy * dy)) as f32;
@@ -387,7 +408,9 @@ fn solve_rows(
                 ..Solved::default()
             }
         }
-        FillMethod::Harmonic => harmonic(&mut fine, opts.tolerance_m, opts.max_iterations),
+        FillMethod::Harmonic => {
+            harmonic(&mut fine, opts.tolerance_m, opts.max_iterations, on_cycle)
+        }
     };
     fine.clamp(range);
     solved

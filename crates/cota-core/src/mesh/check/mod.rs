@@ -53,8 +53,9 @@ use rayon::prelude::*;
 use super::holes::VoidMask;
 use crate::grid::HeightGrid;
 use crate::hierarchy::{diagonal_of, Hierarchy};
-use crate::mesh::metrics::{measure, Metrics};
+use crate::mesh::metrics::{measure_with_progress, Metrics};
 use crate::mesh::{Mesh, MeshVertex};
+use crate::progress::{Progress, Stages};
 
 /// What [`check_mesh`] requires.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -421,30 +422,58 @@ pub fn check_mesh(
     mesh: &Mesh,
     opts: &CheckOptions,
 ) -> Result<CheckReport, CheckError> {
-    crate::par::on_pool(|| check_on_pool(grid, mesh, opts))
+    check_mesh_with_progress(grid, mesh, opts, crate::progress::NONE)
 }
+
+/// [`check_mesh`], telling `progress(done, total)` as it goes: the
+/// vertices, the triangles, the general checks, the holes, then the
+/// measure by rows, weighted by their share of the time (in thousandths,
+/// [`crate::progress`]).
+///
+/// # Errors
+/// As [`check_mesh`].
+pub fn check_mesh_with_progress(
+    grid: &HeightGrid,
+    mesh: &Mesh,
+    opts: &CheckOptions,
+    progress: Progress<'_>,
+) -> Result<CheckReport, CheckError> {
+    crate::par::on_pool(|| check_on_pool(grid, mesh, opts, progress))
+}
+
+/// The relative times of [`check_mesh_with_progress`]'s stages: the
+/// vertices, the triangles, the general checks, the holes, the measure
+/// (measured on an SRTM 1" tile).
+const CHECK_WEIGHTS: [usize; 5] = [2, 50, 5, 1, 42];
 
 /// [`check_mesh`] on a pool thread: its parallel sections enter the pool once.
 fn check_on_pool(
     grid: &HeightGrid,
     mesh: &Mesh,
     opts: &CheckOptions,
+    progress: Progress<'_>,
 ) -> Result<CheckReport, CheckError> {
     let mut found = Found {
         list: Vec::new(),
         total: 0,
     };
+    let stages = Stages::new(progress, &CHECK_WEIGHTS);
     let owner = check_vertices(grid, mesh, opts, &mut found);
+    stages.finish(0);
     if found.total == 0 {
         check_triangles(grid, mesh, opts, &mut found);
     }
+    stages.finish(1);
     if found.total == 0 && opts.general {
         check_general(grid, mesh, &owner, &mut found);
     }
+    stages.finish(2);
     if found.total == 0 && opts.holes {
         holes::check_holes(grid, mesh, &mut found);
     }
-    let metrics = measure(grid, mesh);
+    stages.finish(3);
+    let metrics = measure_with_progress(grid, mesh, &stages.stage(4));
+    stages.finish(4);
     if found.total == 0 {
         if metrics.uncovered > 0 && !opts.holes {
             found.push(Violation::Uncovered {
