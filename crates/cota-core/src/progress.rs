@@ -4,10 +4,10 @@
 //! it (the CLI draws a bar); the plain entry points pass [`NONE`], which
 //! costs one empty call every few thousand rows.
 //!
-//! [`Counter`] counts work done in parallel loops and reports at most a few
-//! hundred times; [`Stages`] turns the stages of a phase, each with its own
-//! `(done, total)`, into one fraction of the phase (in thousandths), each
-//! stage weighted by its share of the phase's time.
+//! Inside the crate, `Counter` counts work done in parallel loops and
+//! reports at most a few hundred times; `Stages` turns the stages of a
+//! phase, each with its own `(done, total)`, into one fraction of the phase
+//! (in thousandths), each stage weighted by its share of the phase's time.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
