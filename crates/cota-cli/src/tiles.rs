@@ -9,8 +9,7 @@ use cota_core::tiles::plan::{plan, plan_with};
 use cota_core::tiles::sources::deviation_of_with_progress;
 use cota_core::tiles::{
     resampling_deviation_with_progress, shard_plan, BandCorners, Deviation, Lattice, LatticeFrame,
-    Prepared,
-    Shard, Source, SourcePart, TilerOptions, ZoomPlan,
+    Prepared, Shard, Source, SourcePart, TilerOptions, ZoomPlan,
 };
 use cota_core::{HeightGrid, LonLat};
 use cota_io::tiles::drawn::{Against, SourceGrid};

@@ -1,5 +1,5 @@
 //! `cota tiles` says what a run will cost before it starts
-//! ([`cota_core::tiles::estimate`]: tiles, lattice, memory, time) and refuses,
+//! ([`mod@cota_core::tiles::estimate`]: tiles, lattice, memory, time) and refuses,
 //! unless `--yes`, a run past [`MAX_TILES`] tiles or one whose estimated
 //! memory is more than the machine has available.
 
