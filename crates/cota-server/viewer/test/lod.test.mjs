@@ -126,3 +126,28 @@ test('new vertices start at their hypotenuse midpoint and reach their height', (
     if (lod.slotOf[i] >= 0) assert.equal(lod.shownZ(i), lod.z[i]);
   }
 });
+
+test('a frame budget cuts refinement short, and still frames converge to the unbudgeted mesh', () => {
+  const K = 720 / (2 * Math.tan(Math.PI / 6));
+  const free = setup('s29w072-200x150-dm');
+  const cut = setup('s29w072-200x150-dm');
+  // A plunge from far to near in one frame: far more work than the budget.
+  const eyes = [[0, -1500, 300000], [500, -800, 1500]];
+  free.lod.update(eyes[0], K, 1, Infinity);
+  cut.lod.update(eyes[0], K, 1, Infinity);
+  free.lod.update(eyes[1], K, 1, Infinity);
+  assert.equal(free.lod.pending, false);
+  // A budget of 0 ms stops at the first look at the clock: one small slice a frame.
+  cut.lod.update(eyes[1], K, 1, 0);
+  assert.equal(cut.lod.pending, true, 'the plunge is cut short by the budget');
+  assert.ok(cut.lod.triCount < free.lod.triCount, `cut short: ${cut.lod.triCount} < ${free.lod.triCount} triangles`);
+  let frames = 1;
+  while (cut.lod.pending && frames < 100000) {
+    cut.lod.update(eyes[1], K, 1, 0);
+    frames++;
+  }
+  assert.equal(cut.lod.pending, false, `caught up after ${frames} frames`);
+  assert.ok(frames > 2, `the work was spread over ${frames} frames`);
+  assert.deepEqual([...cut.lod.active], [...free.lod.active], 'the same split set as without a budget');
+  checkInvariants(cut.lod, cut.d, K, 1);
+});
