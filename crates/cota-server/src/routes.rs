@@ -218,6 +218,9 @@ async fn meta(State(s): State<ServerState>, headers: HeaderMap) -> Result<Respon
         o.insert("warnings".into(), s.warnings.as_slice().into());
     }
     let body = serde_json::to_vec(&v).map_err(|e| ServeError::Internal(format!("meta: {e}")))?;
+    // The ETag of the body, not of the stream: the same stream served with
+    // another texture, other warnings or tiles must not be answered 304.
+    let etag = crate::tiles::etag_of(&body);
     Ok(cached(
         &headers,
         Bytes::from(body),
@@ -225,7 +228,7 @@ async fn meta(State(s): State<ServerState>, headers: HeaderMap) -> Result<Respon
             (header::CONTENT_TYPE, "application/json"),
             (header::CACHE_CONTROL, "no-cache"),
         ],
-        a.etag(),
+        &etag,
     ))
 }
 

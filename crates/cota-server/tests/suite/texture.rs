@@ -134,3 +134,24 @@ async fn without_a_texture_meta_says_so_and_the_route_is_404() {
     tx.send(()).unwrap();
     h.await.unwrap().unwrap();
 }
+
+#[tokio::test]
+async fn meta_is_validated_by_its_own_body_not_the_streams() {
+    use tower::ServiceExt;
+    // The same stream with and without a warning: a client holding the
+    // first meta must not be told 304 by the second server.
+    let grid = crate::common::grid();
+    let plain = ServerState::new(StreamAsset::from_grid(&grid, "w").unwrap());
+    let warned = plain
+        .clone()
+        .with_warnings(vec!["w: 1 void sample filled".into()]);
+    let etag = |state: ServerState| async move {
+        let req = axum::http::Request::get("/meta.json")
+            .body(axum::body::Body::empty())
+            .unwrap();
+        let r = cota_server::router(state).oneshot(req).await.unwrap();
+        r.headers()["etag"].to_str().unwrap().to_string()
+    };
+    let (a, b) = (etag(plain).await, etag(warned).await);
+    assert_ne!(a, b);
+}

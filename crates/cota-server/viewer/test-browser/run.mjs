@@ -250,6 +250,8 @@ async function furnitureTest(page) {
   results.furniture = t;
   check('map furniture shown', /height -?\d+ m/.test(t.cursor) && /\d+ k?m/.test(t['scale-label']) && /\d/.test(t['legend-ticks']) && t.dataset.length > 0,
     JSON.stringify(t).replace(/\\n/g, ' / '));
+  const lap = overlaps(await page.evaluate(() => window.cota.panels()));
+  check('no panels overlap at 1280 px (the dataset panel clear of the overlay)', lap.length === 0, lap.join(', ') || 'none');
 }
 
 /** Aggressive drags and zooms in orbit mode, then a fly sequence diving at the
