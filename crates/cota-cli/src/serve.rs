@@ -70,7 +70,7 @@ fn source_of(a: &ServeArgs) -> anyhow::Result<(Source, Vec<String>)> {
     let report = fill(&mut grid, a.voids)?;
     if report.filled > 0 {
         let how = match a.voids {
-            Voids::Hole => "left as holes in the tiles, filled flat in the stream",
+            Voids::Hole => "filled with a constant height in the stream (no tiles are made)",
             Voids::Idw => "filled by inverse-distance weighting",
             _ => "filled harmonically (smooth surfaces from the void's rim)",
         };
