@@ -545,8 +545,10 @@ async function main() {
   const browser = await chromium.launch({ executablePath: process.env.CHROMIUM || '/usr/bin/chromium', args: ARGS });
   const input = inputs();
   if (textureOnly) {
+    const t0 = Date.now();
     await textureTest(browser);
     await warningsTest(browser);
+    console.log(`texture and warnings cases: ${((Date.now() - t0) / 1000).toFixed(1)} s`);
     await browser.close();
     console.log(`browser tests: ${passed} passed, ${failed} failed`);
     process.exit(failed ? 1 : 0);
@@ -559,8 +561,11 @@ async function main() {
       const e = await stop(s);
       check('the server stops on SIGTERM', e.code === 0, `exit ${e.code} ${e.sig ?? ''}`);
     }
+    const t0 = Date.now();
     await textureTest(browser);
     await warningsTest(browser);
+    results.texture_and_warnings_s = (Date.now() - t0) / 1000;
+    console.log(`texture and warnings cases: ${results.texture_and_warnings_s.toFixed(1)} s`);
   }
   let tiles = null;
   try {
