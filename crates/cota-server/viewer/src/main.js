@@ -609,8 +609,8 @@ function drawOverlay() {
     `triangles   ${s.triangles.toLocaleString('en')}`,
     `refine      ${s.refineMs.toFixed(2)} ms/frame (median ${s.refineMedianMs.toFixed(2)})`,
     `stream      ${kb(s.bytes)} of ${kb(s.total)}, step ${s.steps}/${s.stepsAnnounced}${s.done ? ' (done)' : ''}`,
-    `screen err  max ${s.maxError.sent.toFixed(2)} px, target ${s.targetPx} px${s.maxError.all > s.maxError.sent + 1e-9 ? ` (${s.maxError.all.toFixed(1)} px until the stream arrives)` : ''}`,
-    `            (how far, in pixels, the drawn surface\n             may be from the full data${s.maxError.all > s.maxError.sent + 1e-9 ? ';\n             larger while finer steps stream in' : ''})`,
+    `screen err  max ${s.maxError.sent.toFixed(2)} px, target ${s.targetPx} px`,
+    `            (how far, in pixels, the drawn surface\n             may be from the full data${s.maxError.all > s.maxError.sent + 1e-9 ? `;\n             ${s.maxError.all.toFixed(1)} px until the rest arrives` : ''})`,
     `mode        ${state.fly ? 'fly' : 'orbit'}${state.wire ? ', wireframe' : ''}`,
   ].join('\n');
 }

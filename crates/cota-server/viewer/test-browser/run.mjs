@@ -338,7 +338,6 @@ async function textureTest(browser) {
     }, [name, N]);
     const height = await grab('height');
     const image = await grab('image');
-    await page.screenshot({ path: join(out, 'viewer-texture-top.png') });
     const tex = await page.evaluate(async (n) => {
       const im = new Image();
       im.src = '/texture.png';
