@@ -1153,6 +1153,33 @@ pub struct ServeArgs {
     /// Seconds the server takes at most to answer one request (then 503).
     #[arg(long, default_value_t = 30, value_name = "S")]
     pub request_timeout_s: u64,
+    #[command(flatten)]
+    pub texture: ServeTextureArgs,
+}
+
+/// `cota serve --texture`.
+#[derive(Debug, Args)]
+#[command(next_help_heading = "Texture")]
+pub struct ServeTextureArgs {
+    /// Drape this image on the terrain in the viewer (GeoTIFF, or PNG/JPEG
+    /// with a world file or stretched over the DEM; in the DEM's CRS):
+    /// resampled at start onto the DEM's extent and served at
+    /// /texture.png. T in the viewer switches between it and the height
+    /// colours.
+    #[arg(long, value_name = "IMAGE")]
+    pub texture: Option<PathBuf>,
+    #[command(flatten)]
+    pub image: ImageArgs,
+    /// Largest side of the served texture, texels (the image's own
+    /// resolution over the DEM when that is less).
+    #[arg(long, default_value_t = 4096, value_name = "TEXELS")]
+    pub texture_max_side: usize,
+    /// Also choose paper 004's (mesh, texture) pair within this many bytes
+    /// of textured GLB, as `cota pair --budget-bytes` does, and serve its
+    /// texture level at /texture-pair.png (the viewer shows it and the
+    /// chosen mesh's figures).
+    #[arg(long, value_name = "N")]
+    pub pair_budget_bytes: Option<u64>,
 }
 
 /// `I/N` with `I < N`.

@@ -41,6 +41,15 @@ pub struct Input {
     pub seam_tolerance_m: f64,
     /// Time spent reading and mosaicking, milliseconds.
     pub read_ms: f64,
+    /// What reading warned of (each also said on standard error when it
+    /// was found), one sentence each: `cota serve` shows them in the viewer.
+    pub warnings: Vec<String>,
+}
+
+/// Says `msg` on standard error as a warning and keeps it in `kept`.
+fn warn(kept: &mut Vec<String>, msg: String) {
+    eprintln!("cota: warning: {msg}");
+    kept.push(msg);
 }
 
 /// The input files joined with " + ", for reports.
@@ -221,36 +230,42 @@ fn warn_old_zoom_flag() {
 /// Warns (stderr) when heights are large enough (only with `--any-height`)
 /// that f32 holds them to worse than a millimetre: errors and checks are
 /// against the heights as held.
-fn warn_storage_precision(grid: &HeightGrid, files: &[FileInfo]) {
+fn warn_storage_precision(grid: &HeightGrid, files: &[FileInfo], kept: &mut Vec<String>) {
     let Some((lo, hi)) = grid.valid_range() else {
         return;
     };
     let max_abs = f64::from(lo.abs().max(hi.abs()));
     let held = cota_io::f32_storage_error_m(max_abs);
     if held > 1e-3 {
-        eprintln!(
-            "cota: warning: {}: heights up to {} m are held as f32, within {} m of the file's \
+        warn(
+            kept,
+            format!(
+                "{}: heights up to {} m are held as f32, within {} m of the file's \
              values: errors and checks are against the heights as held, so a bound below \
              that says little (heights relative to an offset are not supported)",
-            name(files),
-            num(max_abs),
-            num_short(held)
+                name(files),
+                num(max_abs),
+                num_short(held)
+            ),
         );
     }
 }
 
-fn warn_unpositioned(files: &[FileInfo]) {
+fn warn_unpositioned(files: &[FileInfo], kept: &mut Vec<String>) {
     for f in files {
         let srtm = matches!(
             f.format,
             cota_io::Format::SrtmHgt | cota_io::Format::SrtmHgtZip
         );
         if srtm && !f.georef.known {
-            eprintln!(
-                "cota: warning: {}: no position in the name (expected [NS]dd[EW]ddd, e.g. N45E006.hgt): \
+            warn(
+                kept,
+                format!(
+                    "{}: no position in the name (expected [NS]dd[EW]ddd, e.g. N45E006.hgt): \
                  read without georeference, at an assumed {} m cell",
-                f.path.display(),
-                num(f.cell_size_m[0])
+                    f.path.display(),
+                    num(f.cell_size_m[0])
+                ),
             );
         }
     }
@@ -266,7 +281,12 @@ fn path_of(files: &[FileInfo], index: usize) -> String {
 /// Warns on stderr (fails with `--strict`) when overlapping tiles disagree
 /// by more than `--seam-tolerance`, naming the two files and the worst
 /// disagreement.
-fn check_seams(a: &ReadArgs, seams: Option<&SeamReport>, files: &[FileInfo]) -> anyhow::Result<()> {
+fn check_seams(
+    a: &ReadArgs,
+    seams: Option<&SeamReport>,
+    files: &[FileInfo],
+    warned: &mut Vec<String>,
+) -> anyhow::Result<()> {
     let Some(s) = seams.filter(|s| s.max_abs_diff_m > a.seam_tolerance_m) else {
         return Ok(());
     };
@@ -296,7 +316,8 @@ fn check_seams(a: &ReadArgs, seams: Option<&SeamReport>, files: &[FileInfo]) -> 
         Seam::Mean => "their mean",
         Seam::First => "the first file's value",
     };
-    eprintln!("cota: warning: {msg}; {kept} is used there (--seam; --strict refuses)");
+    let used = format!("{msg}; {kept} is used there (--seam; --strict refuses)");
+    warn(warned, used);
     Ok(())
 }
 
@@ -425,10 +446,15 @@ fn window(a: &ReadArgs, grid: HeightGrid, files: &[FileInfo]) -> anyhow::Result<
 }
 
 /// A region as an [`Input`], after the seam check and the window.
-fn input_of(a: &ReadArgs, region: Region, read_ms: f64) -> anyhow::Result<Input> {
-    warn_unpositioned(&region.files);
-    warn_storage_precision(&region.grid, &region.files);
-    check_seams(a, region.seams.as_ref(), &region.files)?;
+fn input_of(
+    a: &ReadArgs,
+    region: Region,
+    read_ms: f64,
+    mut warnings: Vec<String>,
+) -> anyhow::Result<Input> {
+    warn_unpositioned(&region.files, &mut warnings);
+    warn_storage_precision(&region.grid, &region.files, &mut warnings);
+    check_seams(a, region.seams.as_ref(), &region.files, &mut warnings)?;
     check_cell_size(&region.grid, &region.files)?;
     let grid = window(a, region.grid, &region.files)?;
     Ok(Input {
@@ -438,6 +464,7 @@ fn input_of(a: &ReadArgs, region: Region, read_ms: f64) -> anyhow::Result<Input>
         hole_samples: region.hole_samples,
         seam_tolerance_m: a.seam_tolerance_m,
         read_ms,
+        warnings,
     })
 }
 
@@ -460,7 +487,7 @@ pub fn load_groups(a: &InputArgs) -> anyhow::Result<Vec<Input>> {
     let read_ms = t0.elapsed().as_secs_f64() * 1e3;
     regions
         .into_iter()
-        .map(|region| input_of(&a.read, region, read_ms))
+        .map(|region| input_of(&a.read, region, read_ms, Vec::new()))
         .collect()
 }
 
@@ -479,20 +506,23 @@ pub fn load(a: &InputArgs) -> anyhow::Result<Input> {
 pub fn load_with(a: &InputArgs, in_turn: bool) -> anyhow::Result<Input> {
     let t0 = Instant::now();
     let (mut groups, region_opts) = read_groups(a, in_turn)?;
+    let mut notes = Vec::new();
     let region = if groups.len() == 1 {
         groups.swap_remove(0)
     } else {
         let (region, resampled) = cota_io::read::resample_join(groups, &region_opts)?;
         for r in resampled {
-            eprintln!(
-                "cota: note: {} resampled onto the finest input's grid (pixel {} to {}): it lies within {} m of its own samples",
+            let note = format!(
+                "{} resampled onto the finest input's grid (pixel {} to {}): it lies within {} m of its own samples",
                 r.files,
                 num(r.pixel),
                 num(region.grid.georef().pixel_x.abs()),
                 num_short(r.max_deviation_m)
             );
+            eprintln!("cota: note: {note}");
+            notes.push(note);
         }
         region
     };
-    input_of(&a.read, region, t0.elapsed().as_secs_f64() * 1e3)
+    input_of(&a.read, region, t0.elapsed().as_secs_f64() * 1e3, notes)
 }

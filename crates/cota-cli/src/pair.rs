@@ -22,10 +22,10 @@ use cota_core::pair::{
     choose, mesh_list_with_progress, Candidate, Choice, MeshCandidate, MeshListOptions, PairOptions,
 };
 use cota_core::quadtree::QuadOptions;
-use cota_core::texture::{drape, DrapeOptions, RgbImage, TextureQuadtree};
+use cota_core::texture::{DrapeOptions, RgbImage, TextureQuadtree};
 use cota_core::{HeightGrid, HierarchyKind, Mesh, Mesher};
 use cota_io::export::{encode_png, textured_mesh_bytes, write_glb_textured, ExportOptions};
-use cota_io::image::{place_on, read_image, Bands, ImageOptions};
+use cota_io::image::{drape_file, Bands, DrapeFileOptions, ImageOptions};
 use serde_json::{json, Value};
 
 use crate::args::{
@@ -79,34 +79,53 @@ fn read_pair(a: &PairArgs) -> anyhow::Result<(HeightGrid, RgbImage, Value)> {
     Ok((grid, texture, about))
 }
 
-/// Reads `image`, places it on `grid` and resamples it onto the texture raster.
+/// The `--bands` of `a`, parsed.
+pub fn bands_of(a: &ImageArgs) -> anyhow::Result<Option<Bands>> {
+    match &a.bands {
+        Some(b) => Ok(Some(
+            Bands::parse(b).map_err(|e| anyhow::anyhow!("--bands: {e}"))?,
+        )),
+        None => Ok(None),
+    }
+}
+
+/// Reads `image`, places it on `grid` and resamples it onto the texture
+/// raster, at most `max_side` texels a side
+/// ([`cota_io::image::drape_file`]); and what was done, as JSON.
+pub fn drape_image_within(
+    grid: &HeightGrid,
+    image: &Path,
+    a: &ImageArgs,
+    max_side: usize,
+) -> anyhow::Result<(RgbImage, Value)> {
+    let opts = DrapeFileOptions::DEFAULT
+        .with_image(ImageOptions::DEFAULT.with_bands(bands_of(a)?))
+        .with_assume_same_crs(a.assume_same_crs)
+        .with_drape(DrapeOptions::DEFAULT.with_max_side_texels(max_side));
+    let d = drape_file(image, grid, &opts)?;
+    let about = json!({
+        "image": image.display().to_string(),
+        "format": d.format,
+        "image_size": d.image_size,
+        "bands": d.bands.text(),
+        "band_count": d.band_count,
+        "image_crs": d.image_crs.to_string(),
+        "dem_crs": grid.georef().crs.to_string(),
+        "placement": d.placement_source,
+        "crs_rule": d.rule,
+        "resampling": "bilinear per channel onto the texture raster spanning the DEM's samples",
+        "texture_size": [d.texture.width(), d.texture.height()],
+    });
+    Ok((d.texture, about))
+}
+
+/// [`drape_image_within`] at the default bound ([`DrapeOptions::DEFAULT`]).
 pub fn drape_image(
     grid: &HeightGrid,
     image: &Path,
     a: &ImageArgs,
 ) -> anyhow::Result<(RgbImage, Value)> {
-    let bands = match &a.bands {
-        Some(b) => Some(Bands::parse(b).map_err(|e| anyhow::anyhow!("--bands: {e}"))?),
-        None => None,
-    };
-    let img = read_image(image, &ImageOptions::DEFAULT.with_bands(bands))?;
-    let placed = place_on(&img, grid, a.assume_same_crs)?;
-    let texture = drape(&img.rgb, &placed.placement, grid, &DrapeOptions::DEFAULT)
-        .with_context(|| format!("{}: draping on the DEM", image.display()))?;
-    let about = json!({
-        "image": image.display().to_string(),
-        "format": img.format,
-        "image_size": [img.rgb.width(), img.rgb.height()],
-        "bands": img.bands.text(),
-        "band_count": img.band_count,
-        "image_crs": img.crs.to_string(),
-        "dem_crs": grid.georef().crs.to_string(),
-        "placement": img.placement_source,
-        "crs_rule": placed.rule,
-        "resampling": "bilinear per channel onto the texture raster spanning the DEM's samples",
-        "texture_size": [texture.width(), texture.height()],
-    });
-    Ok((texture, about))
+    drape_image_within(grid, image, a, DrapeOptions::DEFAULT.max_side_texels)
 }
 
 /// The texture list: the quadtree at each tolerance, rendered and encoded.
@@ -142,12 +161,22 @@ fn texture_list(texture: &RgbImage, tolerances: &[f64]) -> anyhow::Result<Vec<Te
 
 /// The mesh list of the flags.
 fn meshes(a: &PairArgs, mesher: &Mesher<'_>) -> anyhow::Result<Vec<MeshCandidate>> {
+    mesh_list(mesher, a.mesh_tolerances_m.as_deref(), a.hierarchies)
+}
+
+/// The mesh list: `tolerances_m` (default: the height range halved) over
+/// `hierarchies`.
+fn mesh_list(
+    mesher: &Mesher<'_>,
+    tolerances_m: Option<&[f64]>,
+    hierarchies: Hierarchies,
+) -> anyhow::Result<Vec<MeshCandidate>> {
     let mut opts = MeshListOptions::for_grid(mesher);
-    if let Some(t) = &a.mesh_tolerances_m {
-        opts.tolerances_m = t.clone();
+    if let Some(t) = tolerances_m {
+        opts.tolerances_m = t.to_vec();
     }
     let quadtree = HierarchyKind::Quadtree(QuadOptions::DEFAULT);
-    opts.hierarchies = match a.hierarchies {
+    opts.hierarchies = match hierarchies {
         Hierarchies::Both => vec![HierarchyKind::Bitree, quadtree],
         Hierarchies::Bitree => vec![HierarchyKind::Bitree],
         Hierarchies::Quadtree => vec![quadtree],
@@ -156,6 +185,48 @@ fn meshes(a: &PairArgs, mesher: &Mesher<'_>) -> anyhow::Result<Vec<MeshCandidate
     let pb = crate::progress::bar(0, "listing meshes");
     let list = mesh_list_with_progress(mesher, &opts, &bytes, &pb.report());
     list.context("the mesh list")
+}
+
+/// The texture tolerances of `cota pair`'s default list, levels (its
+/// `--texture-tolerances` default).
+pub const DEFAULT_TEXTURE_TOLERANCES: [f64; 12] = [
+    0.0, 2.0, 4.0, 8.0, 12.0, 16.0, 24.0, 32.0, 48.0, 64.0, 96.0, 128.0,
+];
+
+/// Paper 004's optimum pair for `grid` and its texture raster within
+/// `budget_bytes` of textured GLB, from `cota pair`'s default lists (both
+/// hierarchies, [`DEFAULT_TEXTURE_TOLERANCES`], weights 1): the chosen
+/// texture level's PNG and the pair as [`pair_json`] says it.
+pub fn best_pair(
+    grid: &HeightGrid,
+    texture: &RgbImage,
+    budget_bytes: u64,
+) -> anyhow::Result<(Vec<u8>, Value)> {
+    let room = budget_bytes
+        .checked_sub(FRAME_RESERVE_BYTES)
+        .filter(|&r| r > 0);
+    let Some(room) = room else {
+        anyhow::bail!("--pair-budget-bytes: expected more than the {FRAME_RESERVE_BYTES} bytes kept for the GLB's header and JSON, found {budget_bytes}");
+    };
+    let textures = texture_list(texture, &DEFAULT_TEXTURE_TOLERANCES)?;
+    let mesher = Mesher::new(grid);
+    let meshes = mesh_list(&mesher, None, Hierarchies::Both)?;
+    let mc: Vec<Candidate> = meshes.iter().map(|m| m.candidate()).collect();
+    let tc: Vec<Candidate> = textures.iter().map(|t| t.candidate()).collect();
+    let choice = choose(&mc, &tc, room, &PairOptions::DEFAULT).map_err(|e| match e {
+        cota_core::pair::PairError::NothingFits { smallest, .. } if smallest < u64::MAX => anyhow::anyhow!(
+            "--pair-budget-bytes: no (mesh, texture) pair fits in {budget_bytes} bytes: the smallest needs {}",
+            smallest + FRAME_RESERVE_BYTES
+        ),
+        other => anyhow::anyhow!("--pair-budget-bytes: choosing the pair: {other}"),
+    })?;
+    let p = choice.optimum;
+    let mut about = pair_json(&p, &meshes, &textures);
+    about["budget_bytes"] = budget_bytes.into();
+    about["meshes_listed"] = meshes.len().into();
+    about["textures_listed"] = textures.len().into();
+    let png = textures.into_iter().nth(p.texture).map(|t| t.png);
+    Ok((png.unwrap_or_default(), about))
 }
 
 /// Every distinct pair total up to the largest, each chosen again: the

@@ -1,5 +1,7 @@
 //! `cota serve`: read and mosaic DEM files like `cota mesh` (or take a
-//! `.cstream`), listen at once, and make in the background what takes time:
+//! `.cstream`); drape `--texture` on the DEM (and choose paper 004's pair
+//! with `--pair-budget-bytes`) before listening, so that a bad image stops
+//! the start; listen, and make in the background what takes time:
 //! the progressive stream, the tiles' hierarchy (tiles made on demand; or a
 //! `cota tiles` directory with `--tiles`) and the shaded-relief imagery.
 //! Until each is ready its routes answer 503 with `Retry-After`. Stops on
@@ -16,12 +18,13 @@ use cota_core::tiles::{LatticeOptions, TilerOptions, TilesError};
 use cota_core::HeightGrid;
 use cota_io::stream_file::MAGIC;
 use cota_io::tiles::{PyramidOptions, TileExtensions};
+use cota_server::texture::{PAIR_URL, TEXTURE_URL};
 use cota_server::{
     DemandTileSource, DirTileSource, Imagery, MbtilesTileSource, ServeError, ServeOptions,
-    ServerState, StreamAsset, TileSource,
+    ServerState, StreamAsset, TextureLevel, Textures, TileSource,
 };
 
-use crate::args::ServeArgs;
+use crate::args::{ServeArgs, ServeTextureArgs, Voids};
 use crate::input::{fill, load, name};
 
 /// The extensions and encoding of tiles made on demand: normals and
@@ -51,19 +54,113 @@ fn stream_file(a: &ServeArgs) -> Option<PathBuf> {
 }
 
 /// Reads the input in the foreground (errors name the file before the
-/// server listens); a `.cstream` is checked by decoding it.
-fn source_of(a: &ServeArgs) -> anyhow::Result<Source> {
+/// server listens); a `.cstream` is checked by decoding it. Also what the
+/// reading warned of, and the voids filled.
+fn source_of(a: &ServeArgs) -> anyhow::Result<(Source, Vec<String>)> {
     if let Some(f) = stream_file(a) {
         let cap = cota_io::limits::max_file_bytes(&cota_io::ReadOptions::DEFAULT);
         let bytes = cota_io::limits::read_file_capped(&f, cap)
             .with_context(|| format!("reading {}", f.display()))?;
         let s = StreamAsset::from_stream_bytes(bytes, &f.display().to_string())?;
-        return Ok(Source::Stream(Box::new(s)));
+        return Ok((Source::Stream(Box::new(s)), Vec::new()));
     }
     let input = load(&a.input)?;
+    let mut warnings = input.warnings;
     let mut grid = input.grid;
-    fill(&mut grid, a.voids)?;
-    Ok(Source::Grid(Arc::new(grid), name(&input.files)))
+    let report = fill(&mut grid, a.voids)?;
+    if report.filled > 0 {
+        let how = match a.voids {
+            Voids::Hole => "filled with a constant height in the stream (no tiles are made)",
+            Voids::Idw => "filled by inverse-distance weighting",
+            _ => "filled harmonically (smooth surfaces from the void's rim)",
+        };
+        warnings.push(format!(
+            "{}: {} void samples (no data) in {} areas, {how} (--voids)",
+            name(&input.files),
+            report.filled,
+            report.components
+        ));
+    }
+    Ok((Source::Grid(Arc::new(grid), name(&input.files)), warnings))
+}
+
+/// `--bands`, `--assume-same-crs`, `--texture-max-side` and
+/// `--pair-budget-bytes` need `--texture`; checked before any reading.
+fn check_texture_flags(t: &ServeTextureArgs) -> anyhow::Result<()> {
+    if t.texture.is_none() {
+        let alone = [
+            ("--bands", t.image.bands.is_some()),
+            ("--assume-same-crs", t.image.assume_same_crs),
+            ("--pair-budget-bytes", t.pair_budget_bytes.is_some()),
+        ];
+        if let Some((flag, _)) = alone.iter().find(|f| f.1) {
+            anyhow::bail!("{flag}: expected --texture IMAGE with it, found none");
+        }
+    }
+    anyhow::ensure!(
+        t.texture_max_side >= 1,
+        "--texture-max-side: expected 1 texel or more, found 0"
+    );
+    crate::pair::bands_of(&t.image)?;
+    Ok(())
+}
+
+/// `--texture` draped on the grid, at most `--texture-max-side` a side, and
+/// with `--pair-budget-bytes` the pair's texture level; in the foreground.
+fn make_textures(t: &ServeTextureArgs, source: &Source) -> anyhow::Result<Option<Textures>> {
+    let Some(image) = &t.texture else {
+        return Ok(None);
+    };
+    let Source::Grid(grid, _) = source else {
+        anyhow::bail!(
+            "--texture {}: expected a DEM to drape it on, found a .cstream (it holds no grid)",
+            image.display()
+        );
+    };
+    let time = Instant::now();
+    let (rgb, about) = crate::pair::drape_image_within(grid, image, &t.image, t.texture_max_side)?;
+    let level = TextureLevel::from_rgb(&rgb, TEXTURE_URL, about)?;
+    let m = level.meta();
+    println!(
+        "texture     {} (bands {}): {} x {} texels, {} bytes of PNG, ready in {:.0} ms",
+        image.display(),
+        m.about["bands"].as_str().unwrap_or(""),
+        m.width,
+        m.height,
+        m.bytes,
+        ms(time)
+    );
+    let pair = match t.pair_budget_bytes {
+        Some(n) => Some(make_pair(grid, &rgb, n)?),
+        None => None,
+    };
+    Ok(Some(Textures { image: level, pair }))
+}
+
+/// Paper 004's pair within `budget` bytes; its texture level.
+fn make_pair(
+    grid: &HeightGrid,
+    rgb: &cota_core::texture::RgbImage,
+    budget: u64,
+) -> anyhow::Result<TextureLevel> {
+    let time = Instant::now();
+    let (png, about) = crate::pair::best_pair(grid, rgb, budget)?;
+    println!(
+        "pair        within {budget} bytes: {} at {} m ({} triangles) + texture at tolerance {} ({} leaves), {} bytes; chosen in {:.0} ms",
+        about["hierarchy"].as_str().unwrap_or(""),
+        about["tolerance_m"],
+        about["triangles"],
+        about["texture_tolerance"],
+        about["leaves"],
+        about["bytes"],
+        ms(time)
+    );
+    Ok(TextureLevel::from_png(
+        png,
+        [rgb.width(), rgb.height()],
+        PAIR_URL,
+        about,
+    ))
 }
 
 /// The addresses `--addr` names: an IP address and port, or a host name
@@ -239,12 +336,16 @@ fn demand_source(grid: &HeightGrid) -> Result<DemandTileSource, ServeError> {
 pub fn run(a: &ServeArgs) -> anyhow::Result<ExitCode> {
     let t = Instant::now();
     let addrs = addresses(&a.addr)?;
-    let source = source_of(a)?;
-    let state = ServerState::starting(options(a));
+    check_texture_flags(&a.texture)?;
+    let (source, warnings) = source_of(a)?;
+    let mut state = ServerState::starting(options(a)).with_warnings(warnings);
+    if let Some(textures) = make_textures(&a.texture, &source)? {
+        state = state.with_textures(textures);
+    }
     if let Some(dir) = &a.tiles {
         state.set_tiles(Ok(Some(open_tiles(dir)?)));
     }
-    let holes = matches!(a.voids, crate::args::Voids::Hole);
+    let holes = matches!(a.voids, Voids::Hole);
     start_background(&state, source, a.tiles.is_some(), holes);
     cota_server::run(&addrs, state, |bound| {
         let urls: Vec<String> = bound.iter().map(|b| format!("http://{b}/")).collect();

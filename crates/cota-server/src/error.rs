@@ -58,6 +58,9 @@ pub enum ServeError {
     /// Shaded relief cannot be drawn from the source (at start).
     #[error("imagery: {0}")]
     Relief(#[from] cota_core::relief::ReliefError),
+    /// A texture cannot be encoded (at start).
+    #[error("texture: {0}")]
+    Texture(#[from] cota_io::export::ExportError),
     /// Reading a file failed.
     #[error("{}: {source}", path.display())]
     Io {
@@ -119,6 +122,7 @@ pub fn status_of(e: &ServeError) -> StatusCode {
         | ServeError::BadTileSet { .. }
         | ServeError::Tiling(_)
         | ServeError::Relief(_)
+        | ServeError::Texture(_)
         | ServeError::Io { .. }
         | ServeError::BadStream { .. }
         | ServeError::Bind { .. }

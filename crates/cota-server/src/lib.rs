@@ -8,13 +8,16 @@
 //! * `/stream`: the `.cstream` bytes, with HTTP ranges (RFC 9110: one range,
 //!   several as `multipart/byteranges`, unusable ones ignored): a prefix
 //!   ending on a step boundary decodes to a coarser crack-free mesh.
-//! * `/meta.json`: size, cell size, steps (end offsets, stated errors).
+//! * `/meta.json`: size, cell size, steps (end offsets, stated errors), the
+//!   textures, and the warnings the input gave ([`ServerState::with_warnings`]).
 //! * `/tiles/layer.json` (and `/layer.json`), `/tiles/{z}/{x}/{y}.terrain`:
 //!   quantized-mesh tiles from a [`TileSource`]: a `cota tiles` directory
 //!   ([`DirTileSource`]), an MBTiles archive ([`MbtilesTileSource`]) or tiles made on demand from the in-memory
 //!   hierarchy ([`DemandTileSource`]); see [`tiles`] for the URL layout.
 //! * `/imagery.json`, `/imagery/{z}/{x}/{y}.png`: shaded-relief imagery
 //!   drawn from the DEM ([`Imagery`]), in the terrain tiles' geographic tiling.
+//! * `/texture.png`, `/texture-pair.png`: an image draped on the terrain by
+//!   the viewer, and paper 004's chosen texture level ([`Textures`]).
 //! * `/health`: liveness, what is served or still being made, the work counters.
 //!
 //! Work is bounded ([`ServeOptions`]): tiles are made on a fixed pool behind
@@ -52,6 +55,7 @@ mod pool;
 pub mod range;
 mod routes;
 pub mod stream;
+pub mod texture;
 pub mod tiles;
 mod work;
 
@@ -67,6 +71,7 @@ pub use listen::DRAIN_S;
 pub use options::ServeOptions;
 pub use routes::{router, MAX_URI_BYTES};
 pub use stream::{StreamAsset, StreamMeta};
+pub use texture::{TextureLevel, Textures};
 pub use tiles::{DemandTileSource, DirTileSource, MbtilesTileSource, Tile, TileId, TileSource};
 
 use later::Later;
@@ -81,6 +86,8 @@ pub struct ServerState {
     stream: Arc<Later<StreamAsset>>,
     tiles: Arc<Later<Option<Tiles>>>,
     imagery: Arc<Later<Option<Arc<Imagery>>>>,
+    textures: Option<Arc<Textures>>,
+    warnings: Arc<Vec<String>>,
     work: Arc<Work>,
     options: ServeOptions,
 }
@@ -107,6 +114,8 @@ impl std::fmt::Debug for ServerState {
             .field("stream", &self.stream.word())
             .field("tiles", &self.tiles.word())
             .field("imagery", &self.imagery.word())
+            .field("textures", &self.textures.is_some())
+            .field("warnings", &self.warnings.len())
             .field("options", &self.options)
             .finish()
     }
@@ -131,6 +140,8 @@ impl ServerState {
             stream: Later::pending("the stream"),
             tiles: Later::pending("the tiles"),
             imagery: Later::pending("the imagery"),
+            textures: None,
+            warnings: Arc::new(Vec::new()),
             work: Arc::new(Work::new(&options)),
             options,
         }
@@ -155,6 +166,26 @@ impl ServerState {
     pub fn with_imagery(mut self, imagery: Imagery) -> Self {
         self.imagery = Later::ready("the imagery", Some(Arc::new(imagery)));
         self
+    }
+
+    /// Adds the textures the viewer drapes (`/texture.png`,
+    /// `/texture-pair.png`, described in `/meta.json`).
+    pub fn with_textures(mut self, textures: Textures) -> Self {
+        self.textures = Some(Arc::new(textures));
+        self
+    }
+
+    /// Adds what the input gave warning of (seams between tiles that
+    /// disagree, voids filled, heights held as f32 past a millimetre, ...),
+    /// one sentence each: `/meta.json` carries them for the viewer's panel.
+    pub fn with_warnings(mut self, warnings: Vec<String>) -> Self {
+        self.warnings = Arc::new(warnings);
+        self
+    }
+
+    /// The warnings served in `/meta.json`.
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// Sets the stream (`Err`: why it could not be made; `/stream` then

@@ -55,6 +55,8 @@ pub fn router(state: ServerState) -> Router {
         .route("/tiles/{z}/{x}/{y}", get(tile))
         .route("/imagery.json", get(imagery_json))
         .route("/imagery/{z}/{x}/{y}", get(imagery_tile))
+        .route(crate::texture::TEXTURE_URL, get(texture_image))
+        .route(crate::texture::PAIR_URL, get(texture_pair))
         .fallback(embedded)
         .layer(middleware::from_fn_with_state(state.clone(), check_request))
         .with_state(state)
@@ -192,6 +194,8 @@ async fn health(State(s): State<ServerState>) -> Response {
         "steps": stream.map(|a| a.meta().steps.len()),
         "tiles": served(&s.tiles),
         "imagery": served(&s.imagery),
+        "texture": s.textures.as_ref().map_or("no", |t| if t.pair.is_some() { "yes, and a pair" } else { "yes" }),
+        "warnings": s.warnings.len(),
         "work": s.work.summary(),
     });
     let mut r = axum::Json(body).into_response();
@@ -207,8 +211,16 @@ async fn meta(State(s): State<ServerState>, headers: HeaderMap) -> Result<Respon
     if let Some(o) = v.as_object_mut() {
         o.insert("tiles".into(), (served(&s.tiles) != "no").into());
         o.insert("imagery".into(), (served(&s.imagery) != "no").into());
+        let tex = s.textures.as_ref().map(|t| t.meta());
+        let tex =
+            serde_json::to_value(tex).map_err(|e| ServeError::Internal(format!("meta: {e}")))?;
+        o.insert("texture".into(), tex);
+        o.insert("warnings".into(), s.warnings.as_slice().into());
     }
     let body = serde_json::to_vec(&v).map_err(|e| ServeError::Internal(format!("meta: {e}")))?;
+    // The ETag of the body, not of the stream: the same stream served with
+    // another texture, other warnings or tiles must not be answered 304.
+    let etag = crate::tiles::etag_of(&body);
     Ok(cached(
         &headers,
         Bytes::from(body),
@@ -216,7 +228,7 @@ async fn meta(State(s): State<ServerState>, headers: HeaderMap) -> Result<Respon
             (header::CONTENT_TYPE, "application/json"),
             (header::CACHE_CONTROL, "no-cache"),
         ],
-        a.etag(),
+        &etag,
     ))
 }
 
@@ -370,6 +382,33 @@ async fn imagery_tile(
     img.check(id)?;
     let t: Tile = s.work.get(Key::Imagery(id), move || img.tile(id)).await?;
     Ok(tile_response(&headers, t.bytes, &t.etag, "image/png", &[]))
+}
+
+/// `/texture.png`: the image draped on the terrain.
+async fn texture_image(State(s): State<ServerState>, headers: HeaderMap) -> Result<Response> {
+    let t = s.textures.as_ref().ok_or_else(|| {
+        ServeError::NotFound("no texture: `cota serve DEM --texture IMAGE` drapes one".into())
+    })?;
+    Ok(png_response(&headers, &t.image))
+}
+
+/// `/texture-pair.png`: paper 004's chosen texture level.
+async fn texture_pair(State(s): State<ServerState>, headers: HeaderMap) -> Result<Response> {
+    let t = s.textures.as_ref().and_then(|t| t.pair.as_ref());
+    let t = t.ok_or_else(|| {
+        ServeError::NotFound(
+            "no pair: `cota serve DEM --texture IMAGE --pair-budget-bytes N` chooses one".into(),
+        )
+    })?;
+    Ok(png_response(&headers, t))
+}
+
+fn png_response(headers: &HeaderMap, t: &crate::TextureLevel) -> Response {
+    let extra = [
+        (header::CONTENT_TYPE, "image/png"),
+        (header::CACHE_CONTROL, "no-cache"),
+    ];
+    cached(headers, t.png().clone(), &extra, t.etag())
 }
 
 fn tile_response(

@@ -1,7 +1,7 @@
 //! `cota serve` refuses bad inputs at start, naming them, with a non-zero
 //! exit (the server itself is tested in cota-server's tests and, end to end
 //! with a browser, by crates/cota-server/viewer/test-browser/run.mjs).
-#![allow(clippy::unwrap_used, reason = "tests")]
+#![allow(clippy::unwrap_used, clippy::panic, reason = "tests")]
 
 use crate::common;
 
@@ -48,4 +48,146 @@ fn a_corrupt_stream_is_an_error() {
         err.contains("bad.cstream") && err.contains("truncated"),
         "{err}"
     );
+}
+
+fn s(p: &std::path::Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// `cota serve ARGS --addr 127.0.0.1:0` refused before listening, its
+/// message holding every one of `words`.
+fn refused(args: &[&str], words: &[&str]) {
+    let mut all = vec!["serve"];
+    all.extend_from_slice(args);
+    all.extend(["--addr", "127.0.0.1:0"]);
+    let out = cota(&all);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{all:?} served");
+    assert!(words.iter().all(|w| err.contains(w)), "{all:?}: {err}");
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("listening"));
+}
+
+#[test]
+fn a_bad_texture_is_refused_before_serving() {
+    let dir = tempfile::tempdir().unwrap();
+    let (dem, img) = (
+        common::fixture("olinda_dem_utm25s.tif"),
+        common::fixture("L7_ETMs.tif"),
+    );
+    let none = dir.path().join("none.tif");
+    refused(&[s(&dem), "--texture", s(&none)], &["none.tif"]);
+    // Not an image; bands the image lacks; bands that do not parse.
+    let junk = dir.path().join("junk.png");
+    std::fs::write(&junk, b"not an image at all").unwrap();
+    refused(
+        &[s(&dem), "--texture", s(&junk)],
+        &["junk.png", "expected an image"],
+    );
+    refused(
+        &[s(&dem), "--texture", s(&img), "--bands", "9,2,1"],
+        &["L7_ETMs.tif", "9,2,1", "found 6 bands"],
+    );
+    refused(
+        &[s(&dem), "--texture", s(&img), "--bands", "red"],
+        &["--bands", "red"],
+    );
+    refused(&[s(&dem), "--bands", "3,2,1"], &["--bands", "--texture"]);
+    // An image in another CRS, and one that lies elsewhere (a world file
+    // placing the JPEG far from the DEM).
+    let srtm = common::fixture("S29W072.hgt.zip");
+    refused(
+        &[s(&srtm), "--texture", s(&img), "--bands", "3,2,1"],
+        &["L7_ETMs.tif", "EPSG:4326", "EPSG:31985"],
+    );
+    let far = dir.path().join("far.jpg");
+    std::fs::copy(common::fixture("L7_ETMs_321.jpg"), &far).unwrap();
+    std::fs::write(
+        dir.path().join("far.jgw"),
+        "28.5\n0\n0\n-28.5\n1000\n2000\n",
+    )
+    .unwrap();
+    refused(
+        &[s(&dem), "--texture", s(&far), "--assume-same-crs"],
+        &["far.jpg", "expected an image covering the DEM"],
+    );
+}
+
+/// Reads `cota serve`'s standard output until its `listening` line; the URL.
+fn listening(child: &mut std::process::Child) -> String {
+    use std::io::BufRead;
+    let out = child.stdout.take().unwrap();
+    let mut lines = std::io::BufReader::new(out).lines();
+    let line = lines
+        .find_map(|l| l.ok().filter(|l| l.starts_with("listening")))
+        .unwrap();
+    std::thread::spawn(move || lines.for_each(drop));
+    let url = line.split_whitespace().nth(1).unwrap();
+    url.trim_start_matches("http://")
+        .trim_end_matches('/')
+        .into()
+}
+
+/// `GET path` from `addr` (HTTP/1.1, one connection): status and body,
+/// waiting out 503 answers (the stream still being made).
+fn get(addr: &str, path: &str) -> (u16, Vec<u8>) {
+    use std::io::{Read, Write};
+    for _ in 0..600 {
+        let mut c = std::net::TcpStream::connect(addr).unwrap();
+        let req = format!("GET {path} HTTP/1.1\r\nHost: t\r\nConnection: close\r\n\r\n");
+        c.write_all(req.as_bytes()).unwrap();
+        let mut all = Vec::new();
+        c.read_to_end(&mut all).unwrap();
+        let end = all.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+        let status: u16 = String::from_utf8_lossy(&all[9..12]).parse().unwrap();
+        if status != 503 {
+            return (status, all[end + 4..].to_vec());
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    panic!("{path}: 503 for a minute");
+}
+
+#[test]
+fn the_texture_and_the_inputs_warnings_are_served() {
+    let (dem, img) = (
+        common::fixture("olinda_dem_utm25s.tif"),
+        common::fixture("L7_ETMs.tif"),
+    );
+    let bin = env!("CARGO_BIN_EXE_cota");
+    let mut child = std::process::Command::new(bin)
+        .args(["serve", s(&dem), "--texture", s(&img), "--bands", "3,2,1"])
+        .args(["--texture-max-side", "100", "--addr", "127.0.0.1:0"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let addr = listening(&mut child);
+    let (status, png) = get(&addr, "/texture.png");
+    let (_, meta) = get(&addr, "/meta.json");
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(status, 200);
+    // The PNG's IHDR: 100 x 100 (the image's own 347 held to the bound).
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let be = |k: usize| u32::from_be_bytes(png[k..k + 4].try_into().unwrap());
+    assert_eq!((be(16), be(20)), (100, 100));
+    let meta: serde_json::Value = serde_json::from_slice(&meta).unwrap();
+    assert_eq!(meta["texture"]["image"]["about"]["bands"], "3,2,1");
+    assert_eq!(meta["warnings"], serde_json::json!([]));
+    // The bundled SRTM tile has 21 voids: filled, and said in the meta.
+    let srtm = common::fixture("S29W072.hgt.zip");
+    let mut child = std::process::Command::new(bin)
+        .args(["serve", s(&srtm), "--addr", "127.0.0.1:0"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let addr = listening(&mut child);
+    let (_, meta) = get(&addr, "/meta.json");
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let meta: serde_json::Value = serde_json::from_slice(&meta).unwrap();
+    let w = meta["warnings"].as_array().unwrap();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].as_str().unwrap().contains("21 void samples"), "{w:?}");
 }

@@ -18,10 +18,12 @@
 //!   both.
 //!
 //! The resampling itself (bilinear per channel onto the texture raster
-//! that spans the DEM's samples) is `cota_core::texture::drape`.
+//! that spans the DEM's samples) is `cota_core::texture::drape`;
+//! [`drape_file`] does the three steps in one call.
 
 pub mod crs;
 mod decode;
+mod drape;
 pub mod error;
 mod world;
 
@@ -31,6 +33,7 @@ use cota_core::texture::{ImagePlacement, RgbImage};
 use cota_core::{Crs, HeightGrid};
 
 pub use self::decode::MAX_PIXELS;
+pub use self::drape::{drape_file, DrapeFileOptions, Draped};
 pub use self::error::{ImageError, ImageErrorKind};
 
 /// Options of [`read_image`].

@@ -8,3 +8,4 @@ mod imagery;
 mod loopback;
 mod mbtiles;
 mod router;
+mod texture;

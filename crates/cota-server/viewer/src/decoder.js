@@ -494,13 +494,13 @@ function parseHead(b) {
   if (kind === 1) {
     if (rest.length !== 4) throw new StreamError(`bad stream head: expected ${fixed + 4} bytes, found ${b.length}`);
     georef.crs = { epsg: dv.getUint32(fixed, true) };
-  } else if (kind === 2 || kind === 3) {
+  } else if (kind === 2 || kind === 3 || kind === 4) {
     if (rest.length < 2) throw new StreamError(`bad stream head: expected ${fixed + 2} bytes, found ${b.length}`);
     const len = rest[0] | (rest[1] << 8);
     if (rest.length !== 2 + len) throw new StreamError(`bad stream head: expected ${fixed + 2 + len} bytes, found ${b.length}`);
-    georef.crs = { [kind === 2 ? 'geographic' : 'projected']: new TextDecoder().decode(rest.subarray(2)) };
+    georef.crs = { [['geographic', 'projected', 'proj'][kind - 2]]: new TextDecoder().decode(rest.subarray(2)) };
   } else if (kind !== 0) {
-    throw new StreamError(`bad stream CRS: expected kind 0, 1, 2 or 3, found kind ${kind}`);
+    throw new StreamError(`bad stream CRS: expected kind 0, 1, 2, 3 or 4 (a PROJ definition), found kind ${kind}`);
   }
   return { header, steps, georef };
 }

@@ -1,7 +1,8 @@
 // cota's browser viewer: the progressive stream decoded in a Web Worker
 // (worker.js), remeshed every frame by screen-space error (lod.js), drawn by
-// three.js with a hillshade, a wireframe toggle and an overlay of what it
-// costs. Positions are metres relative to the grid's centre (x east, y north,
+// three.js with a hillshade (height colours, or an image the server drapes:
+// `cota serve --texture`, T switches), a wireframe toggle, an overlay of what
+// it costs and a panel of the warnings the server's input gave. Positions are metres relative to the grid's centre (x east, y north,
 // z up), so float32 vertices stay exact to a centimetre.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
@@ -14,6 +15,9 @@ const state = {
   minClearance: Infinity,
   fly: false,
   wire: false,
+  // 'height' (colours by height), 'image' (/texture.png) or 'pair' (/texture-pair.png).
+  colours: 'height',
+  textures: [],
   targetPx: Number(new URLSearchParams(location.search).get('px')) || 1,
   received: 0,
   total: 0,
@@ -40,6 +44,8 @@ const api = {
   },
   frames: (n = 1) => new Promise((resolve) => waiters.push({ frame: frameNo + n, resolve })),
   pixels: () => pixels(),
+  // Mean colour of the terrain pixels, and an n × n grid of mean colours over their bounding box (row 0 at the top).
+  colourGrid: (n) => colourGrid(n),
   ground: (x, y) => groundZ(x, y),
   // Lowest eye height above the ground under it over the frames driven by the
   // person's controls since the last call (then reset); the default view back.
@@ -64,6 +70,12 @@ const api = {
   fly: (on) => {
     if (state.fly !== on) toggleFly();
   },
+  // Shows 'height', 'image' or 'pair' colours (those served); resolves once its texture is loaded.
+  colours: (name) => setColours(name),
+  // Bounding boxes of the page's panels (for tests: nothing overlaps).
+  panels: () => Object.fromEntries([...document.querySelectorAll('.panel, #overlay, #controls')]
+    .filter((e) => !e.hidden && e.offsetParent !== null)
+    .map((e) => [e.id, e.getBoundingClientRect().toJSON()])),
 };
 window.cota = api;
 const waiters = [];
@@ -98,6 +110,10 @@ const uniforms = {
   uWire: { value: 0 },
   // ?facets: the old per-triangle shading from screen-space derivatives (for comparison).
   uFacets: { value: new URLSearchParams(location.search).has('facets') ? 1 : 0 },
+  // The draped texture and whether it is shown; uGrid: samples across and down, cell size (m).
+  uTex: { value: null },
+  uTexOn: { value: 0 },
+  uGrid: { value: new THREE.Vector4(2, 2, 1, 1) },
 };
 const vertexShader = `
 in vec2 morph;
@@ -118,18 +134,28 @@ uniform vec3 uSun;
 uniform vec2 uZRange;
 uniform float uWire;
 uniform float uFacets;
+uniform sampler2D uTex;
+uniform float uTexOn;
+uniform vec4 uGrid;
 in vec3 vWorld;
 in vec3 vNormal;
 void main() {
   if (uWire > 0.5) { fragColor = vec4(0.07, 0.09, 0.11, 1.0); return; }
   vec3 n = uFacets > 0.5 || dot(vNormal, vNormal) < 1e-6 ? normalize(cross(dFdx(vWorld), dFdy(vWorld))) : normalize(vNormal);
   if (n.z < 0.0) n = -n;
+  float shade = clamp(dot(n, uSun), 0.0, 1.0);
+  if (uTexOn > 0.5) {
+    // The texture spans the samples: u = column / (W - 1), v = row / (H - 1), row 0 north.
+    vec2 cr = vec2(vWorld.x / uGrid.z + 0.5 * (uGrid.x - 1.0), 0.5 * (uGrid.y - 1.0) - vWorld.y / uGrid.w);
+    vec3 t = texture(uTex, cr / max(uGrid.xy - 1.0, vec2(1.0))).rgb;
+    fragColor = vec4(min(t * (0.7 + 0.45 * shade), vec3(1.0)), 1.0);
+    return;
+  }
   if (vWorld.z <= 0.0) {
     float s = clamp(dot(normalize(vec3(0.0, 0.0, 1.0)), uSun), 0.0, 1.0);
     fragColor = vec4(vec3(0.16, 0.34, 0.52) * (0.6 + 0.4 * s), 1.0);
     return;
   }
-  float shade = clamp(dot(n, uSun), 0.0, 1.0);
   float h = clamp((vWorld.z - uZRange.x) / max(uZRange.y - uZRange.x, 1.0), 0.0, 1.0);
   vec3 low = vec3(0.30, 0.50, 0.28), mid = vec3(0.70, 0.63, 0.42), high = vec3(0.96, 0.95, 0.92);
   vec3 c = h < 0.5 ? mix(low, mid, h * 2.0) : mix(mid, high, h * 2.0 - 1.0);
@@ -230,6 +256,7 @@ const keys = new Set();
 const look = { yaw: 0, pitch: 0, dragging: false, x: 0, y: 0 };
 window.addEventListener('keydown', (e) => {
   keys.add(e.code);
+  if (e.code === 'KeyT') nextColours();
   if (e.code === 'KeyF') toggleFly();
   if (e.code === 'KeyG') toggleWire();
   if (e.code === 'BracketLeft') setTarget(state.targetPx / 2);
@@ -254,6 +281,7 @@ window.addEventListener('pointermove', (e) => {
 });
 document.getElementById('mode').onclick = () => toggleFly();
 document.getElementById('wire').onclick = () => toggleWire();
+document.getElementById('colours').onclick = () => nextColours();
 document.getElementById('finer').onclick = () => setTarget(state.targetPx / 2);
 document.getElementById('coarser').onclick = () => setTarget(state.targetPx * 2);
 
@@ -264,6 +292,86 @@ function setTarget(px) {
 function toggleWire() {
   state.wire = !state.wire;
   wireMesh.visible = state.wire;
+}
+
+// ---- textures ------------------------------------------------------------------
+
+const loaded = new Map();
+
+/** The texture of `level` (meta.texture.image or .pair), loaded once. */
+function loadTexture(level) {
+  if (!loaded.has(level.url)) {
+    loaded.set(level.url, new Promise((ok, no) => {
+      new THREE.TextureLoader().load(level.url, (t) => {
+        t.flipY = false; // row 0 of the PNG is the north row, v = 0
+        t.colorSpace = THREE.NoColorSpace; // drawn as the image's own levels
+        t.anisotropy = renderer.capabilities.getMaxAnisotropy();
+        t.generateMipmaps = true;
+        t.minFilter = THREE.LinearMipmapLinearFilter;
+        t.needsUpdate = true;
+        ok(t);
+      }, undefined, () => no(new Error(`${level.url}: cannot load the texture`)));
+    }));
+  }
+  return loaded.get(level.url);
+}
+
+/** Switches to the next colours: height, the image, the pair's texture level. */
+function nextColours() {
+  const all = ['height', ...state.textures];
+  setColours(all[(all.indexOf(state.colours) + 1) % all.length]).catch((e) => fail(String(e.message || e)));
+}
+
+async function setColours(name) {
+  const level = name === 'height' ? null : meta && meta.texture && meta.texture[name];
+  if (name !== 'height' && !level) throw new Error(`no ${name} texture served`);
+  state.colours = name;
+  if (level) {
+    const t = await loadTexture(level);
+    if (state.colours !== name) return;
+    uniforms.uTex.value = t;
+  }
+  uniforms.uTexOn.value = level ? 1 : 0;
+  showColours();
+}
+
+/** The legend and the button say which colours are drawn. */
+function showColours() {
+  const name = state.colours;
+  document.getElementById('colours').textContent = { height: 'heights', image: 'image', pair: 'pair' }[name];
+  document.getElementById('legend-height').hidden = name !== 'height';
+  const cap = document.getElementById('legend-texture');
+  cap.hidden = name === 'height';
+  const pair = document.getElementById('pair');
+  pair.hidden = name !== 'pair';
+  if (name === 'height') return;
+  const a = meta.texture.image.about;
+  const file = String(a.image || '').split(/[\\/]/).pop();
+  const lv = meta.texture[name];
+  cap.textContent = `colours: ${file}\nbands ${a.bands}, ${lv.width} × ${lv.height} texels\n${name === 'pair' ? 'the pair\'s texture level' : 'the whole image'} · T: next`;
+  if (name === 'pair') {
+    const p = lv.about;
+    const n = (v) => Number(v).toLocaleString('en');
+    pair.textContent = `paper 004's pair within ${n(p.budget_bytes)} bytes (${n(p.bytes)} used)\n`
+      + `mesh     ${p.hierarchy} at ${p.tolerance_m} m: ${n(p.triangles)} triangles, ${n(p.mesh_bytes)} B\n`
+      + `texture  tolerance ${p.texture_tolerance}: ${n(p.leaves)} flat leaves, ${n(p.texture_bytes)} B\n`
+      + `chosen of ${p.meshes_listed} meshes × ${p.textures_listed} textures (the viewer's mesh\nstill follows the screen error; the pair's mesh is its figures)`;
+  }
+}
+
+/** The warnings the server's input gave, in their panel (hidden when none). */
+function showWarnings() {
+  const w = meta.warnings || [];
+  const el = document.getElementById('warnings');
+  el.hidden = w.length === 0;
+  if (!w.length) return;
+  document.getElementById('warnings-head').textContent = `⚠ ${w.length} warning${w.length > 1 ? 's' : ''} about the input`;
+  const ul = document.getElementById('warnings-list');
+  ul.replaceChildren(...w.map((t) => {
+    const li = document.createElement('li');
+    li.textContent = t;
+    return li;
+  }));
 }
 
 function toggleFly() {
@@ -396,8 +504,9 @@ function setupFurniture() {
   const wkm = (meta.width * meta.cell_size_m[0]) / 1000, hkm = (meta.height * meta.cell_size_m[1]) / 1000;
   const b = meta.lon_lat_bounds;
   const ext = b ? `\n${deg(b[0], 'E', 'W', 3)} … ${deg(b[2], 'E', 'W', 3)}, ${deg(b[3], 'N', 'S', 3)} … ${deg(b[1], 'N', 'S', 3)}` : '';
+  const names = meta.name.split(' + ').map((f) => f.split(/[\\/]/).pop()).join(' + ');
   document.getElementById('dataset').textContent =
-    `${meta.name}\n${meta.width} × ${meta.height} samples, ${wkm.toFixed(1)} × ${hkm.toFixed(1)} km, ${Math.round(lo)}…${Math.round(hi)} m${ext}`;
+    `${names}\n${meta.width} × ${meta.height} samples, ${wkm.toFixed(1)} × ${hkm.toFixed(1)} km, ${Math.round(lo)}…${Math.round(hi)} m${ext}`;
 }
 
 function updateFurniture() {
@@ -500,8 +609,8 @@ function drawOverlay() {
     `triangles   ${s.triangles.toLocaleString('en')}`,
     `refine      ${s.refineMs.toFixed(2)} ms/frame (median ${s.refineMedianMs.toFixed(2)})`,
     `stream      ${kb(s.bytes)} of ${kb(s.total)}, step ${s.steps}/${s.stepsAnnounced}${s.done ? ' (done)' : ''}`,
-    `screen err  max ${s.maxError.sent.toFixed(2)} px, target ${s.targetPx} px${s.maxError.all > s.maxError.sent + 1e-9 ? ` (${s.maxError.all.toFixed(1)} px until the stream arrives)` : ''}`,
-    `            (how far, in pixels, the drawn surface may be from the full data;${s.maxError.all > s.maxError.sent + 1e-9 ? '\n             larger while the finer steps are still streaming in' : ''})`,
+    `screen err  max ${s.maxError.sent.toFixed(2)} px, target ${s.targetPx} px`,
+    `            (how far, in pixels, the drawn surface\n             may be from the full data${s.maxError.all > s.maxError.sent + 1e-9 ? `;\n             ${s.maxError.all.toFixed(1)} px until the rest arrives` : ''})`,
     `mode        ${state.fly ? 'fly' : 'orbit'}${state.wire ? ', wireframe' : ''}`,
   ].join('\n');
 }
@@ -556,8 +665,9 @@ function readFrame() {
   const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
   const px = new Uint8Array(w * h * 4);
   gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
-  const sky = scene.background;
-  const sr = Math.round(sky.r * 255), sg = Math.round(sky.g * 255), sb = Math.round(sky.b * 255);
+  // The clear colour as drawn: sRGB (Color's r, g, b are linear).
+  const sky = scene.background.getHex();
+  const sr = (sky >> 16) & 255, sg = (sky >> 8) & 255, sb = sky & 255;
   return { px, w, h, sr, sg, sb };
 }
 
@@ -592,6 +702,42 @@ function pixels() {
   return { width: w, height: h, terrainFraction: terrain / (w * h), shades: shades.size };
 }
 
+function colourGrid(n) {
+  const { px, w, h, sr, sg, sb } = readFrame();
+  const terrain = (i) => Math.abs(px[i] - sr) + Math.abs(px[i + 1] - sg) + Math.abs(px[i + 2] - sb) > 12;
+  let [x0, x1, y0, y1] = [w, -1, h, -1];
+  const mean = [0, 0, 0];
+  let count = 0;
+  for (let y = 0; y < h; y++) {
+    for (let x = 0; x < w; x++) {
+      const i = 4 * (y * w + x);
+      if (!terrain(i)) continue;
+      count++;
+      for (let k = 0; k < 3; k++) mean[k] += px[i + k];
+      x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y);
+    }
+  }
+  const cells = Array.from({ length: n * n }, () => [0, 0, 0, 0]);
+  for (let y = y0; y <= y1; y++) {
+    for (let x = x0; x <= x1; x++) {
+      const i = 4 * (y * w + x);
+      if (!terrain(i)) continue;
+      // readPixels' row 0 is the bottom of the screen.
+      const cx = Math.min(n - 1, Math.floor(((x - x0) / (x1 - x0 + 1)) * n));
+      const cy = Math.min(n - 1, Math.floor(((y1 - y) / (y1 - y0 + 1)) * n));
+      const c = cells[cy * n + cx];
+      for (let k = 0; k < 3; k++) c[k] += px[i + k];
+      c[3]++;
+    }
+  }
+  return {
+    mean: mean.map((v) => v / Math.max(1, count)),
+    terrainPixels: count,
+    box: [x0, h - 1 - y1, x1, h - 1 - y0],
+    grid: cells.map((c) => (c[3] ? [c[0] / c[3], c[1] / c[3], c[2] / c[3]] : null)),
+  };
+}
+
 window.addEventListener('resize', () => {
   renderer.setSize(window.innerWidth, window.innerHeight);
   camera.aspect = window.innerWidth / window.innerHeight;
@@ -618,8 +764,14 @@ async function main() {
   stepOf = new Uint8Array(n).fill(255);
   lod = new Lod({ width: meta.width, height: meta.height, cellX: meta.cell_size_m[0], cellY: meta.cell_size_m[1], heights, stepOf });
   uniforms.uZRange.value.set(meta.height_range_m[0], meta.height_range_m[1]);
+  uniforms.uGrid.value.set(meta.width, meta.height, meta.cell_size_m[0], meta.cell_size_m[1]);
   homeView();
   setupFurniture();
+  showWarnings();
+  state.textures = ['image', 'pair'].filter((k) => meta.texture && meta.texture[k]);
+  document.getElementById('colours').hidden = !state.textures.length;
+  document.getElementById('help-texture').hidden = !state.textures.length;
+  if (state.textures.length) setColours('image').catch((e) => fail(String(e.message || e)));
   startWorker();
   api.ready = true;
   requestAnimationFrame(frame);

@@ -12,12 +12,18 @@
 //     by `cota serve` itself: tiles load, no tile or console error, and
 //     sampleTerrainMostDetailed agrees with the DEM at DEM samples within the
 //     finest zoom's bound;
+//  2b. the viewer with an image draped (`--texture` on the bundled olinda
+//     DEM + Landsat pair, bands 3,2,1, and paper 004's pair): seen from
+//     above, the frame's colours follow the served texture's (correlation
+//     over a 12×12 grid, against the texture upside down) and differ from
+//     the height-coloured frame; and the warnings panel for a DEM with voids;
+//     the panels do not overlap at 1280 px;
 //  3. the CesiumJS page as a person sees it (issue 31): lit, normals
 //     requested, the server's shaded-relief imagery draped, the footprint
 //     outlined, the zoom-out bounded, the help shown; the luminance spread
 //     over the middle of the view against the page as it was (`?plain`: no
 //     light, no imagery), whose surface was an almost uniform green.
-// Usage: node test-browser/run.mjs [--docs DIR] [--cesium-only] (COTA_BIN: the cota binary,
+// Usage: node test-browser/run.mjs [--docs DIR] [--cesium-only | --texture-only] (COTA_BIN: the cota binary,
 // default $CARGO_TARGET_DIR/release/cota or target/release/cota; CHROMIUM: default /usr/bin/chromium).
 // Writes target/viewer-tests/results.json and screenshots beside it.
 import { chromium } from 'playwright-core';
@@ -35,6 +41,7 @@ mkdirSync(out, { recursive: true });
 const docsAt = process.argv.indexOf('--docs');
 const docs = docsAt >= 0 ? resolve(process.argv[docsAt + 1]) : null;
 const cesiumOnly = process.argv.includes('--cesium-only');
+const textureOnly = process.argv.includes('--texture-only');
 const targetDir = process.env.CARGO_TARGET_DIR ? resolve(process.env.CARGO_TARGET_DIR) : join(repo, 'target');
 const bin = process.env.COTA_BIN || join(targetDir, 'release/cota');
 const shared = process.env.COTA_SHARED_DATA || join(repo, '../shared/data');
@@ -243,6 +250,8 @@ async function furnitureTest(page) {
   results.furniture = t;
   check('map furniture shown', /height -?\d+ m/.test(t.cursor) && /\d+ k?m/.test(t['scale-label']) && /\d/.test(t['legend-ticks']) && t.dataset.length > 0,
     JSON.stringify(t).replace(/\\n/g, ' / '));
+  const lap = overlaps(await page.evaluate(() => window.cota.panels()));
+  check('no panels overlap at 1280 px (the dataset panel clear of the overlay)', lap.length === 0, lap.join(', ') || 'none');
 }
 
 /** Aggressive drags and zooms in orbit mode, then a fly sequence diving at the
@@ -285,6 +294,112 @@ async function cameraTest(page) {
   results.camera = { min_clearance_m: min, after_70px_drag_m: after70, orbit_min_m: orbitMin, fly_min_m: flyMin };
   check('the eye stays above the terrain under drags, zooms and flight', min > 0,
     `lowest height above the ground under the eye ${min.toFixed(1)} m (70 px drag ${after70.toFixed(1)}, orbit ${orbitMin.toFixed(1)}, fly ${flyMin.toFixed(1)})`);
+}
+
+/** Pairs of panels whose boxes intersect (a 1 px touch allowed). */
+function overlaps(panels) {
+  const ids = Object.keys(panels);
+  const out = [];
+  for (const [k, a] of ids.entries()) for (const b of ids.slice(k + 1)) {
+    const p = panels[a], q = panels[b];
+    if (p.left < q.right - 1 && q.left < p.right - 1 && p.top < q.bottom - 1 && q.top < p.bottom - 1) out.push(`${a}/${b}`);
+  }
+  return out;
+}
+
+/** Pearson correlation of two equal-length arrays. */
+function correlation(a, b) {
+  const n = a.length, ma = a.reduce((x, y) => x + y, 0) / n, mb = b.reduce((x, y) => x + y, 0) / n;
+  let sab = 0, saa = 0, sbb = 0;
+  for (let k = 0; k < n; k++) {
+    sab += (a[k] - ma) * (b[k] - mb);
+    saa += (a[k] - ma) ** 2;
+    sbb += (b[k] - mb) ** 2;
+  }
+  return sab / Math.sqrt(saa * sbb || 1);
+}
+
+/** `cota serve --texture` on the olinda pair: the image is draped where it lies, and T switches colours. */
+async function textureTest(browser) {
+  const dem = join(repo, 'fixtures/olinda_dem_utm25s.tif'), img = join(repo, 'fixtures/L7_ETMs.tif');
+  const s = await serve([dem, '--texture', img, '--bands', '3,2,1', '--pair-budget-bytes', '200000']);
+  const page = await browser.newPage({ viewport: { width: 1280, height: 720 }, deviceScaleFactor: 1 });
+  const errors = collectErrors(page);
+  try {
+    await page.goto(`${s.url}/`);
+    await page.waitForFunction(() => window.cota && window.cota.ready && window.cota.stats().done, null, { timeout: 60000 });
+    const N = 12;
+    // Seen from straight above (north up): the terrain's box on screen is the texture's extent.
+    await page.evaluate(() => window.cota.setView([0, -10, 9800], [0, 0, 0]));
+    const grab = (name) => page.evaluate(async ([c, n]) => {
+      await window.cota.colours(c);
+      await window.cota.frames(3);
+      return window.cota.colourGrid(n);
+    }, [name, N]);
+    const height = await grab('height');
+    const image = await grab('image');
+    const tex = await page.evaluate(async (n) => {
+      const im = new Image();
+      im.src = '/texture.png';
+      await im.decode();
+      const c = document.createElement('canvas');
+      c.width = n;
+      c.height = n;
+      const g = c.getContext('2d');
+      g.drawImage(im, 0, 0, n, n);
+      const d = g.getImageData(0, 0, n, n).data;
+      return { size: [im.naturalWidth, im.naturalHeight], grid: Array.from({ length: n * n }, (_, k) => [d[4 * k], d[4 * k + 1], d[4 * k + 2]]) };
+    }, N);
+    const lum = (c) => (c ? 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2] : 0);
+    const flip = (g) => g.map((_, k) => g[(N - 1 - Math.floor(k / N)) * N + (k % N)]);
+    const both = image.grid.map((c, k) => [c, k]).filter(([c]) => c);
+    const rImage = correlation(both.map(([c]) => lum(c)), both.map(([, k]) => lum(tex.grid[k])));
+    const rFlip = correlation(both.map(([c]) => lum(c)), both.map(([, k]) => lum(flip(tex.grid)[k])));
+    const texMean = [0, 1, 2].map((k) => tex.grid.reduce((a, c) => a + c[k], 0) / tex.grid.length);
+    const dist = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+    check('the draped image lies where it belongs (seen from above)', rImage > 0.8 && rImage > rFlip + 0.3,
+      `luminance correlation with the served ${tex.size.join('×')} texture over ${both.length} cells ${rImage.toFixed(3)}, with it upside down ${rFlip.toFixed(3)}`);
+    check('the textured frame has the image\'s colours, not the height colours', dist(image.mean, texMean) < 30 && dist(height.mean, texMean) > 2 * dist(image.mean, texMean),
+      `mean RGB ${image.mean.map(Math.round)} (image frame), ${texMean.map(Math.round)} (texture), ${height.mean.map(Math.round)} (height frame)`);
+    await page.evaluate(() => window.cota.homeView());
+    await page.evaluate(async () => { await window.cota.colours('image'); await window.cota.frames(12); });
+    await page.screenshot({ path: join(out, 'viewer-texture.png') });
+    await page.keyboard.press('KeyT'); // image -> pair
+    await page.waitForFunction(() => window.cota.state.colours === 'pair' && !document.getElementById('pair').hidden);
+    await page.evaluate(() => window.cota.frames(6));
+    await page.screenshot({ path: join(out, 'viewer-texture-pair.png') });
+    const pairText = await page.evaluate(() => document.getElementById('pair').textContent);
+    const lap = overlaps(await page.evaluate(() => window.cota.panels()));
+    check('T switches to paper 004\'s pair, its figures shown; no panels overlap', /pair within 200,000 bytes/.test(pairText) && /triangles/.test(pairText) && lap.length === 0,
+      `${pairText.split('\n')[0]}; overlapping: ${lap.join(', ') || 'none'}`);
+    check('no console errors with a texture', errors.length === 0, errors.slice(0, 3).join(' | '));
+    results.texture = { correlation: rImage, correlation_flipped: rFlip, mean_image: image.mean, mean_texture: texMean, mean_height: height.mean, texture_size: tex.size, pair: pairText };
+  } finally {
+    await page.close();
+    await stop(s);
+  }
+}
+
+/** The warnings panel: a DEM with voids says so in the page. */
+async function warningsTest(browser) {
+  const lux = join(shared, 'geotiff/luxembourg_elev_terra.tif');
+  const dem = existsSync(lux) ? lux : join(repo, 'fixtures/S29W072.hgt.zip');
+  const s = await serve([dem]);
+  const page = await browser.newPage({ viewport: { width: 1280, height: 720 }, deviceScaleFactor: 1 });
+  try {
+    await page.goto(`${s.url}/`);
+    await page.waitForFunction(() => window.cota && window.cota.ready && window.cota.stats().done, null, { timeout: 120000 });
+    await page.evaluate(() => window.cota.frames(8));
+    const w = await page.evaluate(() => ({ shown: !document.getElementById('warnings').hidden, text: document.getElementById('warnings').innerText }));
+    const lap = overlaps(await page.evaluate(() => window.cota.panels()));
+    await page.screenshot({ path: join(out, 'viewer-warnings.png') });
+    check('the input\'s warnings are shown in a panel', w.shown && /void samples/.test(w.text) && lap.length === 0,
+      `${w.text.replace(/\n/g, ' / ')}; overlapping panels: ${lap.join(', ') || 'none'}`);
+    results.warnings = w;
+  } finally {
+    await page.close();
+    await stop(s);
+  }
 }
 
 /** Small screenshots for the docs (640×360). */
@@ -428,6 +543,15 @@ async function readable(browser, url) {
 async function main() {
   const browser = await chromium.launch({ executablePath: process.env.CHROMIUM || '/usr/bin/chromium', args: ARGS });
   const input = inputs();
+  if (textureOnly) {
+    const t0 = Date.now();
+    await textureTest(browser);
+    await warningsTest(browser);
+    console.log(`texture and warnings cases: ${((Date.now() - t0) / 1000).toFixed(1)} s`);
+    await browser.close();
+    console.log(`browser tests: ${passed} passed, ${failed} failed`);
+    process.exit(failed ? 1 : 0);
+  }
   if (!cesiumOnly) {
     const s = await serve(input.files);
     try {
@@ -436,6 +560,11 @@ async function main() {
       const e = await stop(s);
       check('the server stops on SIGTERM', e.code === 0, `exit ${e.code} ${e.sig ?? ''}`);
     }
+    const t0 = Date.now();
+    await textureTest(browser);
+    await warningsTest(browser);
+    results.texture_and_warnings_s = (Date.now() - t0) / 1000;
+    console.log(`texture and warnings cases: ${results.texture_and_warnings_s.toFixed(1)} s`);
   }
   let tiles = null;
   try {

@@ -137,3 +137,32 @@ test('random payloads with valid CRCs are rejected or decoded, never a crash', (
   }
   assert.ok(rejected > 0);
 });
+
+test('a head whose CRS is a PROJ definition (kind 4, as `cota serve` writes for a UTM GeoTIFF) decodes', () => {
+  const { bytes, want } = load('s29w072-129x97');
+  const dv = new DataView(bytes.buffer, bytes.byteOffset);
+  const headLen = dv.getUint32(10, true);
+  const fixed = 52 + 4 + 2 + 32 + 1;
+  const proj = new TextEncoder().encode('+proj=utm +zone=25 +south +ellps=GRS80 +units=m +no_defs');
+  const head = new Uint8Array(fixed + 2 + proj.length);
+  head.set(bytes.subarray(14, 14 + fixed));
+  head[fixed - 1] = 4;
+  head[fixed] = proj.length & 0xff;
+  head[fixed + 1] = proj.length >> 8;
+  head.set(proj, fixed + 2);
+  const rest = bytes.subarray(14 + headLen + 4);
+  const out = new Uint8Array(14 + head.length + 4 + rest.length);
+  out.set(bytes.subarray(0, 14));
+  new DataView(out.buffer).setUint32(10, head.length, true);
+  out.set(head, 14);
+  new DataView(out.buffer).setUint32(14 + head.length, crc32(head), true);
+  out.set(rest, 14 + head.length + 4);
+  const r = new StreamReader();
+  const steps = r.push(out);
+  assert.equal(steps.length, want.steps.length);
+  assert.match(r.georef.crs.proj, /^\+proj=utm \+zone=25/);
+  head[fixed - 1] = 5;
+  out.set(head, 14);
+  new DataView(out.buffer).setUint32(14 + head.length, crc32(head), true);
+  assert.throws(() => new StreamReader().push(out), /kind 5/);
+});
