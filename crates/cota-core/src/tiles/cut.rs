@@ -822,3 +822,29 @@ pub(crate) fn water_of(
         _ => WaterMask::Grid(grid),
     }
 }
+
+#[cfg(test)]
+mod test {
+    use super::*;
+
+    #[test]
+    fn addresses_of_a_range_across_the_antimeridian_are_two_ranges() {
+        let mut s = GeographicScheme {
+            max_zoom: 3,
+            tile_cells: 4,
+            from_greenwich: true,
+        };
+        // Zoom 3: 16 columns; lattice columns 6..9 straddle 180° (8).
+        let r = TileRange {
+            x0: 6,
+            x1: 9,
+            y0: 1,
+            y1: 2,
+        };
+        let range = |x0, x1| TileRange { x0, x1, ..r };
+        assert_eq!(addressed(&s, 3, r), vec![range(0, 1), range(14, 15)]);
+        assert_eq!(addressed(&s, 3, range(9, 12)), vec![range(1, 4)]);
+        s.from_greenwich = false;
+        assert_eq!(addressed(&s, 3, r), vec![r]);
+    }
+}

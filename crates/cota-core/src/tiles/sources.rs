@@ -591,3 +591,50 @@ pub fn deviation_of_with_progress(
         samples: n,
     }
 }
+
+#[cfg(test)]
+mod test {
+    use super::*;
+
+    fn rect(w: f64, s: f64, e: f64, n: f64) -> Vec<[f64; 2]> {
+        vec![[w, s], [e, s], [e, n], [w, n]]
+    }
+
+    #[test]
+    fn the_lattice_counts_from_greenwich_only_across_the_antimeridian() {
+        let (e179, w180) = (rect(179.0, 0.0, 180.0, 1.0), rect(-180.0, 0.0, -179.0, 1.0));
+        assert_eq!(from_greenwich(&[e179.clone(), w180.clone()]), Ok(true));
+        // Touching 180° from one side: as before.
+        assert_eq!(from_greenwich(&[e179]), Ok(false));
+        assert_eq!(from_greenwich(&[w180]), Ok(false));
+        assert_eq!(from_greenwich(&[rect(-1.0, 0.0, 1.0, 1.0)]), Ok(false));
+        assert_eq!(from_greenwich(&[rect(179.5, 0.0, 180.5, 1.0)]), Ok(true));
+        // Fiji as a projection's inverse gives it.
+        let fiji = vec![
+            [179.9, -17.0],
+            [-179.9, -17.0],
+            [-179.9, -16.0],
+            [179.9, -16.0],
+        ];
+        assert_eq!(from_greenwich(&[fiji]), Ok(true));
+        let both = vec![
+            [-10.0, 0.0],
+            [90.0, 0.0],
+            [179.0, 0.0],
+            [-170.0, 0.0],
+            [-170.0, 1.0],
+            [179.0, 1.0],
+            [90.0, 1.0],
+            [-10.0, 1.0],
+        ];
+        assert!(matches!(
+            from_greenwich(&[both]),
+            Err(TilesError::AcrossAntimeridian { .. })
+        ));
+        let pole = vec![[0.0, 80.0], [90.0, 80.0], [180.0, 80.0], [-90.0, 80.0]];
+        assert!(matches!(
+            from_greenwich(&[pole]),
+            Err(TilesError::AroundPole { pole: "north" })
+        ));
+    }
+}
