@@ -8,8 +8,8 @@ use anyhow::Context;
 use cota_core::tiles::plan::{plan, plan_with};
 use cota_core::tiles::sources::deviation_of_with_progress;
 use cota_core::tiles::{
-    resampling_deviation_with_progress, shard_plan, BandCorners, Deviation, Lattice, LatticeFrame,
-    Prepared, Shard, Source, SourcePart, TilerOptions, ZoomPlan,
+    resampling_deviation_with_progress, shard_plan, BandCorners, Deviation, GeographicScheme,
+    Lattice, LatticeFrame, Prepared, Shard, Source, SourcePart, TilerOptions, ZoomPlan,
 };
 use cota_core::{HeightGrid, LonLat};
 use cota_io::tiles::drawn::{Against, SourceGrid};
@@ -241,7 +241,22 @@ fn against_sources<'a>(sources: &[Source<'a>], lattice: &Lattice) -> Against<'a>
         })
         .unwrap_or_default();
     let margin = 2.0 * f64::from(s.tile_cells) * s.cell_deg();
-    Against::new(grids, rects, margin)
+    against_on(s, grids, rects, margin)
+}
+
+/// [`Against`] the sources, across the antimeridian when the lattice is
+/// (its rectangles' longitudes then run past 180°).
+fn against_on<'a>(
+    s: &GeographicScheme,
+    grids: Vec<SourceGrid<'a>>,
+    rects: Vec<[f64; 4]>,
+    margin: f64,
+) -> Against<'a> {
+    if s.from_greenwich {
+        Against::across_antimeridian(grids, rects, margin)
+    } else {
+        Against::new(grids, rects, margin)
+    }
 }
 
 /// Says, before the tiles are made, at which zooms the lattice cannot hold
@@ -296,7 +311,7 @@ fn against<'a>(source: &'a HeightGrid, lattice: &Lattice) -> Against<'a> {
         grid: source,
         transform: &LonLat,
     };
-    Against::new(vec![grid], vec![rect], margin)
+    against_on(s, vec![grid], vec![rect], margin)
 }
 
 /// The error schedule and zooms of the arguments.

@@ -5,7 +5,9 @@
 
 use crate::common;
 
-use common::{cota, stderr, stdout};
+use std::collections::BTreeSet;
+
+use common::{cota, shared, stderr, stdout};
 
 #[test]
 fn sample_pyramid_report_and_resume() {
@@ -329,26 +331,10 @@ fn small_asc(path: &std::path::Path, xll: f64, yll: f64, cell: f64) {
 }
 
 #[test]
-fn antimeridian_and_poles_are_refused_before_any_tile() {
+fn poles_and_beyond_the_world_are_refused_before_any_tile() {
     let dir = tempfile::tempdir().unwrap();
     // (file, CRS, x, y, cell, what the message must say)
     let cases = [
-        (
-            "lonlat.asc",
-            "EPSG:4326",
-            179.8,
-            -17.0,
-            0.01,
-            "crosses ±180°",
-        ),
-        (
-            "utm60.asc",
-            "EPSG:32760",
-            800000.0,
-            8100000.0,
-            1000.0,
-            "crosses ±180°",
-        ),
         (
             "polar.asc",
             "EPSG:3413",
@@ -389,6 +375,164 @@ fn antimeridian_and_poles_are_refused_before_any_tile() {
             !out.join("layer.json").exists(),
             "{name}: a pyramid was written"
         );
+    }
+}
+
+/// Every `(z, x, y)` that `layer.json`'s `available` lists, and every tile
+/// file under `out`.
+fn listed_and_written(out: &std::path::Path) -> (BTreeSet<[u32; 3]>, BTreeSet<[u32; 3]>) {
+    let layer: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("layer.json")).unwrap()).unwrap();
+    let mut listed = BTreeSet::new();
+    for (z, rects) in layer["available"].as_array().unwrap().iter().enumerate() {
+        for r in rects.as_array().unwrap() {
+            let v = |k: &str| r[k].as_u64().unwrap() as u32;
+            for x in v("startX")..=v("endX") {
+                for y in v("startY")..=v("endY") {
+                    listed.insert([z as u32, x, y]);
+                }
+            }
+        }
+    }
+    let mut written = BTreeSet::new();
+    for z in std::fs::read_dir(out).unwrap().flatten() {
+        let Ok(zi) = z.file_name().to_string_lossy().parse::<u32>() else {
+            continue;
+        };
+        for x in std::fs::read_dir(z.path()).unwrap().flatten() {
+            let xi: u32 = x.file_name().to_string_lossy().parse().unwrap();
+            for y in std::fs::read_dir(x.path()).unwrap().flatten() {
+                let name = y.file_name().to_string_lossy().into_owned();
+                let yi: u32 = name.strip_suffix(".terrain").unwrap().parse().unwrap();
+                written.insert([zi, xi, yi]);
+            }
+        }
+    }
+    (listed, written)
+}
+
+/// The tile `z/x/y` under `out`, decoded.
+fn decoded(out: &std::path::Path, [z, x, y]: [u32; 3]) -> cota_io::tiles::DecodedTile {
+    let bytes = std::fs::read(out.join(format!("{z}/{x}/{y}.terrain"))).unwrap();
+    cota_io::tiles::decode(&bytes).unwrap()
+}
+
+/// `cota tiles` of `files` to `out` at zooms up to 9, checked; its report.
+fn tiles_checked(
+    files: &[&std::path::Path],
+    out: &std::path::Path,
+    more: &[&str],
+) -> serde_json::Value {
+    let mut args = vec!["tiles"];
+    args.extend(files.iter().map(|f| f.to_str().unwrap()));
+    args.extend(more);
+    args.extend([
+        "--max-zoom",
+        "9",
+        "--check",
+        "--json",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let r = cota(&args);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&r)).unwrap();
+    assert!(v["check"].as_str().unwrap().starts_with("passed"), "{v}");
+    v
+}
+
+#[test]
+fn a_footprint_across_the_antimeridian_is_tiled_on_both_sides_without_a_seam() {
+    let (Some(w), Some(e)) = (shared("srtm/N00E010.hgt"), shared("srtm/N00E011.hgt.zip")) else {
+        return;
+    };
+    // The two real adjacent tiles renamed (an .hgt is placed by its name):
+    // the same terrain, their shared column now at ±180°.
+    let dir = tempfile::tempdir().unwrap();
+    let (east, west) = (
+        dir.path().join("N00E179.hgt"),
+        dir.path().join("N00W180.hgt.zip"),
+    );
+    std::fs::copy(w, &east).unwrap();
+    std::fs::copy(e, &west).unwrap();
+    let out = dir.path().join("across");
+    tiles_checked(&[&east, &west], &out, &[]);
+    let layer: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("layer.json")).unwrap()).unwrap();
+    let b: Vec<f64> = layer["bounds"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert!(
+        (b[0] - 179.0).abs() < 1e-6 && (b[2] + 179.0).abs() < 1e-6,
+        "{b:?}"
+    );
+    let (listed, written) = listed_and_written(&out);
+    assert_eq!(listed, written);
+    let (mut seams, mut on_land) = (0, 0);
+    for z in 0..=9u32 {
+        let last = (2u32 << z) - 1;
+        // Both sides, `available` split in two ranges where it wraps.
+        assert_eq!(
+            layer["available"][z as usize].as_array().unwrap().len(),
+            2,
+            "zoom {z}"
+        );
+        let ys: Vec<u32> = written
+            .iter()
+            .filter(|t| t[0] == z && t[1] == last)
+            .map(|t| t[2])
+            .collect();
+        assert!(
+            !ys.is_empty() && written.iter().any(|t| t[0] == z && t[1] == 0),
+            "zoom {z}"
+        );
+        for y in ys {
+            let (a, b) = (decoded(&out, [z, last, y]), decoded(&out, [z, 0, y]));
+            let c = cota_io::tiles::compare_border(&a, &b, cota_io::tiles::Neighbour::East);
+            assert_eq!(c.mismatches(), 0, "{z}/{last}/{y} and {z}/0/{y}: {c:?}");
+            seams += 1;
+            on_land += (0..a.u.len())
+                .filter(|&i| a.u[i] == 32767 && a.height_m(i) > 1.0)
+                .count();
+        }
+    }
+    assert!(
+        seams >= 10 && on_land > 20,
+        "{seams} seams, {on_land} border vertices on land"
+    );
+    // Touching 180° without crossing it: one side only, as before.
+    let out = dir.path().join("touching");
+    tiles_checked(&[&east], &out, &[]);
+    let (listed, written) = listed_and_written(&out);
+    assert_eq!(listed, written);
+    assert!(
+        !written.iter().any(|t| t[0] > 0 && t[1] == 0),
+        "{written:?}"
+    );
+}
+
+#[test]
+fn geographic_and_projected_grids_across_the_antimeridian_are_tiled() {
+    let dir = tempfile::tempdir().unwrap();
+    // (file, CRS, x, y, cell): 179.8° to 180.19°, and UTM zone 60 south
+    // (Fiji) past 180°.
+    let cases = [
+        ("lonlat.asc", "EPSG:4326", 179.8, -17.0, 0.01),
+        ("utm60.asc", "EPSG:32760", 800000.0, 8100000.0, 1000.0),
+    ];
+    for (name, crs, x, y, cell) in cases {
+        let f = dir.path().join(name);
+        small_asc(&f, x, y, cell);
+        let out = dir.path().join(format!("out-{name}"));
+        tiles_checked(&[&f], &out, &["--src-crs", crs]);
+        let (listed, written) = listed_and_written(&out);
+        assert_eq!(listed, written, "{name}");
+        let last = (2u32 << 9) - 1;
+        let at = |x: u32| written.iter().any(|t| t[0] == 9 && t[1] == x);
+        assert!(at(last) && at(0), "{name}: {written:?}");
     }
 }
 

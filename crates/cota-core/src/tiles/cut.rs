@@ -169,7 +169,7 @@ impl<'l> Prepared<'l> {
             lattice,
             &Samples::new(
                 &lattice.frame().source_georef,
-                lattice.frame().scheme.cell_deg(),
+                &lattice.frame().scheme,
                 whole,
                 lattice.stored(),
             ),
@@ -272,7 +272,7 @@ impl<'l> Prepared<'l> {
         stages.finish(2);
         let samples = Samples::new(
             &lattice.frame().source_georef,
-            lattice.frame().scheme.cell_deg(),
+            &lattice.frame().scheme,
             source,
             lattice.stored(),
         );
@@ -310,9 +310,11 @@ impl<'l> Prepared<'l> {
         })
     }
 
-    /// True when this hierarchy cuts tile `t` exactly: always for a whole
-    /// lattice; for a part, when `t` is at or finer than the alignment zoom
-    /// and its square grown by half a tile (clipped to the window) is stored.
+    /// True when this hierarchy cuts tile `t` (an address, as every tile
+    /// this type takes and gives: [`GeographicScheme::address`]) exactly:
+    /// always for a whole lattice; for a part, when `t` is at or finer than
+    /// the alignment zoom and its square grown by half a tile (clipped to
+    /// the window) is stored.
     pub fn holds(&self, t: TileId) -> bool {
         let lat = self.lattice;
         if !lat.is_part() {
@@ -322,7 +324,7 @@ impl<'l> Prepared<'l> {
             return false;
         }
         let s = lat.scheme();
-        let (cells, [x, y]) = (s.cells_at(t.z), s.tile_origin(t));
+        let (cells, [x, y]) = (s.cells_at(t.z), s.tile_origin(s.address(t)));
         let (w, st) = (lat.window(), lat.stored());
         // The part's bitree has the global diagonals at this zoom's squares.
         let aligned = st[0] % cells == 0
@@ -366,14 +368,23 @@ impl<'l> Prepared<'l> {
         self.cap.len()
     }
 
-    /// Every tile of the pyramid, zoom by zoom.
+    /// Every tile of the pyramid, zoom by zoom (addresses).
     pub fn tiles(&self) -> impl Iterator<Item = TileId> + '_ {
+        let s = *self.lattice.scheme();
         self.zooms.iter().flat_map(move |p| {
             let r = p.range;
             (r.y0..=r.y1)
                 .flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z: p.zoom, x, y }))
-                .filter(move |&t| self.covers(t))
+                .filter(move |&t| self.covers_lattice(t))
+                .map(move |t| s.address(t))
         })
+    }
+
+    /// Whether tile `t` lies in its zoom's range ([`ZoomPlan::range`], in
+    /// lattice tiles), its zoom being made.
+    pub fn in_range(&self, t: TileId) -> bool {
+        let l = self.lattice.scheme().address(t);
+        self.zoom(t.z).is_some_and(|p| p.range.contains(l.x, l.y))
     }
 
     /// Number of tiles in the pyramid.
@@ -389,6 +400,11 @@ impl<'l> Prepared<'l> {
     /// positive area ([`super::coverage::Coverage`]; the range alone for a
     /// single rectangular footprint).
     pub fn covers(&self, t: TileId) -> bool {
+        self.covers_lattice(self.lattice.scheme().address(t))
+    }
+
+    /// [`Prepared::covers`] of lattice tile `t`.
+    fn covers_lattice(&self, t: TileId) -> bool {
         let Some(cov) = self.lattice.coverage() else {
             return true;
         };
@@ -406,12 +422,17 @@ impl<'l> Prepared<'l> {
         let Some(p) = self.zoom(z) else {
             return Vec::new();
         };
-        covered_runs(p.range, |x, y| self.covers(TileId { z, x, y }))
+        let s = self.lattice.scheme();
+        covered_runs(p.range, |x, y| self.covers_lattice(TileId { z, x, y }))
+            .into_iter()
+            .flat_map(|r| addressed(s, z, r))
+            .collect()
     }
 
     /// The samples tile `t` is checked against: its square of the lattice.
     pub fn region(&self, t: TileId) -> Region<'l> {
-        let [gx, gy] = self.lattice.scheme().tile_origin(t);
+        let s = self.lattice.scheme();
+        let [gx, gy] = s.tile_origin(s.address(t));
         let [ox, oy] = self.lattice.origin();
         let n = self.lattice.scheme().cells_at(t.z) + 1;
         Region {
@@ -432,17 +453,18 @@ impl<'l> Prepared<'l> {
     /// Proportional to the tile's triangles (plus 256² lattice reads for the
     /// water mask).
     pub fn cut(&self, t: TileId, normals: bool, water: bool) -> Result<TileMesh, TilesError> {
+        let s = self.lattice.scheme();
+        let lt = s.address(t);
         let plan = self
             .zoom(t.z)
-            .filter(|p| p.range.contains(t.x, t.y) && self.holds(t) && self.covers(t))
+            .filter(|p| p.range.contains(lt.x, lt.y) && self.holds(t) && self.covers(t))
             .ok_or(TilesError::NoSuchTile {
                 tile: t,
                 min_zoom: self.zooms.first().map_or(0, |p| p.zoom),
-                max_zoom: self.lattice.scheme().max_zoom,
+                max_zoom: s.max_zoom,
             })?;
-        let s = self.lattice.scheme();
         let cells = s.cells_at(t.z);
-        let origin = s.tile_origin(t);
+        let origin = s.tile_origin(lt);
         let zi = self.zoom_index(t.z).unwrap_or(0);
         let leaves = walk_leaves(origin, cells, |tri| self.splits(tri, zi));
         let mesh = self.mesh_of(&leaves, origin);
@@ -456,10 +478,20 @@ impl<'l> Prepared<'l> {
             max_error_m: plan.max_error_m,
             source_bound_m: self.source_bound_m(t.z),
             threshold_m: plan.threshold_m,
-            children: children_in(t, self.zoom(t.z + 1))
-                .map(|r| covered_runs(r, |x, y| self.covers(TileId { z: t.z + 1, x, y })))
-                .unwrap_or_default(),
+            children: self.children(lt),
         })
+    }
+
+    /// The children of lattice tile `t` that the pyramid makes, as runs of
+    /// addresses.
+    fn children(&self, t: TileId) -> Vec<TileRange> {
+        let (s, z) = (self.lattice.scheme(), t.z + 1);
+        children_in(t, self.zoom(z))
+            .map(|r| covered_runs(r, |x, y| self.covers_lattice(TileId { z, x, y })))
+            .unwrap_or_default()
+            .into_iter()
+            .flat_map(|r| addressed(s, z, r))
+            .collect()
     }
 
     /// The index of zoom `z` in [`Prepared::zooms`].
@@ -597,6 +629,27 @@ fn source_codes(
 /// squares whose source errors matter, the source errors, their closure
 /// (measured on an SRTM 1" tile).
 const PREPARE_WEIGHTS: [usize; 6] = [6, 13, 31, 8, 37, 5];
+
+/// The addresses of the lattice tiles of `r` at zoom `z`
+/// ([`GeographicScheme::address`]): `r` itself, or, on a lattice counted
+/// from 0°, its parts east and west of the antimeridian, each moved by half
+/// the world (two rectangles where `r` crosses it, west to east).
+fn addressed(s: &GeographicScheme, z: u8, r: TileRange) -> Vec<TileRange> {
+    if !s.from_greenwich {
+        return vec![r];
+    }
+    let half = 1u32 << z;
+    let parts = [(r.x0.max(half), r.x1), (r.x0, r.x1.min(half - 1))];
+    parts
+        .into_iter()
+        .filter(|(a, b)| a <= b)
+        .map(|(a, b)| TileRange {
+            x0: a ^ half,
+            x1: b ^ half,
+            ..r
+        })
+        .collect()
+}
 
 /// The tiles of `range` for which `made(x, y)` holds, as rectangles: runs
 /// along each row, merged with the row below when they span the same
@@ -767,5 +820,31 @@ pub(crate) fn water_of(
     match grid.first() {
         Some(&v) if grid.iter().all(|&g| g == v) => WaterMask::Uniform(v),
         _ => WaterMask::Grid(grid),
+    }
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+
+    #[test]
+    fn addresses_of_a_range_across_the_antimeridian_are_two_ranges() {
+        let mut s = GeographicScheme {
+            max_zoom: 3,
+            tile_cells: 4,
+            from_greenwich: true,
+        };
+        // Zoom 3: 16 columns; lattice columns 6..9 straddle 180° (8).
+        let r = TileRange {
+            x0: 6,
+            x1: 9,
+            y0: 1,
+            y1: 2,
+        };
+        let range = |x0, x1| TileRange { x0, x1, ..r };
+        assert_eq!(addressed(&s, 3, r), vec![range(0, 1), range(14, 15)]);
+        assert_eq!(addressed(&s, 3, range(9, 12)), vec![range(1, 4)]);
+        s.from_greenwich = false;
+        assert_eq!(addressed(&s, 3, r), vec![r]);
     }
 }

@@ -494,6 +494,7 @@ mod test {
         let scheme = GeographicScheme {
             max_zoom: 12,
             tile_cells: 64,
+            from_greenwich: false,
         };
         let d = scheme.cell_deg();
         let mut seed = 7u64;
@@ -556,6 +557,7 @@ mod test {
         let scheme = GeographicScheme {
             max_zoom: 12,
             tile_cells: 64,
+            from_greenwich: false,
         };
         let b = DrawnBound::new(
             &scheme,

@@ -26,9 +26,10 @@ pub enum TilesError {
         /// Row of the first void.
         row: usize,
     },
-    /// The source's footprint crosses the antimeridian (±180°, an edge of
-    /// the geographic tiling).
-    #[error("expected a source on one side of the antimeridian, found one whose footprint crosses ±180° (longitudes {west:.4}..{east:.4}); tiles across the antimeridian are not made: crop the input to one side of 180°")]
+    /// The data cross both the antimeridian and the prime meridian (wider
+    /// than half the world): the lattice has an edge at one of them
+    /// ([`super::scheme`]'s module docs).
+    #[error("expected data that cross at most one of the antimeridian and the prime meridian, found data across both (longitudes {west:.4}..{east:.4}); tile the eastern and western parts apart")]
     AcrossAntimeridian {
         /// Western edge, degrees (beyond 180° when given so).
         west: f64,

@@ -24,8 +24,12 @@
 //!    interpolate the source's edge) and falls linearly to 0 over
 //!    [`ramp_cells`] cells (an eighth of a maximum-zoom tile): no terrain is
 //!    shown farther than that from the data, and the window's last
-//!    alignment tile is 0 m like everything beyond it. The antimeridian is
-//!    an edge of the tiling, not a seam that wraps.
+//!    alignment tile is 0 m like everything beyond it.
+//! 4. **Across the antimeridian.** A source whose longitudes go past ±180°
+//!    (179.5° to 180.5°, or -180.5° to -179.5°) is laid on a lattice whose
+//!    columns count from 0° ([`GeographicScheme::from_greenwich`]), its
+//!    longitudes taken modulo 360° ([`GeographicScheme::lon_offset`]): the
+//!    footprint is contiguous there and every step above is unchanged.
 
 use rayon::prelude::*;
 
@@ -169,7 +173,8 @@ impl LatticeFrame {
                 "expected a source of at least 2x2 samples, found {w}x{h}"
             )));
         }
-        let scheme = scheme_for(g, opts)?;
+        let mut scheme = scheme_for(g, opts)?;
+        scheme.from_greenwich = past_antimeridian(g, size);
         let footprint = footprint(g, size, &scheme)?;
         let (align_zoom, window) = choose_window(&scheme, footprint);
         let pixel = g.pixel_x.abs().min(g.pixel_y.abs());
@@ -183,6 +188,12 @@ impl LatticeFrame {
             source_size: size,
             fit_m,
         })
+    }
+
+    /// Degrees added to the source's longitudes to bring them into the
+    /// lattice's range ([`GeographicScheme::lon_offset`]).
+    pub fn source_lon_offset(&self) -> f64 {
+        self.scheme.lon_offset(self.source_georef.origin_x)
     }
 
     /// `region` grown by what its fit reads ([`FIT_MARGIN`]), in the window.
@@ -422,6 +433,26 @@ impl Lattice {
         self.frame.footprint
     }
 
+    /// The footprint in degrees, `[west, south, east, north]`, longitudes
+    /// within -180..180: `west > east` when it crosses the antimeridian
+    /// (the convention of GeoJSON's bounding boxes, RFC 7946 §5.2).
+    pub fn footprint_deg(&self) -> [f64; 4] {
+        let (s, fp) = (self.scheme(), self.frame.footprint);
+        let wrap = |l: f64| {
+            if s.from_greenwich && l > 180.0 {
+                l - 360.0
+            } else {
+                l
+            }
+        };
+        [
+            wrap(s.lon_of(fp[0])),
+            s.lat_of(fp[3]),
+            wrap(s.lon_of(fp[2])),
+            s.lat_of(fp[1]),
+        ]
+    }
+
     /// The window in global lattice coordinates: `[x0, y0, x1, y1]`, inclusive.
     pub fn window(&self) -> [u64; 4] {
         self.frame.window
@@ -478,27 +509,39 @@ pub(crate) fn scheme_for_pixel(
     Ok(GeographicScheme {
         max_zoom,
         tile_cells: cells,
+        from_greenwich: false,
     })
+}
+
+/// The source's sample-centre rectangle in degrees: `[west, south, east,
+/// north]`.
+fn rect_deg(g: &GeoRef, [width, height]: [usize; 2]) -> [f64; 4] {
+    let (w, h) = (width as f64 - 1.0, height as f64 - 1.0);
+    let (xa, ya) = g.sample_xy(0.0, 0.0);
+    let (xb, yb) = g.sample_xy(w, h);
+    [xa.min(xb), ya.min(yb), xa.max(xb), ya.max(yb)]
+}
+
+/// Whether the source's longitudes go past ±180° (less than a turn wide):
+/// it is then laid on a lattice counted from 0° (see the module docs).
+fn past_antimeridian(g: &GeoRef, size: [usize; 2]) -> bool {
+    let [west, _, east, _] = rect_deg(g, size);
+    let eps = 1e-9;
+    (west < -180.0 - eps || east > 180.0 + eps) && east - west <= 360.0
 }
 
 /// The source's sample-centre rectangle in global lattice coordinates:
 /// `[west col, north row, east col, south row]`.
-fn footprint(
-    g: &GeoRef,
-    [width, height]: [usize; 2],
-    s: &GeographicScheme,
-) -> Result<[f64; 4], TilesError> {
-    let (w, h) = (width as f64 - 1.0, height as f64 - 1.0);
-    let (xa, ya) = g.sample_xy(0.0, 0.0);
-    let (xb, yb) = g.sample_xy(w, h);
-    let (west, east) = (xa.min(xb), xa.max(xb));
-    let (south, north) = (ya.min(yb), ya.max(yb));
+fn footprint(g: &GeoRef, size: [usize; 2], s: &GeographicScheme) -> Result<[f64; 4], TilesError> {
+    let [west, south, east, north] = rect_deg(g, size);
     let eps = 1e-9;
     let lat_ok = south >= -90.0 - eps && north <= 90.0 + eps;
-    if lat_ok && (west < -180.0 - eps || east > 180.0 + eps) && east - west <= 360.0 {
+    let off = s.lon_offset(g.origin_x);
+    let (lo, hi) = (west + off - s.west_deg(), east + off - s.west_deg());
+    if lat_ok && s.from_greenwich && (lo < -eps || hi > 360.0 + eps) {
         return Err(TilesError::AcrossAntimeridian { west, east });
     }
-    if west < -180.0 - eps || east > 180.0 + eps || !lat_ok {
+    if lo < -eps || hi > 360.0 + eps || !lat_ok {
         return Err(TilesError::OutsideWorld {
             west,
             south,
@@ -508,9 +551,9 @@ fn footprint(
     }
     let d = s.cell_deg();
     Ok([
-        ((west + 180.0) / d).max(0.0),
+        (lo / d).max(0.0),
         ((90.0 - north) / d).max(0.0),
-        ((east + 180.0) / d).min(2.0 * s.root_cells() as f64),
+        (hi / d).min(2.0 * s.root_cells() as f64),
         ((90.0 - south) / d).min(s.root_cells() as f64),
     ])
 }
@@ -657,10 +700,11 @@ fn axes(frame: &LatticeFrame, region: Window) -> (Vec<Axis>, Vec<Axis>) {
     );
     let band = zero_band(s, frame.window, frame.align_zoom);
     let ramp = ramp_cells(s);
+    let off = frame.source_lon_offset();
     let cols = axis(
         w,
         region[0],
-        |gx| (s.lon_of(gx) - g.origin_x) / g.pixel_x - half,
+        |gx| (s.lon_of(gx) - off - g.origin_x) / g.pixel_x - half,
         [fp[0], fp[2]],
         [band[0], band[2]],
         frame.source_size[0],
@@ -705,7 +749,7 @@ fn fitted(
         (grown[2] - grown[0] + 1) as usize,
         (grown[3] - grown[1] + 1) as usize,
     );
-    let at = Samples::new(&frame.source_georef, frame.scheme.cell_deg(), source, grown);
+    let at = Samples::new(&frame.source_georef, &frame.scheme, source, grown);
     let f = fit(
         &mut heights,
         [w, h],
@@ -816,7 +860,7 @@ pub fn resampling_deviation_with_progress(
 ) -> Deviation {
     let g = source.georef();
     let s = lattice.scheme();
-    let d = s.cell_deg();
+    let (d, off) = (s.cell_deg(), lattice.frame().source_lon_offset());
     let [ox, oy] = lattice.origin();
     let grid = lattice.grid();
     let (sw, src) = (source.width(), source.heights());
@@ -831,7 +875,7 @@ pub fn resampling_deviation_with_progress(
             let (mut max, mut sum, mut n) = (0f64, 0f64, 0);
             for col in 0..sw {
                 let (lon, lat) = g.sample_xy(col as f64, row as f64);
-                let x = (lon + 180.0) / d - ox as f64;
+                let x = s.col_of(lon + off) - ox as f64;
                 let y = (90.0 - lat) / d - oy as f64;
                 if part && (!(0.0..=gw).contains(&x) || !(0.0..=gh).contains(&y)) {
                     continue;

@@ -37,7 +37,11 @@
 //!    where their square meets the data's footprint ([`coverage`]);
 //! 4. sharded: the tiles coarser than the band zoom from the shards' partial
 //!    maxima ([`partial`]), merged by a reducer ([`merge`]) exactly;
-//! 5. the tile is encoded, decoded independently and checked with
+//! 5. across the antimeridian, the lattice counts its columns from 0°
+//!    instead of 180° W, so the footprint is contiguous on it and steps 1
+//!    to 4 are unchanged; tiles are addressed modulo the world's columns
+//!    ([`scheme`]'s module docs, [`GeographicScheme::address`]);
+//! 6. the tile is encoded, decoded independently and checked with
 //!    [`crate::mesh::check::check_placed_mesh`] at every lattice sample of its
 //!    square, and as drawn in ECEF at every source sample and at random
 //!    points (`cota-io`'s `tiles::drawn`).

@@ -393,7 +393,7 @@ fn source_partials(
     let [x0, y0, x1, y1] = lat.window();
     let samples = Samples::new(
         &lat.frame().source_georef,
-        lat.frame().scheme.cell_deg(),
+        &lat.frame().scheme,
         source,
         owned,
     );

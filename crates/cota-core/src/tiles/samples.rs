@@ -18,6 +18,7 @@
 //! them follows, so that parts of a sharded run add in the same order as
 //! the whole.
 
+use super::scheme::GeographicScheme;
 use crate::grid::{GeoRef, HeightGrid};
 
 /// A set of source samples on the lattice: positions in global lattice
@@ -70,13 +71,19 @@ pub struct Samples<'a> {
 
 impl<'a> Samples<'a> {
     /// The samples of `part` (a part of the source georeferenced by `g`,
-    /// on a lattice of `d` degrees a cell) whose positions lie in `region`
-    /// (global `[x0, y0, x1, y1]`, inclusive).
-    pub fn new(g: &GeoRef, d: f64, part: SourcePart<'a>, region: [u64; 4]) -> Samples<'a> {
+    /// on the lattice of `scheme`) whose positions lie in `region` (global
+    /// `[x0, y0, x1, y1]`, inclusive).
+    pub fn new(
+        g: &GeoRef,
+        scheme: &GeographicScheme,
+        part: SourcePart<'a>,
+        region: [u64; 4],
+    ) -> Samples<'a> {
+        let (d, off) = (scheme.cell_deg(), scheme.lon_offset(g.origin_x));
         let [ox, oy] = part.offset;
         let inside = |v: f64, lo: u64, hi: u64| v >= lo as f64 && v <= hi as f64;
         let mut cols: Vec<(usize, f64)> = (0..part.grid.width())
-            .map(|c| (c, (g.sample_xy((ox + c) as f64, 0.0).0 + 180.0) / d))
+            .map(|c| (c, scheme.col_of(g.sample_xy((ox + c) as f64, 0.0).0 + off)))
             .filter(|p| inside(p.1, region[0], region[2]))
             .collect();
         let mut rows: Vec<(usize, f64)> = (0..part.grid.height())

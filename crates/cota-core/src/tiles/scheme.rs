@@ -16,6 +16,22 @@
 //! north-west corner is `(x·T_z, (2^z − 1 − y)·T_z)`: a square of the bitree
 //! hierarchy ([`crate::hierarchy`]) over that lattice, at every zoom. That is
 //! what lets one hierarchy serve every tile of every zoom.
+//!
+//! # Across the antimeridian
+//! When the data cross ±180°, the lattice's columns are counted from 0°
+//! instead ([`GeographicScheme::from_greenwich`]): the footprint is then
+//! contiguous on the lattice, which still spans the world (360° = 2·`T_0`
+//! columns), so the window, its bitree, the coarse levels and the zero band
+//! are built exactly as for any footprint; the prime meridian becomes the
+//! lattice's edge, and the antimeridian a border between tiles like any
+//! other (shared vertices, no T-junction). The shift is half the world, so a
+//! lattice tile's column and its address differ by `2^z` modulo `2^(z+1)`
+//! ([`GeographicScheme::address`], its own inverse): every zoom's tile is
+//! still a square of the same tiling, with the same diagonals from zoom 1 on
+//! (`2^z` is even); only the two root tiles swap their diagonals. Vertices
+//! are placed on WGS 84 by longitude, which is periodic, so the as-drawn
+//! error model ([`super::drawn`]) is unchanged. Sources are read at the
+//! longitude of their own convention (`±360°`, see [`super::sources`]).
 
 /// Largest maximum zoom accepted: lattice coordinates stay below 2^31.
 pub const MAX_ZOOM: u8 = 24;
@@ -47,6 +63,10 @@ pub struct GeographicScheme {
     pub max_zoom: u8,
     /// Lattice cells across a tile at the maximum zoom (`S`, a power of two).
     pub tile_cells: u32,
+    /// Columns counted east from 0° rather than from 180° W: chosen when the
+    /// data cross the antimeridian (see the module docs). Lattice tiles are
+    /// then addressed through [`GeographicScheme::address`].
+    pub from_greenwich: bool,
 }
 
 impl GeographicScheme {
@@ -70,14 +90,69 @@ impl GeographicScheme {
         [2u32 << z, 1u32 << z]
     }
 
-    /// Global lattice column and row of the tile's north-west corner.
+    /// The longitude of lattice column 0, degrees: -180, or 0 with
+    /// [`GeographicScheme::from_greenwich`].
+    pub fn west_deg(&self) -> f64 {
+        if self.from_greenwich {
+            0.0
+        } else {
+            -180.0
+        }
+    }
+
+    /// The address (Cesium's column) of lattice tile `t`, and the lattice
+    /// tile of address `t`: the same map both ways (half the world's
+    /// columns added modulo the world's with
+    /// [`GeographicScheme::from_greenwich`], else none).
+    pub fn address(&self, t: TileId) -> TileId {
+        if self.from_greenwich {
+            TileId {
+                x: t.x ^ (1u32 << t.z),
+                ..t
+            }
+        } else {
+            t
+        }
+    }
+
+    /// A longitude in the lattice's own range (from [`GeographicScheme::west_deg`]
+    /// on, 360° wide): `lon` itself unless
+    /// [`GeographicScheme::from_greenwich`], then `lon` modulo 360.
+    pub fn lattice_lon(&self, lon: f64) -> f64 {
+        if self.from_greenwich {
+            lon.rem_euclid(360.0)
+        } else {
+            lon
+        }
+    }
+
+    /// Degrees added to the longitudes of a geographic source whose grid
+    /// starts at longitude `west` to bring them into the lattice's range:
+    /// 0, or a multiple of 360 with [`GeographicScheme::from_greenwich`]
+    /// (a source from -180° on is read from 180° on).
+    pub fn lon_offset(&self, west: f64) -> f64 {
+        if self.from_greenwich {
+            360.0 * ((west.rem_euclid(360.0) - west) / 360.0).round()
+        } else {
+            0.0
+        }
+    }
+
+    /// Global lattice column of longitude `lon` (in the lattice's range, see
+    /// [`GeographicScheme::lattice_lon`]).
+    pub fn col_of(&self, lon: f64) -> f64 {
+        (lon - self.west_deg()) / self.cell_deg()
+    }
+
+    /// Global lattice column and row of lattice tile `t`'s north-west corner.
     pub fn tile_origin(&self, t: TileId) -> [u64; 2] {
         let s = self.cells_at(t.z);
         let row = u64::from((1u32 << t.z) - 1 - t.y);
         [u64::from(t.x) * s, row * s]
     }
 
-    /// The tile's rectangle in degrees: `[west, south, east, north]`.
+    /// The rectangle of the tile of address `t` in degrees: `[west, south,
+    /// east, north]`.
     pub fn tile_rect_deg(&self, t: TileId) -> [f64; 4] {
         let size = 180.0 / f64::from(1u32 << t.z);
         let west = -180.0 + f64::from(t.x) * size;
@@ -85,9 +160,10 @@ impl GeographicScheme {
         [west, south, west + size, south + size]
     }
 
-    /// Longitude of a global lattice column, degrees.
+    /// Longitude of a global lattice column, degrees (beyond 180° for the
+    /// eastern half of a lattice [`GeographicScheme::from_greenwich`]).
     pub fn lon_of(&self, col: f64) -> f64 {
-        -180.0 + col * self.cell_deg()
+        self.west_deg() + col * self.cell_deg()
     }
 
     /// Latitude of a global lattice row, degrees.
@@ -184,6 +260,7 @@ mod test {
         let s = GeographicScheme {
             max_zoom: 12,
             tile_cells: 64,
+            from_greenwich: false,
         };
         assert!((s.cell_deg() * 3600.0 - 2.4719).abs() < 1e-3);
     }
@@ -193,6 +270,7 @@ mod test {
         let s = GeographicScheme {
             max_zoom: 3,
             tile_cells: 4,
+            from_greenwich: false,
         };
         assert_eq!(s.root_cells(), 32);
         let t = TileId { z: 1, x: 2, y: 1 };
@@ -203,5 +281,22 @@ mod test {
         let t0 = TileId { z: 0, x: 0, y: 0 };
         assert_eq!(s.tile_origin(t0), [0, 0]);
         assert_eq!(s.cells_at(0), 32);
+    }
+
+    #[test]
+    fn greenwich_columns_wrap_at_the_antimeridian() {
+        let s = GeographicScheme {
+            max_zoom: 3,
+            tile_cells: 4,
+            from_greenwich: true,
+        };
+        assert_eq!(s.lon_of(32.0), 180.0);
+        assert_eq!(s.col_of(s.lattice_lon(-179.0)), 181.0 / s.cell_deg());
+        // Lattice tile 3 of zoom 2 (90..180°) is Cesium's 7, and back.
+        let t = TileId { z: 2, x: 3, y: 1 };
+        assert_eq!(s.address(t), TileId { z: 2, x: 7, y: 1 });
+        assert_eq!(s.address(s.address(t)), t);
+        assert_eq!(s.tile_rect_deg(s.address(t))[2], 180.0);
+        assert_eq!(s.address(TileId { z: 2, x: 4, y: 1 }).x, 0);
     }
 }

@@ -433,12 +433,7 @@ mod test {
             grid: &grid,
             offset: [0, 0],
         };
-        let s = Samples::new(
-            &frame.source_georef,
-            frame.scheme.cell_deg(),
-            part,
-            frame.window,
-        );
+        let s = Samples::new(&frame.source_georef, &frame.scheme, part, frame.window);
         assert_eq!((s.cols.len(), s.rows.len()), (n, n));
         let (x, y) = (s.cols[5].1, s.rows[5].1);
         let (x0, y0) = ((x as u32) - 3, (y as u32) - 3);

@@ -37,6 +37,20 @@
 //! taken through its map (densified: a projected rectangle is curved on
 //! the lattice); a tile is made when its square meets one with a positive
 //! area ([`Coverage`]).
+//!
+//! # Across the antimeridian
+//! Maps give longitudes in their own convention (a projected DEM over Fiji
+//! comes back as 179.9° and -179.9°, a geographic grid may run from 179.5°
+//! to 180.5°, two SRTM tiles E179 and W180 lie at both ends of the world).
+//! The lattice counts its columns from 0° instead of 180° W
+//! ([`GeographicScheme::from_greenwich`]) when the footprints, longitudes
+//! taken modulo 360°, are narrower so than as given (or are only contiguous
+//! so); each footprint is then placed with its longitudes modulo 360°, and
+//! each source is read at the longitude nearest its own centre's (`±360°`),
+//! so a source at -179.9° answers a lattice point at 180.1°. Data across
+//! both the antimeridian and the prime meridian are refused
+//! ([`TilesError::AcrossAntimeridian`]), as is a footprint around a pole
+//! ([`TilesError::AroundPole`]).
 
 use rayon::prelude::*;
 
@@ -73,6 +87,19 @@ struct Placed<'a> {
     reach: [f64; 4],
     /// A pixel's ground size in lattice cells (the smaller side).
     pixel_cells: f64,
+    /// The longitude its map gives at its centre, when the lattice counts
+    /// from 0° (its queries are brought within 180° of it); else `None`.
+    own_lon: Option<f64>,
+}
+
+impl Placed<'_> {
+    /// Longitude `lon` in the source's own convention (see the module docs).
+    fn own(&self, lon: f64) -> f64 {
+        match self.own_lon {
+            Some(c) => lon - 360.0 * ((lon - c) / 360.0).round(),
+            None => lon,
+        }
+    }
 }
 
 /// The lattice of several sources (its frame's source fields describe the
@@ -180,11 +207,17 @@ fn frame_of<'a>(
         .map(pixel_deg)
         .collect::<Result<Vec<f64>, TilesError>>()?;
     let finest = pixel_deg.iter().copied().fold(f64::INFINITY, f64::min);
-    let scheme = scheme_for_pixel(finest, opts)?;
+    let mut scheme = scheme_for_pixel(finest, opts)?;
+    let rings = sources
+        .iter()
+        .map(ring_of)
+        .collect::<Result<Vec<_>, TilesError>>()?;
+    scheme.from_greenwich = from_greenwich(&rings)?;
     let placed = sources
         .iter()
+        .zip(rings)
         .zip(&pixel_deg)
-        .map(|(s, &p)| place(*s, p, &scheme))
+        .map(|((s, ring), &p)| place(*s, ring, p, &scheme))
         .collect::<Result<Vec<Placed<'_>>, TilesError>>()?;
     let fp = bounds(&placed, &scheme)?;
     let (align_zoom, window) = choose_window(&scheme, fp);
@@ -229,28 +262,44 @@ fn unplaced(g: &GeoRef) -> TilesError {
     ))
 }
 
+/// The source's footprint: its sample-centre rectangle's boundary,
+/// densified, as its map gives it in longitude and latitude.
+fn ring_of(s: &Source<'_>) -> Result<Vec<[f64; 2]>, TilesError> {
+    let g = s.grid.georef();
+    let (w, h) = (s.grid.width() as f64 - 1.0, s.grid.height() as f64 - 1.0);
+    let n = SIDE_POINTS as f64;
+    (0..SIDE_POINTS)
+        .map(|k| (k as f64 / n * w, 0.0))
+        .chain((0..SIDE_POINTS).map(|k| (w, k as f64 / n * h)))
+        .chain((0..SIDE_POINTS).map(|k| (w - k as f64 / n * w, h)))
+        .chain((0..SIDE_POINTS).map(|k| (0.0, h - k as f64 / n * h)))
+        .map(|(c, r)| {
+            let (x, y) = g.sample_xy(c, r);
+            s.transform.to_lonlat(x, y).ok_or_else(|| unplaced(g))
+        })
+        .collect()
+}
+
 /// The source's footprint on the lattice and its reach.
 fn place<'a>(
     s: Source<'a>,
+    ring: Vec<[f64; 2]>,
     pixel_deg: f64,
     scheme: &GeographicScheme,
 ) -> Result<Placed<'a>, TilesError> {
     let g = s.grid.georef();
-    let (w, h) = (s.grid.width() as f64 - 1.0, s.grid.height() as f64 - 1.0);
     let d = scheme.cell_deg();
-    let n = SIDE_POINTS as f64;
-    let ring = (0..SIDE_POINTS)
-        .map(|k| (k as f64 / n * w, 0.0))
-        .chain((0..SIDE_POINTS).map(|k| (w, k as f64 / n * h)))
-        .chain((0..SIDE_POINTS).map(|k| (w - k as f64 / n * w, h)))
-        .chain((0..SIDE_POINTS).map(|k| (0.0, h - k as f64 / n * h)));
-    let mut polygon = Vec::with_capacity(4 * SIDE_POINTS);
-    for (c, r) in ring {
-        let (x, y) = g.sample_xy(c, r);
-        let [lon, lat] = s.transform.to_lonlat(x, y).ok_or_else(|| unplaced(g))?;
-        polygon.push([(lon + 180.0) / d, (90.0 - lat) / d]);
-    }
-    across_antimeridian(&polygon, d)?;
+    let polygon: Vec<[f64; 2]> = ring
+        .iter()
+        .map(|&[lon, lat]| [scheme.col_of(scheme.lattice_lon(lon)), (90.0 - lat) / d])
+        .collect();
+    let own_lon = if scheme.from_greenwich {
+        let (w, h) = (s.grid.width() as f64 - 1.0, s.grid.height() as f64 - 1.0);
+        let (x, y) = g.sample_xy(w / 2.0, h / 2.0);
+        Some(s.transform.to_lonlat(x, y).ok_or_else(|| unplaced(g))?[0])
+    } else {
+        None
+    };
     let pixel_cells = pixel_deg / d;
     let grow = 2.0 + ramp_cells(scheme) + pixel_cells;
     let mut reach = [
@@ -278,47 +327,71 @@ fn place<'a>(
         polygon,
         reach,
         pixel_cells,
+        own_lon,
     })
 }
 
-/// Refuses a footprint whose boundary jumps across ±180° (two consecutive
-/// points of the densified ring more than half the world apart in
-/// longitude): it crosses the antimeridian or encloses a pole.
-fn across_antimeridian(polygon: &[[f64; 2]], d: f64) -> Result<(), TilesError> {
-    let half = 180.0 / d;
-    let jumps = (0..polygon.len())
-        .any(|k| (polygon[k][0] - polygon[(k + 1) % polygon.len()][0]).abs() > half);
-    if !jumps {
-        return Ok(());
+/// Whether the lattice counts its columns from 0° (see the module docs):
+/// when the footprints, longitudes modulo 360°, are narrower than as given,
+/// or contiguous only so.
+///
+/// # Errors
+/// [`TilesError::AroundPole`], [`TilesError::AcrossAntimeridian`] (data
+/// across both the antimeridian and the prime meridian).
+fn from_greenwich(rings: &[Vec<[f64; 2]>]) -> Result<bool, TilesError> {
+    for r in rings {
+        around_pole(r)?;
     }
-    // The ring's winding in longitude: ±360° when it goes round a pole.
-    let winding: f64 = (0..polygon.len())
+    let plain = lon_extent(rings, |l| l).filter(|e| e[0] >= -180.0 - 1e-9 && e[1] <= 180.0 + 1e-9);
+    let wrapped = lon_extent(rings, |l| l.rem_euclid(360.0));
+    let width = |e: [f64; 2]| e[1] - e[0];
+    match (plain, wrapped) {
+        (Some(p), Some(w)) => Ok(width(w) < width(p) - 1e-9),
+        (Some(_), None) => Ok(false),
+        (None, Some(_)) => Ok(true),
+        (None, None) => {
+            let lons = rings.iter().flatten().map(|p| p[0]);
+            Err(TilesError::AcrossAntimeridian {
+                west: lons.clone().fold(f64::INFINITY, f64::min),
+                east: lons.fold(f64::NEG_INFINITY, f64::max),
+            })
+        }
+    }
+}
+
+/// The longitudes `[min, max]` of every ring's points mapped by `f`;
+/// `None` when a ring jumps by more than half the world between two
+/// consecutive points (it crosses the edge of `f`'s range).
+fn lon_extent(rings: &[Vec<[f64; 2]>], f: impl Fn(f64) -> f64) -> Option<[f64; 2]> {
+    let mut e = [f64::INFINITY, f64::NEG_INFINITY];
+    for r in rings {
+        for k in 0..r.len() {
+            let (a, b) = (f(r[k][0]), f(r[(k + 1) % r.len()][0]));
+            if (a - b).abs() > 180.0 {
+                return None;
+            }
+            e = [e[0].min(a), e[1].max(a)];
+        }
+    }
+    Some(e)
+}
+
+/// Refuses a footprint that goes round a pole: its boundary's winding in
+/// longitude (each step taken the short way round) is a whole turn.
+fn around_pole(ring: &[[f64; 2]]) -> Result<(), TilesError> {
+    let n = ring.len();
+    let winding: f64 = (0..n)
         .map(|k| {
-            let dx = polygon[(k + 1) % polygon.len()][0] - polygon[k][0];
-            dx - 2.0 * half * (dx / (2.0 * half)).round()
+            let dx = ring[(k + 1) % n][0] - ring[k][0];
+            dx - 360.0 * (dx / 360.0).round()
         })
         .sum();
-    if winding.abs() > half {
-        let north = polygon.iter().map(|p| p[1]).sum::<f64>() < half / 2.0 * polygon.len() as f64;
-        let pole = if north { "north" } else { "south" };
-        return Err(TilesError::AroundPole { pole });
+    if winding.abs() <= 180.0 {
+        return Ok(());
     }
-    // West and east as a user reads them: the eastern part's longitudes
-    // past 180°.
-    let lon = |x: f64| x * d - 180.0;
-    let west = polygon
-        .iter()
-        .map(|p| lon(p[0]))
-        .filter(|l| *l > 0.0)
-        .fold(180.0, f64::min);
-    let east = polygon
-        .iter()
-        .map(|p| lon(p[0]))
-        .filter(|l| *l <= 0.0)
-        .fold(-180.0, f64::max);
-    Err(TilesError::AcrossAntimeridian {
-        west,
-        east: east + 360.0,
+    let north = ring.iter().map(|p| p[1]).sum::<f64>() > 0.0;
+    Err(TilesError::AroundPole {
+        pole: if north { "north" } else { "south" },
     })
 }
 
@@ -344,9 +417,9 @@ fn bounds(placed: &[Placed<'_>], scheme: &GeographicScheme) -> Result<[f64; 4], 
     if fp[0] < -eps || fp[1] < -eps || fp[2] > wmax + eps || fp[3] > hmax + eps {
         let d = scheme.cell_deg();
         return Err(TilesError::OutsideWorld {
-            west: fp[0] * d - 180.0,
+            west: scheme.lon_of(fp[0]),
             south: 90.0 - fp[3] * d,
-            east: fp[2] * d - 180.0,
+            east: scheme.lon_of(fp[2]),
             north: 90.0 - fp[1] * d,
         });
     }
@@ -393,7 +466,7 @@ fn height_at(placed: &[Placed<'_>], s: &GeographicScheme, x: f64, y: f64, ramp: 
         if x < r[0] || x > r[2] || y < r[1] || y > r[3] {
             continue;
         }
-        let Some((d, v)) = clamped(p.src, lon, lat) else {
+        let Some((d, v)) = clamped(p.src, p.own(lon), lat) else {
             continue;
         };
         if d <= 0.0 {
@@ -463,11 +536,11 @@ fn sample_positions(placed: &[Placed<'_>], scheme: &GeographicScheme) -> Vec<[f6
                     (0..g.width()).filter_map(move |c| {
                         let (x, y) = geo.sample_xy(c as f64, r as f64);
                         let [lon, lat] = p.src.transform.to_lonlat(x, y)?;
-                        let covered = placed[..k]
-                            .iter()
-                            .any(|q| clamped(q.src, lon, lat).is_some_and(|(d, _)| d <= 0.0));
-                        (!covered)
-                            .then(|| [(lon + 180.0) / d, (90.0 - lat) / d, f64::from(g.get(c, r))])
+                        let covered = placed[..k].iter().any(|q| {
+                            clamped(q.src, q.own(lon), lat).is_some_and(|(d, _)| d <= 0.0)
+                        });
+                        let x = scheme.col_of(scheme.lattice_lon(lon));
+                        (!covered).then(|| [x, (90.0 - lat) / d, f64::from(g.get(c, r))])
                     })
                 })
                 .collect()
@@ -516,5 +589,52 @@ pub fn deviation_of_with_progress(
         max_m: max,
         rms_m: if n > 0 { (sum / n as f64).sqrt() } else { 0.0 },
         samples: n,
+    }
+}
+
+#[cfg(test)]
+mod test {
+    use super::*;
+
+    fn rect(w: f64, s: f64, e: f64, n: f64) -> Vec<[f64; 2]> {
+        vec![[w, s], [e, s], [e, n], [w, n]]
+    }
+
+    #[test]
+    fn the_lattice_counts_from_greenwich_only_across_the_antimeridian() {
+        let (e179, w180) = (rect(179.0, 0.0, 180.0, 1.0), rect(-180.0, 0.0, -179.0, 1.0));
+        assert_eq!(from_greenwich(&[e179.clone(), w180.clone()]), Ok(true));
+        // Touching 180° from one side: as before.
+        assert_eq!(from_greenwich(&[e179]), Ok(false));
+        assert_eq!(from_greenwich(&[w180]), Ok(false));
+        assert_eq!(from_greenwich(&[rect(-1.0, 0.0, 1.0, 1.0)]), Ok(false));
+        assert_eq!(from_greenwich(&[rect(179.5, 0.0, 180.5, 1.0)]), Ok(true));
+        // Fiji as a projection's inverse gives it.
+        let fiji = vec![
+            [179.9, -17.0],
+            [-179.9, -17.0],
+            [-179.9, -16.0],
+            [179.9, -16.0],
+        ];
+        assert_eq!(from_greenwich(&[fiji]), Ok(true));
+        let both = vec![
+            [-10.0, 0.0],
+            [90.0, 0.0],
+            [179.0, 0.0],
+            [-170.0, 0.0],
+            [-170.0, 1.0],
+            [179.0, 1.0],
+            [90.0, 1.0],
+            [-10.0, 1.0],
+        ];
+        assert!(matches!(
+            from_greenwich(&[both]),
+            Err(TilesError::AcrossAntimeridian { .. })
+        ));
+        let pole = vec![[0.0, 80.0], [90.0, 80.0], [180.0, 80.0], [-90.0, 80.0]];
+        assert!(matches!(
+            from_greenwich(&[pole]),
+            Err(TilesError::AroundPole { pole: "north" })
+        ));
     }
 }

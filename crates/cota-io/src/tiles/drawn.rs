@@ -20,6 +20,11 @@
 //!    compared with the source's bilinear surface where there is data (a
 //!    deviation between samples, reported) and with the ellipsoid far from
 //!    the data (where the bound holds).
+//!
+//! Across the antimeridian ([`Against::across_antimeridian`]) every
+//! longitude is also looked for a turn east and west (`±360°`): a tile
+//! west of 180° W is measured against the samples of a source that gives
+//! them as 180.1°, and the other way round.
 
 use cota_core::{GeoTransform, HeightGrid, PixelIs};
 
@@ -42,6 +47,18 @@ pub type Sample = [f64; 3];
 #[derive(Debug)]
 pub struct SourceSamples<'a> {
     sources: Vec<Located<'a>>,
+    /// Samples are looked for a turn east and west too.
+    wrap: bool,
+}
+
+/// The turns (degrees of longitude) at which a point is looked for: none,
+/// or also one east and one west.
+fn turns(wrap: bool) -> &'static [f64] {
+    if wrap {
+        &[0.0, 360.0, -360.0]
+    } else {
+        &[0.0]
+    }
 }
 
 /// A source with, when its CRS is not WGS 84 geographic, its samples'
@@ -64,23 +81,33 @@ struct Buckets {
 impl<'a> SourceSamples<'a> {
     /// The samples of `sources` (voids skipped).
     pub fn new(sources: &[SourceGrid<'a>]) -> SourceSamples<'a> {
+        SourceSamples::with_wrap(sources, false)
+    }
+
+    /// The samples of `sources`, looked for a turn east and west too when
+    /// `wrap` (data across the antimeridian).
+    pub fn with_wrap(sources: &[SourceGrid<'a>], wrap: bool) -> SourceSamples<'a> {
         let sources = sources
             .iter()
             .map(|&src| Located {
                 src,
-                buckets: (!src.transform.is_identity()).then(|| Buckets::of(src)),
+                buckets: (!src.transform.is_identity()).then(|| Buckets::of(src, wrap)),
             })
             .collect();
-        SourceSamples { sources }
+        SourceSamples { sources, wrap }
     }
 
     /// Calls `f` with every sample inside `[west, south, east, north]`
-    /// (closed), degrees.
+    /// (closed), degrees (its longitude brought into the rectangle's turn).
     pub fn for_each_in(&self, rect: [f64; 4], f: &mut impl FnMut(Sample)) {
-        for s in &self.sources {
-            match &s.buckets {
-                None => affine_samples(s.src.grid, rect, f),
-                Some(b) => b.for_each_in(rect, f),
+        for &k in turns(self.wrap) {
+            let q = [rect[0] + k, rect[1], rect[2] + k, rect[3]];
+            let g = &mut |s: Sample| f([s[0] - k, s[1], s[2]]);
+            for s in &self.sources {
+                match &s.buckets {
+                    None => affine_samples(s.src.grid, q, g),
+                    Some(b) => b.for_each_in(q, g),
+                }
             }
         }
     }
@@ -125,7 +152,9 @@ fn affine_samples(grid: &HeightGrid, rect: [f64; 4], f: &mut impl FnMut(Sample))
 impl Buckets {
     const N: usize = 256;
 
-    fn of(src: SourceGrid<'_>) -> Buckets {
+    /// The samples of `src`, longitudes modulo 360° when `wrap` (so that
+    /// data across the antimeridian stay together).
+    fn of(src: SourceGrid<'_>, wrap: bool) -> Buckets {
         let g = src.grid.georef();
         let mut all = Vec::with_capacity(src.grid.len());
         for r in 0..src.grid.height() {
@@ -133,6 +162,7 @@ impl Buckets {
                 let z = src.grid.get(c, r);
                 let (x, y) = g.sample_xy(c as f64, r as f64);
                 if let (false, Some([lon, lat])) = (z.is_nan(), src.transform.to_lonlat(x, y)) {
+                    let lon = if wrap { lon.rem_euclid(360.0) } else { lon };
                     all.push([lon, lat, f64::from(z)]);
                 }
             }
@@ -465,14 +495,32 @@ pub fn reference_at(
     lon: f64,
     lat: f64,
 ) -> Reference {
-    if let Some(z) = sources.iter().find_map(|s| s.bilinear(lon, lat)) {
+    reference_turns(sources, footprints, margin_deg, [lon, lat], false)
+}
+
+/// [`reference_at`], the point also looked for a turn east and west when
+/// `wrap`.
+fn reference_turns(
+    sources: &[SourceGrid<'_>],
+    footprints: &[[f64; 4]],
+    margin_deg: f64,
+    [lon, lat]: [f64; 2],
+    wrap: bool,
+) -> Reference {
+    let lons = turns(wrap).iter().map(|k| lon + k);
+    if let Some(z) = lons
+        .clone()
+        .find_map(|l| sources.iter().find_map(|s| s.bilinear(l, lat)))
+    {
         return Reference::Data(z);
     }
     let near = footprints.iter().any(|f| {
-        lon >= f[0] - margin_deg
-            && lon <= f[2] + margin_deg
-            && lat >= f[1] - margin_deg
-            && lat <= f[3] + margin_deg
+        lons.clone().any(|lon| {
+            lon >= f[0] - margin_deg
+                && lon <= f[2] + margin_deg
+                && lat >= f[1] - margin_deg
+                && lat <= f[3] + margin_deg
+        })
     });
     if near {
         Reference::Skip
@@ -496,9 +544,29 @@ impl<'a> Against<'a> {
     /// east, north]` degrees): the ellipsoid is checked farther than
     /// `margin_deg` from them.
     pub fn new(sources: Vec<SourceGrid<'a>>, footprints: Vec<[f64; 4]>, margin_deg: f64) -> Self {
-        let samples = SourceSamples::new(&sources);
+        Against::with_wrap(sources, footprints, margin_deg, false)
+    }
+
+    /// [`Against::new`] for data across the antimeridian: samples and
+    /// points are also looked for a turn east and west, so sources and
+    /// `footprints` may give longitudes beyond 180° or below -180°.
+    pub fn across_antimeridian(
+        sources: Vec<SourceGrid<'a>>,
+        footprints: Vec<[f64; 4]>,
+        margin_deg: f64,
+    ) -> Self {
+        Against::with_wrap(sources, footprints, margin_deg, true)
+    }
+
+    fn with_wrap(
+        sources: Vec<SourceGrid<'a>>,
+        footprints: Vec<[f64; 4]>,
+        margin_deg: f64,
+        wrap: bool,
+    ) -> Self {
+        let samples = SourceSamples::with_wrap(&sources, wrap);
         let reference = Box::new(move |lon: f64, lat: f64| {
-            reference_at(&sources, &footprints, margin_deg, lon, lat)
+            reference_turns(&sources, &footprints, margin_deg, [lon, lat], wrap)
         });
         Against { samples, reference }
     }

@@ -116,6 +116,8 @@ impl ShardFrame {
                 scheme: GeographicScheme {
                     max_zoom: small("max_zoom")?,
                     tile_cells: u32::try_from(v["tile_cells"].as_u64()?).ok()?,
+                    // Sharded runs refuse a footprint across the antimeridian.
+                    from_greenwich: false,
                 },
                 footprint: [fp[0], fp[1], fp[2], fp[3]],
                 window: <[u64; 4]>::try_from(win).ok()?,
@@ -166,7 +168,8 @@ pub fn plan_layout_path(out: &Path, shards: u32) -> PathBuf {
 /// Writes `frame` to [`shard_frame_path`] atomically.
 ///
 /// # Errors
-/// [`PyramidError::Io`].
+/// [`PyramidError::Io`]; [`PyramidError::Shard`] for a frame across the
+/// antimeridian (sharded runs are not made across it).
 pub fn write_shard_frame(out: &Path, frame: &ShardFrame) -> Result<(), PyramidError> {
     write_frame_to(&shard_frame_path(out, frame.shards), frame)
 }
@@ -175,12 +178,18 @@ pub fn write_shard_frame(out: &Path, frame: &ShardFrame) -> Result<(), PyramidEr
 /// [`plan_layout_path`] atomically.
 ///
 /// # Errors
-/// [`PyramidError::Io`].
+/// As [`write_shard_frame`].
 pub fn write_plan_layout(out: &Path, frame: &ShardFrame) -> Result<(), PyramidError> {
     write_frame_to(&plan_layout_path(out, frame.shards), frame)
 }
 
 fn write_frame_to(path: &Path, frame: &ShardFrame) -> Result<(), PyramidError> {
+    if frame.frame.scheme.from_greenwich {
+        return Err(PyramidError::Shard {
+            path: path.to_path_buf(),
+            message: "expected a footprint on one side of the antimeridian for --plan/--shard, found one across it; tile it in one run without --plan".into(),
+        });
+    }
     let text = format!("{}\n", frame.to_json());
     write_file_atomically(path, text.as_bytes(), false)
 }

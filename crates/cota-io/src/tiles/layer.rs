@@ -13,7 +13,6 @@ use super::quantized_mesh::TileExtensions;
 pub fn layer_json(prep: &Prepared<'_>, ext: &TileExtensions) -> Value {
     let lat = prep.lattice();
     let s = lat.scheme();
-    let fp = lat.footprint();
     let available: Vec<Value> = (0..=s.max_zoom)
         .map(|z| {
             let rects: Vec<Value> = prep
@@ -43,7 +42,8 @@ pub fn layer_json(prep: &Prepared<'_>, ext: &TileExtensions) -> Value {
         "tiles": ["{z}/{x}/{y}.terrain?v={version}"],
         "minzoom": prep.zooms().first().map_or(0, |p| p.zoom),
         "maxzoom": s.max_zoom,
-        "bounds": [s.lon_of(fp[0]), s.lat_of(fp[3]), s.lon_of(fp[2]), s.lat_of(fp[1])],
+        // West > east across the antimeridian (RFC 7946's bounding boxes).
+        "bounds": lat.footprint_deg(),
         "available": available,
         "extensions": ext.names(),
         "cota": {"tile_cells": s.tile_cells, "lattice_deg": s.cell_deg(), "errors": errors}

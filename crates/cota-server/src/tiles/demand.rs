@@ -103,7 +103,13 @@ impl DemandTileSource {
         let prep = self.prepared();
         let t = u8::try_from(id.z)
             .ok()
-            .filter(|&z| prep.zoom(z).is_some_and(|p| p.range.contains(id.x, id.y)))
+            .filter(|&z| {
+                prep.in_range(cota_core::tiles::TileId {
+                    z,
+                    x: id.x,
+                    y: id.y,
+                })
+            })
             .map(|z| cota_core::tiles::TileId {
                 z,
                 x: id.x,
