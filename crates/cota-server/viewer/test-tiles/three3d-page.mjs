@@ -185,7 +185,7 @@ const qmThree = new QuantizedMeshLoader();
  * QuantizedMeshLoaderBase.parse) and 'three' (a three.js mesh: GLTFLoader;
  * 3DTilesRendererJS's QuantizedMeshLoader, skirts and ECEF positions).
  */
-window.decodeBench = async (sets, rounds = 5) => {
+window.decodeBench = async (sets, rounds = 3) => {
   await MeshoptDecoder.ready;
   const out = [];
   for (const set of sets) {

@@ -14,7 +14,7 @@
 //    printed as `# decode` lines (bench/README.md has the figures; no bound).
 // Environment: COTA_TILES3D (the pyramid), COTA_TILES3D_FLOAT (optional, a
 // float32 pyramid of the same tiles), COTA_TILES (optional, the quantized-mesh
-// pyramid), COTA_TILES3D_DECODE_ROUNDS (default 5),
+// pyramid), COTA_TILES3D_DECODE_ROUNDS (default 3),
 // COTA_TILES3D_THREE_SCREENSHOT (default target/tiles3d-three.png; -ground and
 // -250km beside it). Without COTA_TILES3D it skips.
 import { test, after } from 'node:test';
@@ -186,7 +186,7 @@ if (!dir) {
     const sets = [set('tiles', 'glb')];
     if (roots.float) sets.push(set('float', 'glb'));
     if (roots.qm) sets.push(set('qm', 'terrain'));
-    const rounds = Number(process.env.COTA_TILES3D_DECODE_ROUNDS || 5);
+    const rounds = Number(process.env.COTA_TILES3D_DECODE_ROUNDS || 3);
     const got = await page.evaluate(([s, k]) => window.decodeBench(s, k), [sets, rounds]);
     for (const g of got) {
       assert.ok(g.tiles > 0 && g.arrays > 0 && g.three > 0, JSON.stringify(g));
