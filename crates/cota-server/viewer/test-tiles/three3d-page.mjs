@@ -133,6 +133,32 @@ window.pixels = () => {
   return { terrain: terrain / (w * h), terrainLower: terrainLower / (w * h / 2), sd, levels: new Set(lum.map(Math.round)).size };
 };
 
+/**
+ * The fraction of the canvas's pixels whose ray from the camera meets the
+ * WGS 84 ellipsoid: what a plain globe (terrain everywhere, no holes) covers
+ * in the last view.
+ */
+window.globeFraction = () => {
+  const [w, h] = [800, 600];
+  const [a, b] = [6378137, 6356752.314245179];
+  const o = camera.position;
+  const p = new THREE.Vector3();
+  let hits = 0;
+  for (let j = 0; j < h; j++) {
+    for (let i = 0; i < w; i++) {
+      p.set(((i + 0.5) / w) * 2 - 1, 1 - ((j + 0.5) / h) * 2, 0.5).unproject(camera).sub(o);
+      // The ray o + t·d in coordinates scaled to the unit sphere.
+      const [ox, oy, oz] = [o.x / a, o.y / a, o.z / b];
+      const [dx, dy, dz] = [p.x / a, p.y / a, p.z / b];
+      const B = ox * dx + oy * dy + oz * dz;
+      const A = dx * dx + dy * dy + dz * dz;
+      const C = ox * ox + oy * oy + oz * oz - 1;
+      if (B < 0 && B * B - A * C >= 0) hits++;
+    }
+  }
+  return hits / (w * h);
+};
+
 // ---- Decode timings.
 
 /** A GLB's JSON and binary chunk. */
