@@ -8,7 +8,9 @@
 //  * an oblique view a few km over the data and a view from 250 km down:
 //    tiles drawn at more than one implicit level, meshes with triangles, and
 //    terrain pixels in the screenshot (the lower half of the oblique view all
-//    terrain; shaded, not flat);
+//    terrain but for cracks, shaded, not flat; the 250 km view terrain wherever
+//    a plain globe is, i.e. no hole where a refined tile lacks a child: cota's
+//    fill tiles);
 //  * the decode time of every tile in the same browser: GLB (this pyramid, and
 //    COTA_TILES3D_FLOAT's when set) and quantized-mesh (COTA_TILES's when set),
 //    printed as `# decode` lines (bench/README.md has the figures; no bound).
