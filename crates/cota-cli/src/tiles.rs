@@ -531,9 +531,13 @@ fn write(
         (None, Some((i, n))) => Some(shard_plan(prepared.zooms(), n)?.swap_remove(i as usize)),
         (None, None) => None,
     };
+    let fills = match (&shard, a.format) {
+        (None, TileFormatArg::Tiles3d) => prepared.fills().count() as u64,
+        _ => 0,
+    };
     let total = shard
         .as_ref()
-        .map_or(prepared.tile_count(), Shard::tile_count);
+        .map_or(prepared.tile_count() + fills, Shard::tile_count);
     let pb = progress::bar(total, "tiles");
     let pb = &pb;
     let report = match &shard {
@@ -671,6 +675,7 @@ fn report_json(
         "tiles": prep.tile_count(),
         "written": r.written(),
         "skipped": r.skipped(),
+        "fill": r.fill(),
         "bytes": r.bytes(),
         "zooms": r.zooms,
         "check": check_line(checked),
@@ -716,6 +721,12 @@ fn print_report(
         r.skipped(),
         r.bytes()
     );
+    if r.fill() > 0 {
+        println!(
+            "fill        {} of them beyond the data (3D Tiles: every refined tile's four children)",
+            r.fill()
+        );
+    }
     println!("check       {}", check_line(checked));
     println!(
         "time        prepare {prep_s:.3} s, tiles {:.3} s, total {total_s:.3} s",

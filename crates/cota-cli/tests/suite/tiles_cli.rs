@@ -593,6 +593,11 @@ fn three_d_tiles_pyramid_and_its_refusals() {
     assert!(out.join("0/0/0/0.glb").is_file() && out.join("1/0/0/0.glb").is_file());
     assert!(out.join("0/subtrees/0/0/0.subtree").is_file());
     assert!(!out.join("layer.json").exists());
+    // The fill tiles (every refined tile's four children) come on top of
+    // the pyramid's tiles: the west root's other three quadrants at least.
+    let fill = v["fill"].as_u64().unwrap();
+    assert!(fill >= 3, "{v}");
+    assert_eq!(v["written"].as_u64(), Some(v["tiles"].as_u64().unwrap() + fill));
     // The same directory as quantized-mesh: other settings, refused.
     let r = cota(&["tiles", "--max-zoom", "7", "-o", o]);
     assert!(!r.status.success());

@@ -453,16 +453,79 @@ impl<'l> Prepared<'l> {
     /// Proportional to the tile's triangles (plus 256² lattice reads for the
     /// water mask).
     pub fn cut(&self, t: TileId, normals: bool, water: bool) -> Result<TileMesh, TilesError> {
+        if !(self.makes(t) && self.holds(t)) {
+            return Err(self.no_such_tile(t));
+        }
+        let children = self.children(self.lattice.scheme().address(t));
+        self.cut_square(t, [normals, water], children)
+    }
+
+    /// Whether the pyramid makes tile `t`: its zoom is made, and `t` is in
+    /// the zoom's range and meets the data ([`Prepared::covers`]).
+    pub fn makes(&self, t: TileId) -> bool {
+        self.in_range(t) && self.covers(t)
+    }
+
+    /// Whether `t` is a *fill* tile: not made ([`Prepared::makes`]), on a
+    /// made zoom, and a child of a made tile that has a made child. A
+    /// format whose clients draw a refined tile only through its children
+    /// (3D Tiles' REPLACE refinement) needs every quadrant of such a tile;
+    /// quantized-mesh clients upsample the parent instead.
+    pub fn is_fill(&self, t: TileId) -> bool {
+        if t.z == 0 || self.zoom(t.z).is_none() || self.makes(t) {
+            return false;
+        }
+        let parent = TileId {
+            z: t.z - 1,
+            x: t.x / 2,
+            y: t.y / 2,
+        };
+        self.makes(parent) && quadrants(parent).into_iter().any(|c| self.makes(c))
+    }
+
+    /// Every fill tile ([`Prepared::is_fill`]), zoom by zoom.
+    pub fn fills(&self) -> impl Iterator<Item = TileId> + '_ {
+        self.tiles()
+            .flat_map(quadrants)
+            .filter(move |&c| self.is_fill(c))
+    }
+
+    /// Cuts fill tile `t` ([`Prepared::is_fill`]) from the same global
+    /// hierarchy as the pyramid's tiles: beyond the lattice's window the
+    /// terrain is the ellipsoid (0 m) and only the drawn bound's curvature
+    /// term splits (a few triangles), inside it the lattice's heights (the
+    /// ramp down from the data's edge); its border vertices are its
+    /// same-zoom neighbours'. It has no children.
+    ///
+    /// # Errors
+    /// [`TilesError::NoSuchTile`] for a tile that is not a fill tile or
+    /// that a part does not hold.
+    pub fn cut_fill(&self, t: TileId, normals: bool) -> Result<TileMesh, TilesError> {
+        if !(self.is_fill(t) && self.holds(t)) {
+            return Err(self.no_such_tile(t));
+        }
+        self.cut_square(t, [normals, false], Vec::new())
+    }
+
+    fn no_such_tile(&self, t: TileId) -> TilesError {
+        TilesError::NoSuchTile {
+            tile: t,
+            min_zoom: self.zooms.first().map_or(0, |p| p.zoom),
+            max_zoom: self.lattice.scheme().max_zoom,
+        }
+    }
+
+    /// The subtree of `t`'s square at its zoom's threshold (the zoom is
+    /// made), with normals and water mask as `[normals, water]` say.
+    fn cut_square(
+        &self,
+        t: TileId,
+        [normals, water]: [bool; 2],
+        children: Vec<TileRange>,
+    ) -> Result<TileMesh, TilesError> {
+        let plan = self.zoom(t.z).ok_or_else(|| self.no_such_tile(t))?;
         let s = self.lattice.scheme();
         let lt = s.address(t);
-        let plan = self
-            .zoom(t.z)
-            .filter(|p| p.range.contains(lt.x, lt.y) && self.holds(t) && self.covers(t))
-            .ok_or(TilesError::NoSuchTile {
-                tile: t,
-                min_zoom: self.zooms.first().map_or(0, |p| p.zoom),
-                max_zoom: s.max_zoom,
-            })?;
         let cells = s.cells_at(t.z);
         let origin = s.tile_origin(lt);
         let zi = self.zoom_index(t.z).unwrap_or(0);
@@ -478,7 +541,7 @@ impl<'l> Prepared<'l> {
             max_error_m: plan.max_error_m,
             source_bound_m: self.source_bound_m(t.z),
             threshold_m: plan.threshold_m,
-            children: self.children(lt),
+            children,
         })
     }
 
@@ -558,6 +621,16 @@ impl<'l> Prepared<'l> {
             is_wet(f, x, y, self.lattice.height_at(x, y))
         })
     }
+}
+
+/// The four children of `t`.
+fn quadrants(t: TileId) -> [TileId; 4] {
+    let (z, x, y) = (t.z + 1, 2 * t.x, 2 * t.y);
+    [(0, 0), (1, 0), (0, 1), (1, 1)].map(|(dx, dy)| TileId {
+        z,
+        x: x + dx,
+        y: y + dy,
+    })
 }
 
 /// Whether a coarse split point above the window's bitree, of lattice
@@ -848,3 +921,8 @@ mod test {
         assert_eq!(addressed(&s, 3, r), vec![r]);
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+#[path = "cut_fill_tests.rs"]
+mod fill_tests;

@@ -366,6 +366,10 @@ pub struct ZoomReport {
     pub written: u64,
     /// Tiles kept from a previous run.
     pub skipped: u64,
+    /// Of the tiles written or kept, the fill tiles (3D Tiles: the
+    /// quadrants beyond the data of a refined tile,
+    /// [`cota_core::tiles::Prepared::is_fill`]; 0 for quantized-mesh).
+    pub fill: u64,
     /// Bytes written.
     pub bytes: u64,
     /// Triangles written.
@@ -409,6 +413,11 @@ impl PyramidReport {
     /// Tiles skipped.
     pub fn skipped(&self) -> u64 {
         self.zooms.iter().map(|z| z.skipped).sum()
+    }
+
+    /// Fill tiles written or kept ([`ZoomReport::fill`]).
+    pub fn fill(&self) -> u64 {
+        self.zooms.iter().map(|z| z.fill).sum()
     }
 
     /// Bytes written.
@@ -501,6 +510,8 @@ pub(crate) fn manifest(
 pub(crate) struct Outcome {
     zoom: u8,
     written: bool,
+    /// A fill tile ([`ZoomReport::fill`]).
+    pub(crate) fill: bool,
     bytes: u64,
     triangles: u64,
     vertices: u64,
@@ -585,6 +596,7 @@ impl Outcome {
         Outcome {
             zoom: t.z,
             written: true,
+            fill: false,
             bytes: m.bytes.len() as u64,
             triangles: m.triangles as u64,
             vertices: m.vertices as u64,
@@ -617,6 +629,7 @@ pub(crate) fn fold(prep: &Prepared<'_>, outcomes: &[Outcome]) -> Vec<ZoomReport>
                 ..ZoomReport::default()
             };
             for o in outcomes.iter().filter(|o| o.zoom == p.zoom) {
+                r.fill += u64::from(o.fill);
                 if o.written {
                     r.written += 1;
                     r.bytes += o.bytes;

@@ -1,8 +1,13 @@
 //! Writing a 3D Tiles 1.1 terrain pyramid: `OUT/tileset.json`, the subtree
 //! files and one GLB per tile ([`super::tileset3d`], [`super::glb_tile`]).
 //!
-//! The tiles are the quantized-mesh pyramid's, cut from the same hierarchy
-//! with the same bound per zoom: each is cut, encoded and (with
+//! The tiles are the quantized-mesh pyramid's, plus *fill* tiles: every
+//! quadrant of a refined tile that does not meet the data, cut from the
+//! same hierarchy ([`Prepared::cut_fill`]: the ellipsoid beyond the data, a
+//! few triangles; no children), since 3D Tiles' REPLACE refinement leaves
+//! a refined tile's missing quadrants empty (quantized-mesh's Cesium client
+//! upsamples the parent instead, so that pyramid stays as it is). All are
+//! cut with the same bound per zoom: each is cut, encoded and (with
 //! [`PyramidOptions::check`]) checked as a quantized-mesh tile at every
 //! lattice sample of its square, then turned into a GLB from its decoded
 //! vertices. The check then decodes the GLB with the independent decoder
@@ -61,7 +66,12 @@ pub fn make_glb_tile(
     opts: &PyramidOptions,
     source: Option<&Against<'_>>,
 ) -> Result<(MadeTile, TileMeta), PyramidError> {
-    let tile = prep.cut(t, opts.extensions.normals, false)?;
+    let normals = opts.extensions.normals;
+    let tile = if prep.is_fill(t) {
+        prep.cut_fill(t, normals)?
+    } else {
+        prep.cut(t, normals, false)?
+    };
     let (rect, bounds) = (tile.rect_deg, [tile.max_error_m, tile.source_bound_m]);
     let qm = PyramidOptions {
         gzip: false,
@@ -139,8 +149,17 @@ fn one_tile(
     Ok((t, meta, Outcome::made(t, &made)))
 }
 
-/// Writes every tile of `prep` under `out` as a 3D Tiles terrain pyramid,
-/// then its subtrees and `tileset.json`; `progress(done)` after each tile.
+/// The tiles of a 3D Tiles pyramid: the pyramid's, then the fill tiles
+/// that give every refined tile its four children
+/// ([`Prepared::is_fill`]; REPLACE refinement draws a refined tile only
+/// through its children).
+pub fn tiles3d(prep: &Prepared<'_>) -> Vec<TileId> {
+    prep.tiles().chain(prep.fills()).collect()
+}
+
+/// Writes every tile of `prep` and the fill tiles ([`tiles3d`]) under `out`
+/// as a 3D Tiles terrain pyramid, then its subtrees and `tileset.json`;
+/// `progress(done)` after each tile.
 ///
 /// # Errors
 /// [`PyramidError`]: the first tile that failed, an unwritable output, an
@@ -166,12 +185,15 @@ pub fn write_tiles3d(
         ))));
     }
     manifest(prep, out, opts)?;
-    let tiles: Vec<TileId> = prep.tiles().collect();
+    let tiles = tiles3d(prep);
     let done = AtomicU64::new(0);
     let results: Vec<(TileId, TileMeta, Outcome)> = tiles
         .par_iter()
         .map(|&t| {
-            let r = one_tile(prep, out, t, opts, source);
+            let r = one_tile(prep, out, t, opts, source).map(|mut r| {
+                r.2.fill = prep.is_fill(t);
+                r
+            });
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
             r
         })

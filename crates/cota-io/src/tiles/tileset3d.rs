@@ -16,10 +16,14 @@
 //!   `OUT/{root}/subtrees/{level}/{x}/{y}.subtree` the subtrees
 //!   ([`subtree_levels`] levels each: the pyramid's levels split evenly,
 //!   at most [`MAX_SUBTREE_LEVELS`] a subtree);
-//! * a tile is available exactly when the pyramid made it (both level-0
-//!   tiles always; below them only tiles that meet the data), so clients
-//!   never ask for a tile outside the data: the provider takes a parent's
-//!   child mask from the availability and upsamples where a child is absent;
+//! * a tile is available exactly when it was written: the pyramid's tiles
+//!   (both level-0 tiles always; below them the tiles that meet the data)
+//!   and the fill tiles that give every tile with a child all four
+//!   ([`cota_core::tiles::Prepared::is_fill`]): the specification's REPLACE
+//!   refinement draws a refined tile only through its children, so a
+//!   missing quadrant is a hole in a generic client (CesiumJS's provider
+//!   would upsample the parent there, as for quantized-mesh); fill tiles
+//!   have no children;
 //! * a tile's `geometricError` is its zoom's bound `e_z` (the root's halves
 //!   at each level, as `e_z` does).
 

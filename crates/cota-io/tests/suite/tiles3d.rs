@@ -10,14 +10,17 @@ mod meshopt;
 
 use crate::common;
 
-use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
+use std::collections::HashSet;
+
+use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
 use cota_core::{fill_voids, FillOptions, LonLat};
 use cota_io::tiles::drawn::{check_samples, Against, DrawnTile, SourceGrid};
 use cota_io::tiles::glb_decode::{decode_glb, same_triangles};
 use cota_io::tiles::glb_tile::{float32_budget_m, u16_budget_m};
 use cota_io::tiles::tileset3d::glb_rel_path;
 use cota_io::tiles::{
-    decode, make_tile, write_tiles3d, PyramidError, PyramidOptions, TileExtensions, TileFormat,
+    decode, make_glb_tile, make_tile, write_tiles3d, PyramidError, PyramidOptions, TileExtensions,
+    TileFormat,
 };
 use cota_io::{read_dem, ReadOptions};
 
@@ -66,7 +69,11 @@ fn pyramid_within_bounds_and_resumable(opts: PyramidOptions) {
     let against = Against::new(vec![grid], vec![rect], 0.5);
     let out = tempfile::tempdir().unwrap();
     let report = write_tiles3d(&prep, out.path(), &opts, Some(&against), &|_| {}).unwrap();
-    assert_eq!(report.written(), prep.tile_count());
+    let fills: Vec<TileId> = prep.fills().collect();
+    let written = prep.tile_count() + fills.len() as u64;
+    assert_eq!(report.written(), written);
+    assert_eq!(report.fill(), fills.len() as u64);
+    fills_complete_the_tree(&prep, out.path(), &fills, &against);
     let mut worst = 0.0f64;
     for t in prep.tiles() {
         let bytes = std::fs::read(out.path().join(glb_rel_path(t))).unwrap();
@@ -120,16 +127,14 @@ fn pyramid_within_bounds_and_resumable(opts: PyramidOptions) {
             );
         }
     }
-    assert_eq!(marked, prep.tile_count());
+    assert_eq!(marked, written);
     // Resumed: one tile removed is made again, the rest skipped; same tileset.
     let victim = out.path().join(glb_rel_path(prep.tiles().last().unwrap()));
     std::fs::remove_file(&victim).unwrap();
     let before = std::fs::read(out.path().join("0/subtrees/0/0/0.subtree")).unwrap();
     let again = write_tiles3d(&prep, out.path(), &opts, None, &|_| {}).unwrap();
-    assert_eq!(
-        (again.written(), again.skipped()),
-        (1, prep.tile_count() - 1)
-    );
+    assert_eq!((again.written(), again.skipped()), (1, written - 1));
+    assert_eq!(again.fill(), fills.len() as u64);
     assert_eq!(
         std::fs::read(out.path().join("0/subtrees/0/0/0.subtree")).unwrap(),
         before
@@ -143,6 +148,54 @@ fn pyramid_within_bounds_and_resumable(opts: PyramidOptions) {
     ] {
         let err = write_tiles3d(&prep, out.path(), &other, None, &|_| {}).unwrap_err();
         assert!(matches!(err, PyramidError::Changed { .. }), "{err}");
+    }
+}
+
+/// Every written tile with a child has all four (REPLACE refinement draws
+/// no hole); the fill tiles are GLBs on the ellipsoid (within their zoom's
+/// bound of 0 m as drawn, away from the data), a few triangles each, with
+/// no children, and quantized-mesh does not make them.
+fn fills_complete_the_tree(
+    prep: &Prepared<'_>,
+    out: &std::path::Path,
+    fills: &[TileId],
+    against: &Against<'_>,
+) {
+    assert!(!fills.is_empty());
+    let written: HashSet<TileId> = prep.tiles().chain(fills.iter().copied()).collect();
+    let kids = |t: TileId| {
+        [(0, 0), (1, 0), (0, 1), (1, 1)].map(|(dx, dy)| TileId {
+            z: t.z + 1,
+            x: 2 * t.x + dx,
+            y: 2 * t.y + dy,
+        })
+    };
+    for &t in &written {
+        let n = kids(t).iter().filter(|c| written.contains(c)).count();
+        assert!(n == 0 || n == 4, "{t}: {n} of 4 children written");
+    }
+    for &f in fills {
+        assert!(kids(f).iter().all(|c| !written.contains(c)), "{f}");
+        assert!(make_tile(prep, f, &PyramidOptions::DEFAULT, None).is_err());
+        let glb = decode_glb(&std::fs::read(out.join(glb_rel_path(f))).unwrap()).unwrap();
+        assert_eq!(glb.edges.iter().filter(|e| e.len() >= 2).count(), 4, "{f}");
+        let rect = prep.lattice().scheme().tile_rect_deg(f);
+        // Wholly 0.05° or more from the data: the ellipsoid, a few triangles.
+        let far = rect[2] < -72.05 || rect[0] > -70.95 || rect[3] < -29.05 || rect[1] > -27.95;
+        if far {
+            let meta = glb.meta.unwrap();
+            assert_eq!((meta.min_height_m, meta.max_height_m), (0.0, 0.0), "{f}");
+            assert!(
+                glb.triangles.len() <= 300,
+                "{f}: {} triangles",
+                glb.triangles.len()
+            );
+        }
+        // Made again with the check: as drawn within e_z (plus float32's
+        // rounding) of the source's samples and of the ellipsoid.
+        let (made, _) = make_glb_tile(prep, f, &opts().with_check(true), Some(against)).unwrap();
+        let bound = prep.zoom(f.z).unwrap().max_error_m + float32_budget_m(1e7);
+        assert!(made.drawn_error_m <= bound, "{f}: {} m", made.drawn_error_m);
     }
 }
 
