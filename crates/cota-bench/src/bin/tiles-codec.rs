@@ -15,11 +15,14 @@
 //! Both make exactly cota's tiles (those that meet the data). Phases, run in
 //! turn each repetition (interleaved) after one warm-up round:
 //! `compute` (tiles made in memory, nothing written), `dir` (into a fresh
-//! directory), `mbtiles` (cota only). Reading the DEM is outside every timing.
+//! directory), `dir-atomic` (the peer's tiles written as cota writes them: a
+//! temporary file and a rename, the per-tile tax of atomicity), `mbtiles`
+//! (cota only). Reading the DEM and removing the previous run's output are
+//! outside every timing.
 //!
 //! Usage: `tiles-codec OUT REPS FILE...`; prints one JSON line per run and a
-//! Markdown table of medians, and leaves `OUT/cota` and `OUT/codec` for
-//! `tiles-peers measure` (true error and seams of both pyramids).
+//! Markdown table of medians, and leaves `OUT/cota-dir` and `OUT/codec-dir`
+//! for `tiles-peers measure` (true error and seams of both pyramids).
 #![allow(clippy::unwrap_used)]
 
 use std::path::{Path, PathBuf};
@@ -29,7 +32,9 @@ use anyhow::{bail, Context, Result};
 use cota_core::grid::PixelIs;
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
 use cota_core::{fill_voids, mosaic, FillOptions, HeightGrid, MosaicOptions};
-use cota_io::tiles::{make_tile, tile_path, write_mbtiles, write_pyramid, PyramidOptions};
+use cota_io::tiles::{
+    make_tile, tile_path, write_file_atomically, write_mbtiles, write_pyramid, PyramidOptions,
+};
 use rayon::prelude::*;
 use serde_json::json;
 use terrain_codec::quantized_mesh::TileBounds;
@@ -48,13 +53,19 @@ fn load(files: &[PathBuf]) -> Result<HeightGrid> {
     Ok(g)
 }
 
-/// Bilinear height of the source at (lon, lat), clamped to its edge.
+/// Bilinear height of the source at (lon, lat); 0 m beyond its samples
+/// (where cota shows the ellipsoid, so that both are measured alike).
 fn bilinear(g: &HeightGrid, lon: f64, lat: f64) -> f64 {
     let r = g.georef();
     let half = if r.pixel_is == PixelIs::Area { 0.5 } else { 0.0 };
     let (w, h) = (g.width(), g.height());
-    let col = ((lon - r.origin_x) / r.pixel_x - half).clamp(0.0, (w - 1) as f64);
-    let row = ((lat - r.origin_y) / r.pixel_y - half).clamp(0.0, (h - 1) as f64);
+    let col = (lon - r.origin_x) / r.pixel_x - half;
+    let row = (lat - r.origin_y) / r.pixel_y - half;
+    let inside = |v: f64, n: usize| (-1e-9..=(n - 1) as f64 + 1e-9).contains(&v);
+    if !inside(col, w) || !inside(row, h) {
+        return 0.0;
+    }
+    let (col, row) = (col.clamp(0.0, (w - 1) as f64), row.clamp(0.0, (h - 1) as f64));
     let (c0, r0) = ((col as usize).min(w - 2), (row as usize).min(h - 2));
     let (fx, fy) = (col - c0 as f64, row - r0 as f64);
     let z = |c: usize, r: usize| f64::from(g.get(c, r));
@@ -89,11 +100,6 @@ fn run(phase: &str, who: &str, g: &HeightGrid, prep: &Prepared<'_>, out: &Path) 
     let tiles: Vec<TileId> = prep.tiles().collect();
     let opts = PyramidOptions::DEFAULT.with_gzip(true).with_check(false);
     let none = |_: u64| {};
-    match phase {
-        "dir" => drop(std::fs::remove_dir_all(out)),
-        "mbtiles" => drop(std::fs::remove_file(out.with_extension("mbtiles"))),
-        _ => {}
-    }
     let bytes: u64 = match (who, phase) {
         ("cota", "compute") => tiles
             .par_iter()
@@ -115,6 +121,14 @@ fn run(phase: &str, who: &str, g: &HeightGrid, prep: &Prepared<'_>, out: &Path) 
                 Ok(b.len() as u64)
             })
             .sum::<Result<u64>>()?,
+        ("codec", "dir-atomic") => tiles
+            .par_iter()
+            .map(|&t| {
+                let b = codec_tile(g, prep, t);
+                write_file_atomically(&tile_path(out, t), &b, false)?;
+                Ok(b.len() as u64)
+            })
+            .sum::<Result<u64>>()?,
         _ => bail!("no such run: {who} {phase}"),
     };
     Ok(bytes)
@@ -125,13 +139,23 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-const RUNS: [(&str, &str); 5] = [
+const RUNS: [(&str, &str); 6] = [
     ("cota", "compute"),
     ("codec", "compute"),
     ("cota", "dir"),
     ("codec", "dir"),
+    ("codec", "dir-atomic"),
     ("cota", "mbtiles"),
 ];
+
+/// Removes what a run of `phase` into `out` writes (outside its timing).
+fn clear(phase: &str, out: &Path) {
+    match phase {
+        "mbtiles" => drop(std::fs::remove_file(out.with_extension("mbtiles"))),
+        "compute" => {}
+        _ => drop(std::fs::remove_dir_all(out)),
+    }
+}
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -150,8 +174,10 @@ fn main() -> Result<()> {
     let mut sizes = vec![0u64; RUNS.len()];
     for rep in 0..=reps {
         for (k, (who, phase)) in RUNS.iter().enumerate() {
+            let dir = out.join(format!("{who}-{phase}"));
+            clear(phase, &dir);
             let t = Instant::now();
-            let bytes = run(phase, who, &grid, &prep, &out.join(who))?;
+            let bytes = run(phase, who, &grid, &prep, &dir)?;
             let s = t.elapsed().as_secs_f64();
             println!("{}", json!({"pipeline": who, "phase": phase, "rep": rep, "seconds": s, "tiles": tiles, "bytes": bytes}));
             if rep > 0 {
