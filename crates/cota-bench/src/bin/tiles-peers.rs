@@ -9,7 +9,8 @@
 //!   its square of the same lattice ([`check_placed_mesh`], triangles turned
 //!   counter-clockwise first, since the winding is not what is measured),
 //!   and counts seam mismatches between same-zoom neighbours
-//!   ([`compare_border`]); prints one JSON object.
+//!   ([`compare_border`]); prints one JSON object, with the worst error per
+//!   zoom over every tile and over the tiles inside the data's samples.
 #![allow(clippy::unwrap_used)]
 
 use std::collections::HashMap;
@@ -79,11 +80,23 @@ fn gzip_len(bytes: &[u8]) -> usize {
     e.finish().unwrap().len()
 }
 
-fn measure(out: &Path, prep: &Prepared<'_>) -> Result<serde_json::Value> {
+/// Whether tile `t`'s rectangle lies inside the samples of `g` (a
+/// geographic grid): there both pyramids are measured against the data
+/// alone, not against what each shows beyond its edge.
+fn inside(g: &HeightGrid, prep: &Prepared<'_>, t: TileId) -> bool {
+    let [w, s, e, n] = prep.lattice().scheme().tile_rect_deg(t);
+    let (x0, y0) = g.georef().sample_xy(0.0, 0.0);
+    let (x1, y1) = g.georef().sample_xy((g.width() - 1) as f64, (g.height() - 1) as f64);
+    let (lo_x, hi_x, lo_y, hi_y) = (x0.min(x1), x0.max(x1), y0.min(y1), y0.max(y1));
+    w >= lo_x && e <= hi_x && s >= lo_y && n <= hi_y
+}
+
+fn measure(out: &Path, prep: &Prepared<'_>, g: &HeightGrid) -> Result<serde_json::Value> {
     let mut tiles: HashMap<TileId, DecodedTile> = HashMap::new();
     let (mut bytes, mut gz, mut flipped, mut invalid, mut over) =
         (0usize, 0usize, 0usize, 0usize, 0usize);
     let mut worst: Vec<f64> = vec![0.0; 64];
+    let mut worst_inside: Vec<f64> = vec![0.0; 64];
     for t in prep.tiles() {
         let raw = std::fs::read(tile_path(out, t)).with_context(|| format!("tile {t}"))?;
         let mut d = decode(&raw).with_context(|| format!("tile {t}"))?;
@@ -100,6 +113,9 @@ fn measure(out: &Path, prep: &Prepared<'_>) -> Result<serde_json::Value> {
             Ok(r) => {
                 let ratio = r.metrics.max_error_m / bound;
                 worst[t.z as usize] = worst[t.z as usize].max(ratio);
+                if inside(g, prep, t) {
+                    worst_inside[t.z as usize] = worst_inside[t.z as usize].max(ratio);
+                }
                 over += usize::from(ratio > 1.0);
             }
             Err(_) => invalid += 1,
@@ -127,11 +143,17 @@ fn measure(out: &Path, prep: &Prepared<'_>) -> Result<serde_json::Value> {
         .iter()
         .map(|p| json!([p.zoom, worst[p.zoom as usize]]))
         .collect();
+    let inside_per_zoom: Vec<_> = prep
+        .zooms()
+        .iter()
+        .map(|p| json!([p.zoom, worst_inside[p.zoom as usize]]))
+        .collect();
     Ok(json!({
         "tiles": tiles.len(), "bytes": bytes, "gzip_bytes": gz,
         "max_error_ratio": worst.iter().cloned().fold(0.0, f64::max),
         "tiles_over_bound": over, "invalid_tiles": invalid, "clockwise_triangles": flipped,
         "worst_ratio_per_zoom": per_zoom,
+        "worst_ratio_per_zoom_inside_the_data": inside_per_zoom,
         "borders": borders, "borders_with_mismatches": mismatched_borders, "seam_mismatches": mismatches,
     }))
 }
@@ -148,7 +170,7 @@ fn main() -> Result<()> {
     match args[0].as_str() {
         "export" => export(Path::new(&args[1]), &prep),
         "measure" => {
-            println!("{}", measure(Path::new(&args[1]), &prep)?);
+            println!("{}", measure(Path::new(&args[1]), &prep, &grid)?);
             Ok(())
         }
         other => bail!("expected export or measure, found {other}"),

@@ -41,6 +41,7 @@ pub mod ellipsoid;
 pub mod frame;
 pub mod glb_decode;
 pub mod glb_tile;
+pub mod journal;
 pub mod layer;
 pub mod mbtiles;
 pub mod part;
@@ -62,6 +63,7 @@ pub use frame::{
     plan_layout_path, read_plan_layout, read_shard_frame, shard_frame_path, write_plan_layout,
     write_shard_frame, ShardFrame,
 };
+pub use journal::JOURNAL_DIR;
 pub use layer::layer_json;
 pub use mbtiles::{is_mbtiles, write_mbtiles, MbtilesReader};
 pub use part::{
@@ -73,8 +75,8 @@ pub use plan_frame::{
 };
 pub use plan_parts::{finish_plan, plan_layout_or, plan_part_path, run_plan_part, PlanPartReport};
 pub use pyramid::{
-    finish_tile, make_tile, tile_path, write_pyramid, MadeTile, PyramidError, PyramidOptions,
-    PyramidReport, TileFormat, ZoomReport,
+    finish_tile, make_tile, tile_path, write_file_atomically, write_pyramid, MadeTile,
+    PyramidError, PyramidOptions, PyramidReport, TileFormat, ZoomReport,
 };
 pub use pyramid3d::{make_glb_tile, tiles3d, write_tiles3d};
 pub use quantized_mesh::{encode, encode_tile, EncodeError, Extensions, TileExtensions, TileFrame};

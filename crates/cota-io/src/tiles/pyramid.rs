@@ -6,10 +6,12 @@
 //!   is independent (the prepared hierarchy is shared, read-only).
 //! * **Bounded memory**: a tile lives from its cut to its write; nothing of
 //!   the pyramid is kept but per-zoom counters.
-//! * **Atomic**: a tile is written to a temporary file in its directory and
-//!   renamed over its name, so an interrupted run leaves complete tiles or
-//!   none (not `fsync`ed: a power cut may lose recent tiles, never mix them).
-//!   `layer.json` is written last.
+//! * **No corrupt tile left**: tiles are written in place, each begun and
+//!   ended in the run's journal ([`super::journal`]: a rename per tile was
+//!   most of the writing time), so an interrupted run leaves at most one
+//!   unfinished tile per thread, named in its journal and made again by the
+//!   next run over the same tiles; `layer.json` is written last (not
+//!   `fsync`ed: a power cut may lose recent tiles, never mix them).
 //! * **Resumable, shardable**: `OUT/.cota-tiles.json` records what decides
 //!   the tiles' content; a run into a directory whose manifest matches skips
 //!   the tiles already there (`force` redoes them), one whose manifest
@@ -31,6 +33,7 @@ use rayon::prelude::*;
 
 use super::decode::{decode, DecodeError};
 use super::drawn::{check_random, check_samples, Against, DrawnTile};
+use super::journal::{make_dirs, Journal, PathIo};
 use super::layer::{layer_json, run_manifest};
 use super::quantized_mesh::{encode_tile, EncodeError, TileExtensions};
 use super::seams::edge_lists_match;
@@ -426,6 +429,12 @@ impl PyramidReport {
     }
 }
 
+impl From<PathIo> for PyramidError {
+    fn from(PathIo(path, source): PathIo) -> Self {
+        PyramidError::Io { path, source }
+    }
+}
+
 pub(crate) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> PyramidError + '_ {
     move |source| PyramidError::Io {
         path: path.to_path_buf(),
@@ -473,12 +482,13 @@ pub fn tile_path(out: &Path, t: TileId) -> PathBuf {
         .join(format!("{}.terrain", t.y))
 }
 
-/// Checks or writes the run manifest.
+/// Checks or writes the run manifest: `true` when it was written now (a new
+/// output, or `force`), `false` when an earlier run's matched.
 pub(crate) fn manifest(
     prep: &Prepared<'_>,
     out: &Path,
     opts: &PyramidOptions,
-) -> Result<(), PyramidError> {
+) -> Result<bool, PyramidError> {
     std::fs::create_dir_all(out).map_err(io_err(out))?;
     let path = out.join(".cota-tiles.json");
     let mut want = run_manifest(prep, &opts.extensions, opts.gzip);
@@ -500,9 +510,10 @@ pub(crate) fn manifest(
                 expected: want,
             });
         }
-        return Ok(());
+        return Ok(false);
     }
-    write_file_atomically(&path, want.as_bytes(), opts.force)
+    write_file_atomically(&path, want.as_bytes(), opts.force)?;
+    Ok(true)
 }
 
 /// Per-tile outcome folded into the report.
@@ -563,23 +574,28 @@ pub(crate) fn write_tiles(
     tiles: &[TileId],
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<Outcome>, PyramidError> {
-    manifest(prep, out, opts)?;
+    // A new output has no tile to skip: no look at each tile's name.
+    let fresh = manifest(prep, out, opts)?;
+    let journal = Journal::open(out, tiles, |t| tile_path(out, t))?;
+    make_dirs(tiles, |t| tile_path(out, t))?;
     let done = AtomicU64::new(0);
-    tiles
+    let outcomes = tiles
         .par_iter()
         .map(|&t| {
             let path = tile_path(out, t);
-            let o = if !opts.force && path.is_file() {
+            let o = if !fresh && !opts.force && path.is_file() {
                 Outcome::skipped(t)
             } else {
                 let m = make_tile(prep, t, opts, source)?;
-                write_file_atomically(&path, &m.bytes, opts.force)?;
+                journal.write_tile(t, &path, &m.bytes)?;
                 Outcome::made(t, &m)
             };
             progress(done.fetch_add(1, Ordering::Relaxed) + 1);
             Ok(o)
         })
-        .collect()
+        .collect::<Result<Vec<_>, PyramidError>>()?;
+    journal.finish()?;
+    Ok(outcomes)
 }
 
 impl Outcome {

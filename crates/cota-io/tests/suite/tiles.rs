@@ -15,6 +15,7 @@ use cota_core::{fill_voids, mosaic, FillOptions, HeightGrid, Mesh, MeshVertex, M
 use cota_io::tiles::{
     compare_border, decode, edge_lists_match, encode, make_tile, tile_path, write_pyramid,
     DecodedTile, Extensions, Neighbour, PyramidError, PyramidOptions, TileExtensions, TileFrame,
+    JOURNAL_DIR,
 };
 use cota_io::{read_dem, ReadOptions};
 
@@ -170,6 +171,58 @@ fn resume_skips_force_redoes_and_changed_settings_are_refused() {
         .filter(|p| p.ends_with(".tmp"))
         .count();
     assert_eq!(stray, 0);
+}
+
+#[test]
+fn an_interrupted_directory_run_redoes_the_tiles_its_journal_left_unfinished() {
+    let g = load(&[common::fixture("S29W072.hgt.zip")]);
+    let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(8))).unwrap();
+    let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let first = write_pyramid(&prep, out.path(), &PyramidOptions::DEFAULT, None, &|_| {}).unwrap();
+    let journals = out.path().join(JOURNAL_DIR);
+    assert!(!journals.exists(), "a run that ended leaves no journal");
+    let tiles: Vec<TileId> = prep.tiles().collect();
+    let (cut, whole) = (tiles[tiles.len() - 1], tiles[tiles.len() - 2]);
+    let good = std::fs::read(tile_path(out.path(), cut)).unwrap();
+    let whole_before = std::fs::metadata(tile_path(out.path(), whole))
+        .unwrap()
+        .modified()
+        .unwrap();
+    // As a killed run leaves it: `cut` begun and half written, `whole` ended;
+    // and another shard's journal with a tile outside this run's set.
+    std::fs::write(tile_path(out.path(), cut), &good[..good.len() / 2]).unwrap();
+    std::fs::create_dir_all(&journals).unwrap();
+    let line = |k: char, t: TileId| format!("{k} {} {} {}\n", t.z, t.x, t.y);
+    let killed = [
+        line('b', whole),
+        line('b', cut),
+        line('e', whole),
+        "b 9 1".into(),
+    ]
+    .concat();
+    std::fs::write(journals.join("1-1.log"), killed).unwrap();
+    std::fs::write(journals.join("2-2.log"), "b 20 0 0\n").unwrap();
+    let again = write_pyramid(&prep, out.path(), &PyramidOptions::DEFAULT, None, &|_| {}).unwrap();
+    assert_eq!((again.written(), again.skipped()), (1, first.written() - 1));
+    assert_eq!(
+        std::fs::read(tile_path(out.path(), cut)).unwrap(),
+        good,
+        "made again whole"
+    );
+    let whole_after = std::fs::metadata(tile_path(out.path(), whole))
+        .unwrap()
+        .modified()
+        .unwrap();
+    assert_eq!(whole_before, whole_after, "an ended tile is kept");
+    assert!(
+        !journals.join("1-1.log").exists(),
+        "the journal it made good is removed"
+    );
+    assert!(
+        journals.join("2-2.log").exists(),
+        "another set's journal is kept"
+    );
 }
 
 /// Every file under `dir`, as displayed paths.
