@@ -57,7 +57,11 @@ fn load(files: &[PathBuf]) -> Result<HeightGrid> {
 /// (where cota shows the ellipsoid, so that both are measured alike).
 fn bilinear(g: &HeightGrid, lon: f64, lat: f64) -> f64 {
     let r = g.georef();
-    let half = if r.pixel_is == PixelIs::Area { 0.5 } else { 0.0 };
+    let half = if r.pixel_is == PixelIs::Area {
+        0.5
+    } else {
+        0.0
+    };
     let (w, h) = (g.width(), g.height());
     let col = (lon - r.origin_x) / r.pixel_x - half;
     let row = (lat - r.origin_y) / r.pixel_y - half;
@@ -65,7 +69,10 @@ fn bilinear(g: &HeightGrid, lon: f64, lat: f64) -> f64 {
     if !inside(col, w) || !inside(row, h) {
         return 0.0;
     }
-    let (col, row) = (col.clamp(0.0, (w - 1) as f64), row.clamp(0.0, (h - 1) as f64));
+    let (col, row) = (
+        col.clamp(0.0, (w - 1) as f64),
+        row.clamp(0.0, (h - 1) as f64),
+    );
     let (c0, r0) = ((col as usize).min(w - 2), (row as usize).min(h - 2));
     let (fx, fy) = (col - c0 as f64, row - r0 as f64);
     let z = |c: usize, r: usize| f64::from(g.get(c, r));
@@ -87,7 +94,12 @@ fn codec_tile(g: &HeightGrid, prep: &Prepared<'_>, t: TileId) -> Vec<u8> {
         max_error: prep.zoom(t.z).map_or(0.0, |p| p.max_error_m),
         ..TerrainOptions::default()
     };
-    encode_terrain_from_fn(GRID, &TileBounds::new(west, south, east, north), at, &options)
+    encode_terrain_from_fn(
+        GRID,
+        &TileBounds::new(west, south, east, north),
+        at,
+        &options,
+    )
 }
 
 fn write_plain(path: &Path, bytes: &[u8]) -> Result<()> {
@@ -179,7 +191,10 @@ fn main() -> Result<()> {
             let t = Instant::now();
             let bytes = run(phase, who, &grid, &prep, &dir)?;
             let s = t.elapsed().as_secs_f64();
-            println!("{}", json!({"pipeline": who, "phase": phase, "rep": rep, "seconds": s, "tiles": tiles, "bytes": bytes}));
+            println!(
+                "{}",
+                json!({"pipeline": who, "phase": phase, "rep": rep, "seconds": s, "tiles": tiles, "bytes": bytes})
+            );
             if rep > 0 {
                 times[k].push(s);
             }
@@ -192,7 +207,12 @@ fn main() -> Result<()> {
     for (k, (who, phase)) in RUNS.iter().enumerate() {
         let m = median(times[k].clone());
         let prep_s = if *who == "cota" { prepare_s } else { 0.0 };
-        println!("| {who} | {phase} | {m:.3} | {:.0} | {:.0} | {} |", tiles / m, tiles / (m + prep_s), sizes[k]);
+        println!(
+            "| {who} | {phase} | {m:.3} | {:.0} | {:.0} | {} |",
+            tiles / m,
+            tiles / (m + prep_s),
+            sizes[k]
+        );
     }
     Ok(())
 }

@@ -86,7 +86,9 @@ fn gzip_len(bytes: &[u8]) -> usize {
 fn inside(g: &HeightGrid, prep: &Prepared<'_>, t: TileId) -> bool {
     let [w, s, e, n] = prep.lattice().scheme().tile_rect_deg(t);
     let (x0, y0) = g.georef().sample_xy(0.0, 0.0);
-    let (x1, y1) = g.georef().sample_xy((g.width() - 1) as f64, (g.height() - 1) as f64);
+    let (x1, y1) = g
+        .georef()
+        .sample_xy((g.width() - 1) as f64, (g.height() - 1) as f64);
     let (lo_x, hi_x, lo_y, hi_y) = (x0.min(x1), x0.max(x1), y0.min(y1), y0.max(y1));
     w >= lo_x && e <= hi_x && s >= lo_y && n <= hi_y
 }

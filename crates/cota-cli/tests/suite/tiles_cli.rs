@@ -597,7 +597,10 @@ fn three_d_tiles_pyramid_and_its_refusals() {
     // the pyramid's tiles: the west root's other three quadrants at least.
     let fill = v["fill"].as_u64().unwrap();
     assert!(fill >= 3, "{v}");
-    assert_eq!(v["written"].as_u64(), Some(v["tiles"].as_u64().unwrap() + fill));
+    assert_eq!(
+        v["written"].as_u64(),
+        Some(v["tiles"].as_u64().unwrap() + fill)
+    );
     // The same directory as quantized-mesh: other settings, refused.
     let r = cota(&["tiles", "--max-zoom", "7", "-o", o]);
     assert!(!r.status.success());
