@@ -18,7 +18,16 @@
 //!
 //! # Runtime
 //! Per level, every source sample in the region is read once (twice on a
-//! shared edge), in parallel over the level's split points.
+//! shared edge), in parallel over the level's split points. Below
+//! [`BY_SAMPLE_BELOW`] cells a separable set is read square by square: a
+//! square's samples are a rectangle of the axes, so its five corner heights
+//! are read once for all of them, each axis position's square and fraction
+//! are computed once per size, and the squares that decide nothing
+//! ([`super::relevant`]) are not entered. Each triangle's code is taken
+//! once from its largest deviation: the rounding up to `f32` and
+//! [`encode_up`] are monotone, so that is the largest of the per-sample
+//! codes, and every deviation is computed by the same expressions in the
+//! same order as sample by sample, so the codes are the same bit for bit.
 
 use rayon::prelude::*;
 
@@ -188,7 +197,8 @@ fn pow2(a: u64, b: u64) -> impl Iterator<Item = u64> {
 /// side triangle (`B`) of its square that hold it, and raises their split
 /// points' codes (a sample on an edge counts once: both triangles' planes
 /// agree there). The sizes' split points are distinct points, so each size
-/// is one task with its own array, merged at the end.
+/// is one task with its own array, merged at the end; a separable set's
+/// samples are read square by square ([`by_rectangles`]).
 fn by_sample(
     s: &impl SampleSet,
     region: [u64; 4],
@@ -248,9 +258,10 @@ impl SizeCodes {
     }
 }
 
-/// The codes of one size (see [`SizeCodes`]), the samples in turn, each
-/// against the closed-form planes of the half and the side triangle of its
-/// square that hold it.
+/// The codes of one size (see [`SizeCodes`]): each sample against the
+/// closed-form planes of the half and the side triangle of its square that
+/// hold it, a separable set square by square ([`by_rectangles`]), any other
+/// sample by sample ([`one_by_one`]).
 fn size_codes(
     s: &impl SampleSet,
     region: [u64; 4],
@@ -263,34 +274,71 @@ fn size_codes(
         ((region[2] / size + 2).saturating_sub(first[0])) as usize,
         ((region[3] / size + 2).saturating_sub(first[1])) as usize,
     ];
-    let needed: Option<Vec<bool>> = skip.map(|k| {
-        (0..dims[0] * dims[1])
-            .into_par_iter()
-            .map(|q| {
-                let (i, j) = ((q % dims[0]) as u64, (q / dims[0]) as u64);
-                k.needed(size, first[0] + i, first[1] + j)
-            })
-            .collect()
-    });
+    let needed = skip.map(|k| needed_squares(k, size, first, dims));
     let mut codes = [0, 1, 2].map(|_| vec![0u16; dims[0] * dims[1]]);
-    let sz = size as f64;
-    let h = |x: u64, y: u64| f64::from(height(x, y));
-    for k in 0..s.len() {
-        let [x, y, hs] = s.sample(k);
-        let (si, sj) = ((x / sz).floor(), (y / sz).floor());
-        if si < 0.0 || sj < 0.0 {
-            continue;
+    let mut raise = |i: usize, m: &SquareMax| {
+        let code = |e: f64| encode_up(round_up_f32(e));
+        // The side triangles' split points: north and west are this
+        // square's, south the next row's north, east the next column's west.
+        let slots = [(0, i), (1, i), (2, i + 1), (1, i + dims[0]), (2, i)];
+        for ((arr, ii), e) in slots.into_iter().zip(m.0) {
+            codes[arr][ii] = codes[arr][ii].max(code(e));
         }
-        let (fx, fy) = (x / sz - si, y / sz - sj);
-        let (si, sj) = (si as u64, sj as u64);
+    };
+    let squares = Squares {
+        region,
+        size,
+        first,
+        dims,
+        needed: needed.as_deref(),
+    };
+    match s.separable() {
+        Some(axes) => by_rectangles(axes, &squares, height, &mut raise),
+        None => one_by_one(s, &squares, height, &mut raise),
+    }
+    SizeCodes { first, dims, codes }
+}
+
+/// Per square of a [`SizeCodes`] grid, whether its errors can decide.
+fn needed_squares(k: &Skip<'_>, size: u64, first: [u64; 2], dims: [usize; 2]) -> Vec<bool> {
+    (0..dims[0] * dims[1])
+        .into_par_iter()
+        .map(|q| {
+            let (i, j) = ((q % dims[0]) as u64, (q / dims[0]) as u64);
+            k.needed(size, first[0] + i, first[1] + j)
+        })
+        .collect()
+}
+
+/// The grid of one size's squares in a region (see [`SizeCodes`]), and
+/// which of them are measured.
+struct Squares<'a> {
+    region: [u64; 4],
+    size: u64,
+    first: [u64; 2],
+    dims: [usize; 2],
+    needed: Option<&'a [bool]>,
+}
+
+impl Squares<'_> {
+    /// The index of square `(si, sj)` when it lies inside the region and is
+    /// needed, with its corner heights `[nw, ne, sw, se, centre]`.
+    fn measured(
+        &self,
+        si: u64,
+        sj: u64,
+        height: &impl Fn(u64, u64) -> f32,
+    ) -> Option<(usize, [f64; 5])> {
+        let (size, r) = (self.size, self.region);
         let (x0, y0) = (si * size, sj * size);
-        if x0 < region[0] || x0 + size > region[2] || y0 < region[1] || y0 + size > region[3] {
-            continue;
+        if x0 < r[0] || x0 + size > r[2] || y0 < r[1] || y0 + size > r[3] {
+            return None;
         }
-        let i = (sj - first[1]) as usize * dims[0] + (si - first[0]) as usize;
-        if needed.as_ref().is_some_and(|n| !n[i]) {
-            continue;
+        let i = (sj - self.first[1]) as usize * self.dims[0] + (si - self.first[0]) as usize;
+        if self.needed.is_some_and(|n| !n[i]) {
+            return None;
         }
+        let h = |x: u64, y: u64| f64::from(height(x, y));
         let corners = [
             h(x0, y0),
             h(x0 + size, y0),
@@ -298,21 +346,138 @@ fn size_codes(
             h(x0 + size, y0 + size),
             h(x0 + size / 2, y0 + size / 2),
         ];
-        let (a, b) = square_planes(corners, (si + sj).is_multiple_of(2), fx, fy);
-        let code = |z: f64| encode_up(round_up_f32((z - hs).abs()));
-        codes[0][i] = codes[0][i].max(code(a));
-        // The side triangle's split point: north (this square's), west
-        // (this square's), south (the next row's north), east (the next
-        // column's west).
-        let (arr, ii) = match b.1 {
-            Side::North => (1, i),
-            Side::West => (2, i),
-            Side::South => (1, i + dims[0]),
-            Side::East => (2, i + 1),
-        };
-        codes[arr][ii] = codes[arr][ii].max(code(b.0));
+        Some((i, corners))
     }
-    SizeCodes { first, dims, codes }
+}
+
+/// The largest |plane − h| of one square's samples in its half (`A`) and
+/// in its side triangles (`B`: north, east, south, west), in that order;
+/// NaN counts as `+∞` (as [`encode_up`] takes it). The code of a maximum is
+/// the maximum of the codes ([`round_up_f32`] and [`encode_up`] are
+/// monotone), so one code per triangle is the per-sample codes' maximum.
+#[derive(Debug, Clone, Copy, Default)]
+struct SquareMax([f64; 5]);
+
+impl SquareMax {
+    /// Raises the maxima with one sample of height `hs` at `(fx, fy)` in
+    /// the square (`even`, `corners`: see [`square_planes`]).
+    #[inline]
+    fn add(&mut self, corners: [f64; 5], even: bool, fx: f64, fy: f64, hs: f64) {
+        let (a, (b, side)) = square_planes(corners, even, fx, fy);
+        let k = match side {
+            Side::North => 1,
+            Side::East => 2,
+            Side::South => 3,
+            Side::West => 4,
+        };
+        for (slot, z) in [(0, a), (k, b)] {
+            let d = (z - hs).abs();
+            let d = if d.is_nan() { f64::INFINITY } else { d };
+            self.0[slot] = self.0[slot].max(d);
+        }
+    }
+}
+
+/// [`size_codes`] for any sample set: the samples in turn, each into the
+/// square that holds it.
+fn one_by_one(
+    s: &impl SampleSet,
+    q: &Squares<'_>,
+    height: &impl Fn(u64, u64) -> f32,
+    raise: &mut impl FnMut(usize, &SquareMax),
+) {
+    let sz = q.size as f64;
+    for k in 0..s.len() {
+        let [x, y, hs] = s.sample(k);
+        let (si, sj) = ((x / sz).floor(), (y / sz).floor());
+        if si < 0.0 || sj < 0.0 {
+            continue;
+        }
+        let (fx, fy) = (x / sz - si, y / sz - sj);
+        let Some((i, corners)) = q.measured(si as u64, sj as u64, height) else {
+            continue;
+        };
+        let mut m = SquareMax::default();
+        m.add(
+            corners,
+            (si as u64 + sj as u64).is_multiple_of(2),
+            fx,
+            fy,
+            hs,
+        );
+        raise(i, &m);
+    }
+}
+
+/// [`size_codes`] for separable samples: each square's samples are a
+/// rectangle of the axes, read with its corners loaded once; each axis
+/// position's square and fraction are computed once per size, as
+/// [`one_by_one`] computes them per sample, so every plane value is the
+/// same. Rows of squares in parallel.
+fn by_rectangles(
+    s: &Samples<'_>,
+    q: &Squares<'_>,
+    height: &(impl Fn(u64, u64) -> f32 + Sync),
+    raise: &mut impl FnMut(usize, &SquareMax),
+) {
+    let (cols, rows) = (
+        AxisRuns::new(&s.cols, q.size),
+        AxisRuns::new(&s.rows, q.size),
+    );
+    let g = s.part.grid;
+    let per_row: Vec<Vec<(usize, SquareMax)>> = rows
+        .runs
+        .par_iter()
+        .map(|(sj, rr)| {
+            cols.runs
+                .iter()
+                .filter_map(|(si, cr)| {
+                    let (i, corners) = q.measured(*si, *sj, height)?;
+                    let even = (si + sj).is_multiple_of(2);
+                    let mut m = SquareMax::default();
+                    for j in rr.clone() {
+                        let row = &g.heights()[s.rows[j].0 * g.width()..];
+                        for i in cr.clone() {
+                            let hs = f64::from(row[s.cols[i].0]);
+                            m.add(corners, even, cols.frac[i], rows.frac[j], hs);
+                        }
+                    }
+                    Some((i, m))
+                })
+                .collect()
+        })
+        .collect();
+    for (i, m) in per_row.iter().flatten() {
+        raise(*i, m);
+    }
+}
+
+/// One axis of separable samples cut into squares of one size: the runs
+/// of consecutive positions in one square (its index, the positions'
+/// indices), and each position's fraction into its square.
+struct AxisRuns {
+    runs: Vec<(u64, std::ops::Range<usize>)>,
+    frac: Vec<f64>,
+}
+
+impl AxisRuns {
+    fn new(axis: &[(usize, f64)], size: u64) -> AxisRuns {
+        let sz = size as f64;
+        let mut runs: Vec<(u64, std::ops::Range<usize>)> = Vec::new();
+        let mut frac = Vec::with_capacity(axis.len());
+        for (k, &(_, v)) in axis.iter().enumerate() {
+            let q = (v / sz).floor();
+            frac.push(v / sz - q);
+            if q < 0.0 {
+                continue;
+            }
+            match runs.last_mut() {
+                Some((sq, r)) if *sq == q as u64 && r.end == k => r.end = k + 1,
+                _ => runs.push((q as u64, k..k + 1)),
+            }
+        }
+        AxisRuns { runs, frac }
+    }
 }
 
 /// A side of a square.
@@ -410,6 +575,45 @@ mod test {
         assert!(span_at(&p, 4.5).is_none());
         let (a, b) = span_at(&p, 0.0).unwrap();
         assert!(a <= 0.0 && b >= 4.0);
+    }
+
+    /// Square by square (a separable set) and sample by sample (the same
+    /// samples listed) give the same codes, bit for bit.
+    #[test]
+    fn squares_and_samples_give_the_same_codes() {
+        let n = 37;
+        let v: Vec<f32> = (0..n * n)
+            .map(|k| ((k * 7919) % 1000) as f32 * 0.37 + (k % n) as f32)
+            .collect();
+        let g = GeoRef {
+            crs: Crs::WGS84,
+            origin_x: 10.0,
+            origin_y: 1.0,
+            pixel_x: 0.01,
+            pixel_y: -0.01,
+            pixel_is: PixelIs::Point,
+            known: true,
+        };
+        let grid = HeightGrid::new(n, n, v, g).unwrap();
+        let frame = LatticeFrame::of(&grid, &LatticeOptions::DEFAULT).unwrap();
+        let part = SourcePart {
+            grid: &grid,
+            offset: [0, 0],
+        };
+        let w = frame.window;
+        let s = Samples::new(&frame.source_georef, frame.scheme.cell_deg(), part, w);
+        let listed =
+            crate::tiles::samples::Listed::new((0..s.len()).map(|k| s.sample(k)).collect());
+        let height = |x: u64, y: u64| ((x * 31 + y * 17) % 97) as f32;
+        let dims = [(w[2] - w[0] + 1) as usize, (w[3] - w[1] + 1) as usize];
+        let at =
+            |m: Pt| (u64::from(m[1]) - w[1]) as usize * dims[0] + (u64::from(m[0]) - w[0]) as usize;
+        let done = Counter::new(crate::progress::NONE, 1);
+        let sizes = [2, 4, 8, 16];
+        let a = by_sample(&s, w, &sizes, &height, &at, None, &done);
+        let b = by_sample(&listed, w, &sizes, &height, &at, None, &done);
+        assert!(a.iter().filter(|c| **c > 0).count() > 100);
+        assert_eq!(a, b);
     }
 
     /// A single peak between lattice points: the triangle over it sees it.
