@@ -6,7 +6,7 @@
 // z up), so float32 vertices stay exact to a centimetre.
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
-import { Lod } from './lod.js';
+import { Lod, FRAME_BUDGET_MS } from './lod.js';
 
 /* global __COTA_WORKER__ */
 const overlay = document.getElementById('overlay');
@@ -19,6 +19,8 @@ const state = {
   colours: 'height',
   textures: [],
   targetPx: Number(new URLSearchParams(location.search).get('px')) || 1,
+  // Refinement time per frame (ms): FRAME_BUDGET_MS unless ?budget=MS.
+  budgetMs: Number(new URLSearchParams(location.search).get('budget')) || FRAME_BUDGET_MS,
   received: 0,
   total: 0,
   steps: 0,
@@ -634,7 +636,7 @@ function frame(now) {
   camera.updateProjectionMatrix();
   const K = renderer.domElement.clientHeight / (2 * Math.tan((camera.fov * Math.PI) / 360));
   const t = performance.now();
-  lod.update(camera.position.toArray(), K, state.targetPx);
+  lod.update(camera.position.toArray(), K, state.targetPx, state.budgetMs);
   const ms = performance.now() - t;
   state.refineMs.push(ms);
   state.triangles.push(lod.triCount);

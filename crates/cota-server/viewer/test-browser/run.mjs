@@ -145,7 +145,11 @@ function flightPath(meta, zFocus) {
 async function viewerTest(browser, url, input) {
   const page = await browser.newPage({ viewport: { width: 1280, height: 720 }, deviceScaleFactor: 1 });
   const errors = collectErrors(page);
-  await page.goto(`${url}/`);
+  // The flight runs with the earlier 50 ms refinement budget: under SwiftShader
+  // every frame is a software render, and a 4 ms budget (the viewer's default,
+  // checked in node by test/lod.test.mjs and bench/refine.mjs) multiplied the
+  // catch-up frames rendered here, and this step's time in CI.
+  await page.goto(`${url}/?budget=50`);
   await page.waitForFunction(() => window.cota && window.cota.ready, null, { timeout: 60000 });
   await page.waitForFunction(() => window.cota.stats().firstDraw, null, { timeout: 60000 });
   const first = await page.evaluate(() => window.cota.stats().firstDraw);
