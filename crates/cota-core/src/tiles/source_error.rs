@@ -601,7 +601,7 @@ mod test {
             offset: [0, 0],
         };
         let w = frame.window;
-        let s = Samples::new(&frame.source_georef, frame.scheme.cell_deg(), part, w);
+        let s = Samples::new(&frame.source_georef, &frame.scheme, part, w);
         let listed =
             crate::tiles::samples::Listed::new((0..s.len()).map(|k| s.sample(k)).collect());
         let height = |x: u64, y: u64| ((x * 31 + y * 17) % 97) as f32;
