@@ -106,6 +106,21 @@ pub fn wanted(filters: &[String], prefix: &str) -> bool {
         })
 }
 
+/// Reads DEM files, mosaics them and fills their voids: the input of the
+/// tiling benchmarks (`tiles-peers`, `tiles-codec`).
+///
+/// # Errors
+/// A file that cannot be read, or inputs that cannot be mosaicked.
+pub fn load_mosaic(files: &[PathBuf]) -> anyhow::Result<HeightGrid> {
+    let grids = files
+        .iter()
+        .map(|p| Ok(read_dem(p, &ReadOptions::DEFAULT)?.grid))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let mut g = cota_core::mosaic(grids, &cota_core::MosaicOptions::DEFAULT)?.grid;
+    fill_voids(&mut g, &FillOptions::DEFAULT)?;
+    Ok(g)
+}
+
 /// The median of `v` (the mean of the middle two for an even count; NaN when
 /// empty).
 pub fn median(v: &[f64]) -> f64 {

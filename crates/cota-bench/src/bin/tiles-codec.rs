@@ -31,7 +31,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use cota_core::grid::PixelIs;
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
-use cota_core::{fill_voids, mosaic, FillOptions, HeightGrid, MosaicOptions};
+use cota_core::HeightGrid;
 use cota_io::tiles::{
     make_tile, tile_path, write_file_atomically, write_mbtiles, write_pyramid, PyramidOptions,
 };
@@ -42,16 +42,6 @@ use terrain_codec::terrain::{encode_terrain_from_fn, TerrainOptions};
 
 /// Posts along a side of the peer's per-tile grid (2⁶ + 1, martini's size).
 const GRID: u32 = 65;
-
-fn load(files: &[PathBuf]) -> Result<HeightGrid> {
-    let grids = files
-        .iter()
-        .map(|p| Ok(cota_io::read_dem(p, &cota_io::ReadOptions::DEFAULT)?.grid))
-        .collect::<Result<Vec<_>>>()?;
-    let mut g = mosaic(grids, &MosaicOptions::DEFAULT)?.grid;
-    fill_voids(&mut g, &FillOptions::DEFAULT)?;
-    Ok(g)
-}
 
 /// Bilinear height of the source at (lon, lat); 0 m beyond its samples
 /// (where cota shows the ellipsoid, so that both are measured alike).
@@ -176,7 +166,7 @@ fn main() -> Result<()> {
     }
     let (out, reps): (PathBuf, usize) = (args[0].clone().into(), args[1].parse()?);
     let files: Vec<PathBuf> = args[2..].iter().map(PathBuf::from).collect();
-    let grid = load(&files)?;
+    let grid = cota_bench::load_mosaic(&files)?;
     let t0 = Instant::now();
     let lattice = Lattice::resample(&grid, &LatticeOptions::DEFAULT)?;
     let prep = Prepared::new(&lattice, &grid, &TilerOptions::DEFAULT)?;

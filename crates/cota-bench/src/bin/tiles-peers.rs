@@ -20,19 +20,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use cota_core::mesh::check::check_placed_mesh;
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
-use cota_core::{fill_voids, mosaic, FillOptions, HeightGrid, MosaicOptions};
+use cota_core::HeightGrid;
 use cota_io::tiles::{compare_border, decode, tile_path, DecodedTile, Neighbour};
 use serde_json::json;
-
-fn load(files: &[PathBuf]) -> Result<HeightGrid> {
-    let grids = files
-        .iter()
-        .map(|p| Ok(cota_io::read_dem(p, &cota_io::ReadOptions::DEFAULT)?.grid))
-        .collect::<Result<Vec<_>>>()?;
-    let mut g = mosaic(grids, &MosaicOptions::DEFAULT)?.grid;
-    fill_voids(&mut g, &FillOptions::DEFAULT)?;
-    Ok(g)
-}
 
 fn export(dir: &Path, prep: &Prepared<'_>) -> Result<()> {
     std::fs::create_dir_all(dir)?;
@@ -166,7 +156,7 @@ fn main() -> Result<()> {
         bail!("usage: tiles-peers export DIR FILE... | tiles-peers measure PYRAMID FILE...");
     }
     let files: Vec<PathBuf> = args[2..].iter().map(PathBuf::from).collect();
-    let grid = load(&files)?;
+    let grid = cota_bench::load_mosaic(&files)?;
     let lattice = Lattice::resample(&grid, &LatticeOptions::DEFAULT)?;
     let prep = Prepared::new(&lattice, &grid, &TilerOptions::DEFAULT)?;
     match args[0].as_str() {
