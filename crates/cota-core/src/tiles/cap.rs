@@ -22,13 +22,17 @@
 //!
 //! # Runtime
 //! `O(window samples)` per level, two passes (sides and halves of each
-//! square), in parallel; a few dozen coarse levels at most.
+//! square), in parallel; a few dozen coarse levels at most. Each triangle's
+//! rows are read in two passes ([`super::row_blocks`]): a few samples per
+//! run of 16 columns first, then only the runs whose bound can exceed the
+//! triangle's maximum so far, with the same result.
 
 use rustc_hash::FxHashMap as HashMap;
 
 use rayon::prelude::*;
 
 use super::lattice::Lattice;
+use super::row_blocks::{max_deviation, RowBlocks};
 use crate::bitree::error_code;
 use crate::bitree::{round_up_f32, Bitree};
 use crate::hierarchy::{Pt, RowSpans, Tri};
@@ -63,7 +67,8 @@ impl Cap {
         let s = lattice.scheme();
         let top = s.cells_at(lattice.align_zoom());
         let window = lattice.window();
-        let own = |t: &Tri| own_error(lattice, t);
+        let blocks = RowBlocks::new(lattice.grid());
+        let own = |t: &Tri| own_error(lattice, &blocks, t);
         let below = |m: Pt| bitree_error(lattice, tree, m);
         Cap::build_with(s.root_cells(), window, top, own, below, progress)
     }
@@ -232,14 +237,14 @@ pub(crate) fn square_halves([nw, ne, sw, se]: [Pt; 4], even: bool) -> [Tri; 2] {
 /// The own error `e(T)` of a global triangle over the lattice (window
 /// samples one by one, the 0 m beyond by the ends of each row's span),
 /// rounded up to `f32`.
-pub(crate) fn own_error(lattice: &Lattice, t: &Tri) -> f32 {
+fn own_error(lattice: &Lattice, blocks: &RowBlocks, t: &Tri) -> f32 {
     let z = t_heights(t, |x, y| lattice.height_at(x, y));
     round_up_f32(own_rows(
         lattice.window(),
         t,
         z,
         true,
-        Some((lattice, lattice.window())),
+        Some((lattice, lattice.window(), Some(blocks))),
     ))
 }
 
@@ -248,34 +253,12 @@ pub(crate) fn t_heights(t: &Tri, height: impl Fn(u64, u64) -> f32) -> [f64; 3] {
     [t.a, t.b, t.c].map(|q| f64::from(height(u64::from(q[0]), u64::from(q[1]))))
 }
 
-/// Largest `|plane(x, y) − h|` over `heights`, the samples of row `y` from
-/// column `x0` on: each value computed as `Plane::at` computes it, in four
-/// independent lanes (so the compiler can use vector registers) whose
-/// maxima are then merged; a maximum does not depend on the order it is
-/// taken in, so the result is the one-by-one loop's, bit for bit.
-fn max_deviation(plane: &Plane, x0: i64, y: f64, heights: &[f32]) -> f64 {
-    let mut lanes = [0f64; 4];
-    let mut chunks = heights.chunks_exact(4);
-    let mut x = x0;
-    for c in &mut chunks {
-        for (k, (m, h)) in lanes.iter_mut().zip(c).enumerate() {
-            let d = (plane.at((x + k as i64) as f64, y) - f64::from(*h)).abs();
-            *m = if d > *m { d } else { *m };
-        }
-        x += 4;
-    }
-    let mut e = lanes[0].max(lanes[1]).max(lanes[2].max(lanes[3]));
-    for (k, h) in chunks.remainder().iter().enumerate() {
-        e = e.max((plane.at((x + k as i64) as f64, y) - f64::from(*h)).abs());
-    }
-    e
-}
-
 /// Largest |plane − h| of a coarse triangle `t` whose corners have heights
 /// `z`, over the window `window`: with `beyond`, the 0 m outside the window
 /// (by the ends of each row's span, the plane being linear along a row);
 /// with `inside = (lattice, clip)`, the window samples in `clip` read one by
-/// one from `lattice`. The maxima of the parts (the 0 m beyond, and clips
+/// one from `lattice` (runs that cannot hold the maximum skipped with
+/// `blocks`, the same result: [`super::row_blocks`]). The maxima of the parts (the 0 m beyond, and clips
 /// covering the window) combine into the whole's exactly: each value is
 /// computed the same way in every part.
 pub(crate) fn own_rows(
@@ -283,7 +266,7 @@ pub(crate) fn own_rows(
     t: &Tri,
     z: [f64; 3],
     beyond: bool,
-    inside: Option<(&Lattice, [u64; 4])>,
+    inside: Option<(&Lattice, [u64; 4], Option<&RowBlocks>)>,
 ) -> f64 {
     let [x0, y0, x1, y1] = window;
     let p = [t.a, t.b, t.c];
@@ -299,9 +282,12 @@ pub(crate) fn own_rows(
     let Some(plane) = Plane::new(p, z) else {
         return 0.0;
     };
+    let z_abs = z.iter().fold(0f64, |m, v| m.max(v.abs()));
     let spans = RowSpans::new(p.map(|q| [i64::from(q[0]), i64::from(q[1])]));
     let (ya, yb) = spans.rows();
-    let row_error = |y: i64| -> f64 {
+    // With `blocks`, two passes: exact values at a few samples of each row
+    // (`floor: None`), then only the runs that can exceed their maximum.
+    let row_error = |y: i64, floor: Option<f64>| -> f64 {
         let (l, r) = spans.at(y);
         if l > r {
             return 0.0;
@@ -309,35 +295,52 @@ pub(crate) fn own_rows(
         let bg = |x: i64| plane.at(x as f64, y as f64).abs();
         let (wx0, wx1) = (x0 as i64, x1 as i64);
         if y < y0 as i64 || y > y1 as i64 || r < wx0 || l > wx1 {
-            return if beyond { bg(l).max(bg(r)) } else { 0.0 };
+            return if beyond && floor.is_none() {
+                bg(l).max(bg(r))
+            } else {
+                0.0
+            };
         }
         let (a, b) = (l.max(wx0), r.min(wx1));
         let mut e = 0f64;
-        if beyond && l < a {
+        if beyond && floor.is_none() && l < a {
             e = e.max(bg(l)).max(bg(a - 1));
         }
-        if beyond && r > b {
+        if beyond && floor.is_none() && r > b {
             e = e.max(bg(b + 1)).max(bg(r));
         }
-        if let Some((lattice, clip)) = inside {
+        if let Some((lattice, clip, blocks)) = inside {
             let (ca, cb) = (a.max(clip[0] as i64), b.min(clip[2] as i64));
             if y < clip[1] as i64 || y > clip[3] as i64 || ca > cb {
                 return e;
             }
             let g = lattice.grid();
             let [ox, oy] = lattice.origin();
-            let row = &g.heights()[(y - oy as i64) as usize * g.width()..];
-            let (i, j) = ((ca - ox as i64) as usize, (cb - ox as i64) as usize);
-            e = e.max(max_deviation(&plane, ca, y as f64, &row[i..=j]));
+            let r = (y - oy as i64) as usize;
+            let row = &g.heights()[r * g.width()..(r + 1) * g.width()];
+            let span = ((ca - ox as i64) as usize, (cb - ox as i64) as usize);
+            let yf = y as f64;
+            e = e.max(match (blocks, floor) {
+                (Some(b), None) => b.row_seed(&plane, row, r, span, ca, yf),
+                (Some(b), Some(f)) => b.row_rest(&plane, row, r, span, ca, yf, (z_abs, f)),
+                (None, _) => max_deviation(&plane, ca, yf, &row[span.0..=span.1]),
+            });
         }
         e
     };
-    if yb - ya > 256 {
-        (ya..=yb)
-            .into_par_iter()
-            .map(row_error)
-            .reduce(|| 0.0, f64::max)
-    } else {
-        (ya..=yb).map(row_error).fold(0.0, f64::max)
+    let pass = |floor: Option<f64>| {
+        if yb - ya > 256 {
+            (ya..=yb)
+                .into_par_iter()
+                .map(|y| row_error(y, floor))
+                .reduce(|| 0.0, f64::max)
+        } else {
+            (ya..=yb).map(|y| row_error(y, floor)).fold(0.0, f64::max)
+        }
+    };
+    let seed = pass(None);
+    match inside {
+        Some((_, _, Some(_))) => seed.max(pass(Some(seed))),
+        _ => seed,
     }
 }

@@ -58,6 +58,7 @@ pub mod merge;
 pub mod partial;
 pub mod plan;
 pub mod relevant;
+mod row_blocks;
 pub mod samples;
 pub mod scheme;
 pub mod shard;

@@ -470,7 +470,7 @@ fn partial_of(
         let g = lat.grid();
         clipped_span_error(g.heights(), g.width(), lat.origin(), tri, z, owned)
     } else {
-        own_rows(lat.window(), tri, z, false, Some((lat, owned)))
+        own_rows(lat.window(), tri, z, false, Some((lat, owned, None)))
     };
     Ok(round_up_f32(e))
 }

@@ -140,7 +140,14 @@ pub fn own_errors(
     } else {
         2 * last
     };
-    let split = below.clamp(first, last.max(first));
+    // A set without row spans measures every size up to `last` sample by
+    // sample (`split / 2 = last`); a separable one hands the sizes from
+    // `split` on to the row pass.
+    let split = match s.separable() {
+        Some(_) => below.clamp(first, last.max(first)),
+        None if last >= first => 2 * last,
+        None => first,
+    };
     let small: Vec<u64> = pow2(first, split / 2).collect();
     // The sample-by-sample sizes (the most time: one share each), then
     // the levels by rows (one share together).
@@ -613,6 +620,59 @@ mod test {
         let a = by_sample(&s, w, &sizes, &height, &at, None, &done);
         let b = by_sample(&listed, w, &sizes, &height, &at, None, &done);
         assert!(a.iter().filter(|c| **c > 0).count() > 100);
+        assert_eq!(a, b);
+    }
+
+    /// Listed samples (projected or mixed sources, no row spans) are
+    /// measured at every size, the largest included, as the same samples on
+    /// a grid are by squares and rows.
+    #[test]
+    fn listed_samples_are_measured_at_every_size() {
+        let n = 37;
+        let v: Vec<f32> = (0..n * n)
+            .map(|k| ((k * 7919) % 1000) as f32 * 0.37 + (k % n) as f32)
+            .collect();
+        let g = GeoRef {
+            crs: Crs::WGS84,
+            origin_x: 10.0,
+            origin_y: 1.0,
+            pixel_x: 0.01,
+            pixel_y: -0.01,
+            pixel_is: PixelIs::Point,
+            known: true,
+        };
+        let grid = HeightGrid::new(n, n, v, g).unwrap();
+        let frame = LatticeFrame::of(&grid, &LatticeOptions::DEFAULT).unwrap();
+        let part = SourcePart {
+            grid: &grid,
+            offset: [0, 0],
+        };
+        let w = frame.window;
+        let s = Samples::new(&frame.source_georef, &frame.scheme, part, w);
+        let listed =
+            crate::tiles::samples::Listed::new((0..s.len()).map(|k| s.sample(k)).collect());
+        let dims = [(w[2] - w[0] + 1) as usize, (w[3] - w[1] + 1) as usize];
+        let last = (dims[0].max(dims[1]) as u64 / 2).next_power_of_two();
+        fn errors(set: &impl SampleSet, w: [u64; 4], dims: [usize; 2], last: u64) -> Vec<u16> {
+            let height = |x: u64, y: u64| ((x * 31 + y * 17) % 97) as f32;
+            let (origin, sizes, none) = ([w[0], w[1]], [2, last], crate::progress::NONE);
+            own_errors(set, origin, dims, sizes, 2 * last, &height, None, none)
+        }
+        let (a, b) = (errors(&s, w, dims, last), errors(&listed, w, dims, last));
+        // The split points of the largest squares: their centres.
+        let centres: Vec<usize> = (0..dims[1])
+            .flat_map(|y| (0..dims[0]).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                let (gx, gy) = (x as u64 + w[0], y as u64 + w[1]);
+                gx % last == last / 2 && gy % last == last / 2
+            })
+            .map(|(x, y)| y * dims[0] + x)
+            .collect();
+        assert!(!centres.is_empty());
+        assert!(
+            centres.iter().any(|&i| b[i] > 0),
+            "largest size not measured"
+        );
         assert_eq!(a, b);
     }
 
