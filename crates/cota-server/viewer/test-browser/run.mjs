@@ -50,6 +50,18 @@ const ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '
 
 let passed = 0, failed = 0;
 const results = {};
+// The flight's length: 500 frames with --docs (the figures of docs/viewer.md),
+// half of them by default. Under SwiftShader every frame is a software render
+// of up to ~230 k triangles, the largest part of this step's time in CI; half
+// the frames make the same approach, low pass and climb in steps twice as
+// long, with as many screen-error readings.
+const FLIGHT_SCALE = docs ? 1 : Number(process.env.COTA_FLIGHT_SCALE || 0.5);
+const atFlight = (k) => Math.round(k * FLIGHT_SCALE);
+// The CesiumJS pages' size. CesiumJS loads a view's tiles a few per frame and,
+// under SwiftShader, a 1280×720 frame of the lit, draped globe took ~2 s on a
+// loaded 2-core machine (about 50 frames to load a view): 800×450 is 39 % of
+// the pixels and needs fewer tiles for the same screen-space error.
+const CESIUM_VIEW = { width: 800, height: 450 };
 function check(name, ok, detail = '') {
   if (ok) passed++;
   else failed++;
@@ -119,25 +131,25 @@ function collectErrors(page) {
 const median = (a) => [...a].sort((x, y) => x - y)[a.length >> 1];
 const pct = (a, p) => [...a].sort((x, y) => x - y)[Math.min(a.length - 1, Math.floor(a.length * p))];
 
-/** The scripted flight: approach, low pass, climb away. */
+/** The scripted flight: approach, low pass, climb away (500 frames at FLIGHT_SCALE 1). */
 function flightPath(meta, zFocus) {
   const ext = Math.max(meta.width * meta.cell_size_m[0], meta.height * meta.cell_size_m[1]);
   const path = [];
   const az = (-110 * Math.PI) / 180, el = (35 * Math.PI) / 180;
   const at = (d, a, fx) => [fx + d * Math.cos(el) * Math.cos(a), d * Math.cos(el) * Math.sin(a), zFocus + d * Math.sin(el)];
   const far = 0.6 * ext, near = 2500;
-  const n = 200;
+  const n = atFlight(200), low = atFlight(100);
   for (let k = 0; k < n; k++) {
     const d = far * (near / far) ** (k / (n - 1));
     path.push({ eye: at(d, az, 0), target: [0, 0, zFocus], phase: 'approach' });
   }
-  for (let k = 0; k < 100; k++) {
-    const fx = 60 * k;
+  for (let k = 0; k < low; k++) {
+    const fx = (60 * 100 * k) / low;
     path.push({ eye: at(near, az, fx), target: [fx, 0, zFocus], phase: 'low' });
   }
   for (let k = 0; k < n; k++) {
     const d = near * (far / near) ** (k / (n - 1));
-    path.push({ eye: at(d, az + k * 0.004, 6000), target: [6000, 0, zFocus], phase: 'climb' });
+    path.push({ eye: at(d, az + (k * 0.8) / n, 6000), target: [6000, 0, zFocus], phase: 'climb' });
   }
   return path;
 }
@@ -178,11 +190,11 @@ async function viewerTest(browser, url, input) {
       last = await page.evaluate(() => window.cota.frames(1));
     }
     frames.push({ phase: p.phase, triangles: s.triangles, refineMs: s.refineMs, pending: s.pending, catchUp });
-    if (k % 25 === 0 || k === path.length - 1) {
+    if (k % atFlight(25) === 0 || k === path.length - 1) {
       const e = await page.evaluate(() => window.cota.screenError());
       errorsPx.push(e.sent);
     }
-    if (k === 150 || k === 260) {
+    if (k === atFlight(150) || k === atFlight(260)) {
       await page.screenshot({ path: join(out, `viewer-${p.phase}-${k}.png`) });
     }
   }
@@ -193,7 +205,7 @@ async function viewerTest(browser, url, input) {
   const tri = frames.map((f) => f.triangles);
   const peak = Math.max(...tri);
   const peakAt = tri.indexOf(peak);
-  check('triangles rise as the camera approaches', peak > 3 * tri[0] && peakAt >= 150, `${tri[0]} at the start, ${peak} at frame ${peakAt}`);
+  check('triangles rise as the camera approaches', peak > 3 * tri[0] && peakAt >= atFlight(150), `${tri[0]} at the start, ${peak} at frame ${peakAt}`);
   check('triangles fall as it leaves', tri.at(-1) < peak / 3, `${peak} → ${tri.at(-1)} at the end`);
   const worst = Math.max(...errorsPx);
   check('screen error within the 1 px target', worst <= 1 + 1e-9, `largest measured ${worst.toFixed(3)} px over ${errorsPx.length} checks`);
@@ -231,7 +243,7 @@ async function viewerTest(browser, url, input) {
  * old per-triangle shading (?facets): the luminance steps between neighbouring
  * pixels are smaller with the new one on the same frame. */
 async function shadingTest(page, path) {
-  const p = path[Math.min(path.length - 1, 200)];
+  const p = path[Math.min(path.length - 1, atFlight(200))];
   await page.evaluate(([e, t]) => window.cota.setView(e, t), [p.eye, p.target]);
   for (let k = 0; k < 40 && (await page.evaluate(() => window.cota.frames(1))).pending; k++);
   await page.evaluate(() => window.cota.frames(3));
@@ -453,7 +465,7 @@ function demPoints(input) {
 /** The CesiumJS page of `cota serve` over real tiles: `mode` 'directory' (--tiles DIR) or 'on demand'. */
 async function cesiumTest(browser, input, tiles, mode) {
   const s = await serve(mode === 'directory' ? [...input.files, '--tiles', tiles.dir] : input.files);
-  const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
+  const page = await browser.newPage({ viewport: CESIUM_VIEW });
   const errors = collectErrors(page);
   const served = [];
   page.on('response', (r) => {
@@ -515,14 +527,16 @@ async function settle(page) {
 async function readable(browser, url) {
   const out1 = {};
   for (const [name, query] of [['readable', ''], ['plain', '?plain']]) {
-    const page = await browser.newPage({ viewport: { width: 1280, height: 720 } });
+    const page = await browser.newPage({ viewport: CESIUM_VIEW });
     const errors = collectErrors(page);
     const images = [];
     page.on('response', (r) => {
       if (new URL(r.url()).pathname.startsWith('/imagery/')) images.push(r.status());
     });
+    const t0 = Date.now();
     await page.goto(`${url}/cesium${query}`);
     await settle(page);
+    console.log(`  (${name} page settled in ${((Date.now() - t0) / 1000).toFixed(1)} s)`);
     const r = await page.evaluate(() => {
       const c = window.cotaCesium;
       const g = c.viewer.scene.globe;
