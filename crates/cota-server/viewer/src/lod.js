@@ -196,7 +196,7 @@ export class Lod {
     }
     if (this.rootsInside && !active[this.rootMid]) this.addRoots();
     for (let i = 0; i < w * h; i++) {
-      if (this.isCandidate(i)) this.queue.push(i, 0, 0, 0, 0, 0);
+      if (this.isCandidate(i)) this.queue.push(i, this.travel, 0, 0, 0, 0);
     }
   }
 

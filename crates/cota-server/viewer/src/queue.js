@@ -145,13 +145,15 @@ export class SlackQueue {
   }
 
   /**
-   * Schedules `node` at `key` (metres of travel, at least the travel so far),
-   * replacing its live entry: kind 0 for a full evaluation, else the kind
+   * Schedules `node` at `key` (metres of travel; one behind the travel so far
+   * is due at once), replacing its live entry: kind 0 for a full evaluation, else the kind
    * and the decision's constants.
    */
   push(node, key, kind, cz, r, dT) {
     const v = (this.ver[node] = (this.ver[node] + 1) | 0);
-    this.buckets[bucketOf(Math.floor(key * Q), this.lastQ)].add(key, node, v, kind, cz, r, dT);
+    // A key behind the last frame's travel is due now: bucket 0.
+    const kq = Math.max(Math.floor(key * Q), this.lastQ);
+    this.buckets[bucketOf(kq, this.lastQ)].add(key, node, v, kind, cz, r, dT);
     if (++this.entries > this.compactAt) this.compact();
   }
 

@@ -72,4 +72,9 @@ test('each frame takes out exactly the live entries the travel has reached', () 
     assert.deepEqual([...want].filter(([, k]) => k <= t), []);
   }
   assert.equal(want.size, 0);
+  // A key behind the travel (a step decoded after frames have run) is due at once.
+  push(42, 10);
+  q.begin(65700);
+  assert.equal(q.popDue(65700, 64), 1);
+  assert.equal(q.node, 42);
 });
