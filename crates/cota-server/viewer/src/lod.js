@@ -20,14 +20,23 @@
 // Incremental: each candidate (a split point that could split now, or one that
 // could merge now) is evaluated once and scheduled again for the moment the
 // eye has travelled far enough to change the decision (its slack in metres:
-// the distance can change by no more than the eye moved). Each frame pops only
-// the candidates whose slack is used up, so the work per frame follows the
-// change of the mesh, not its size; nothing is rebuilt.
+// the distance can change by no more than the eye moved). Each frame takes out
+// only the candidates whose slack is used up, so the work per frame follows
+// the change of the mesh, not its size; nothing is rebuilt. The schedule
+// (queue.js) keeps with each entry its diamond's sphere and target distance,
+// so deciding again a candidate whose slack ran out is a distance and a
+// compare, without reading the grid; a candidate enters the schedule only
+// when its state changes (a split makes the child points it uncovered
+// candidates, a merge makes its apexes candidates again once they have no
+// split child, and takes out the child points it covered), never to find that
+// nothing can be decided.
 //
 // Geomorphing: a new vertex starts at the midpoint of its hypotenuse (where the
 // coarser surface had it: the fictitious point of paper 000) and moves to its
 // real height over `morphFrames` frames (on the GPU, from a start height and a
 // start frame per vertex).
+
+import { SlackQueue } from './queue.js';
 
 const SQRT2 = Math.SQRT2;
 /**
@@ -45,83 +54,8 @@ const MERGE_FRACTION = 0.8;
 export const FRAME_BUDGET_MS = 4;
 /** Candidates evaluated between two looks at the clock. */
 const CLOCK_EVERY = 32;
-
-/**
- * An indexed binary min-heap of (key, node): one entry per node at most, its
- * key changed in place (no stale entries to skip).
- */
-class Heap {
-  constructor(nodes) {
-    this.keys = new Float64Array(1024);
-    this.nodes = new Int32Array(1024);
-    this.pos = new Int32Array(nodes).fill(-1);
-    this.size = 0;
-  }
-
-  /** Puts `node` at `key`, or moves it there when it is in the heap. */
-  set(node, key) {
-    let i = this.pos[node];
-    if (i < 0) {
-      if (this.size === this.keys.length) this.grow();
-      i = this.size++;
-    } else if (key > this.keys[i]) {
-      this.down(i, key, node);
-      return;
-    }
-    this.up(i, key, node);
-  }
-
-  up(i, key, node) {
-    const { keys, nodes, pos } = this;
-    while (i > 0) {
-      const p = (i - 1) >> 1;
-      if (keys[p] <= key) break;
-      keys[i] = keys[p];
-      nodes[i] = nodes[p];
-      pos[nodes[i]] = i;
-      i = p;
-    }
-    keys[i] = key;
-    nodes[i] = node;
-    pos[node] = i;
-  }
-
-  down(i, key, node) {
-    const { keys, nodes, pos } = this;
-    const n = this.size;
-    for (;;) {
-      let c = 2 * i + 1;
-      if (c >= n) break;
-      if (c + 1 < n && keys[c + 1] < keys[c]) c++;
-      if (keys[c] >= key) break;
-      keys[i] = keys[c];
-      nodes[i] = nodes[c];
-      pos[nodes[i]] = i;
-      i = c;
-    }
-    keys[i] = key;
-    nodes[i] = node;
-    pos[node] = i;
-  }
-
-  grow() {
-    const k = new Float64Array(this.keys.length * 2);
-    k.set(this.keys);
-    const n = new Int32Array(this.nodes.length * 2);
-    n.set(this.nodes);
-    this.keys = k;
-    this.nodes = n;
-  }
-
-  /** Removes and returns the node of smallest key. */
-  pop() {
-    const top = this.nodes[0];
-    this.pos[top] = -1;
-    const n = --this.size;
-    if (n > 0) this.down(0, this.keys[n], this.nodes[n]);
-    return top;
-  }
-}
+/** Schedule entries passed over (not due yet) between two looks at the clock. */
+const SCAN_EVERY = 1024;
 
 /** Edge index (0..3) of the direction (dx, dy) from an apex to a child point. */
 function edgeIndex(dx, dy) {
@@ -154,7 +88,7 @@ export class Lod {
     this.active = new Uint8Array(len); // 0 no, 1 split, 2 split in step 0 (never merges)
     this.bounds = new Float64Array(256).fill(Infinity);
     this.stated = [];
-    this.heap = new Heap(len);
+    this.queue = new SlackQueue(len);
     this.travel = 0;
     this.eye = null;
     this.K = 1;
@@ -169,9 +103,13 @@ export class Lod {
     this.scratch = new Int32Array(8);
     this.scratch2 = new Int32Array(8);
     this.scratch3 = new Int32Array(8);
+    this.scratch4 = new Int32Array(8);
+    this.scratch5 = new Int32Array(8);
     this.splits = 0;
     this.merges = 0;
     this.evaluations = 0;
+    /** Evaluations that read the grid (the others read their queue entry alone). */
+    this.fullEvaluations = 0;
   }
 
   initTriangles(cap) {
@@ -242,7 +180,7 @@ export class Lod {
       return;
     }
     for (const i of points) {
-      if (this.isCandidate(i)) this.schedule(i, this.travel);
+      if (this.isCandidate(i)) this.queue.push(i, this.travel, 0, 0, 0, 0);
     }
   }
 
@@ -258,7 +196,7 @@ export class Lod {
     }
     if (this.rootsInside && !active[this.rootMid]) this.addRoots();
     for (let i = 0; i < w * h; i++) {
-      if (this.isCandidate(i)) this.schedule(i, 0);
+      if (this.isCandidate(i)) this.queue.push(i, this.travel, 0, 0, 0, 0);
     }
   }
 
@@ -452,7 +390,10 @@ export class Lod {
 
   // ---- split and merge ----------------------------------------------------
 
-  /** Splits i, first forcing its apexes (ROAM's forced splits). */
+  /**
+   * Splits i, first forcing its apexes (ROAM's forced splits). The caller
+   * schedules i as a merge candidate (a forced apex has a split child at once).
+   */
   split(i) {
     if (this.active[i]) return;
     const w = this.w;
@@ -474,22 +415,46 @@ export class Lod {
       this.removeTri(w * this.h * 4);
       this.removeTri(w * this.h * 4 + 1);
     }
+    // i is no longer a split candidate; its apexes now have a split child, so
+    // they cannot merge until it merges back (merge schedules them then).
+    const q = this.queue;
+    q.remove(i);
+    if (use1 && this.active[c1y * w + c1x] === 1) q.remove(c1y * w + c1x);
+    if (use2 && this.active[c2y * w + c2x] === 1) q.remove(c2y * w + c2x);
     this.scheduleChildren(i);
-    this.schedule(i, this.travel);
   }
 
+  /**
+   * Schedules the child points of i (just split) that it made candidates,
+   * with their decision's constants (those that were candidates already, by
+   * their other apex, keep their entry).
+   */
   scheduleChildren(i) {
-    const x = i % this.w, y = (i / this.w) | 0;
-    const s = this.scratch2;
+    const w = this.w;
+    const x = i % w, y = (i / w) | 0;
+    const s = this.scratch2, g = this.scratch5;
     const f = this.diamond(x, y, s);
-    const t = f & 0xffffff;
-    if ((f & (1 << 30)) === 0 && t === 1) return;
+    if ((f & (1 << 30)) === 0 && (f & 0xffffff) === 1) return;
+    const e = this.eye;
     for (let k = 0; k < 4; k++) {
       const mx = (s[2 * k] + s[(2 * k + 2) & 7]) >> 1, my = (s[2 * k + 1] + s[(2 * k + 3) & 7]) >> 1;
-      if (this.inGrid(mx, my)) {
-        const c = my * this.w + mx;
-        if (this.isCandidate(c)) this.schedule(c, this.travel);
-      }
+      if (!this.inGrid(mx, my)) continue;
+      const c = my * w + mx;
+      const step = this.stepOf[c];
+      if (this.active[c] || step === 255 || this.isCorner(mx, my)) continue;
+      const gf = this.diamond(mx, my, g);
+      const o = gf & (1 << 29) ? 2 : 0;
+      const other = g[o] === x && g[o + 1] === y ? o + 4 : o;
+      if (this.present(g[other], g[other + 1])) continue;
+      const bound = this.bounds[step];
+      if (bound === 0) continue; // exact: never needs a split
+      this.sphereOf(c, gf, g, bound);
+      const dT = (bound * this.K) / this.targetPx;
+      const dx = e[0] - (mx - (w - 1) / 2) * this.cellX;
+      const dy = e[1] - ((this.h - 1) / 2 - my) * this.cellY;
+      const dz = e[2] - this.sphereZ;
+      const slack = Math.sqrt(dx * dx + dy * dy + dz * dz) - this.sphereR - dT;
+      this.queue.push(c, this.travel + Math.max(slack, 0), 1, this.sphereZ, this.sphereR, dT);
     }
   }
 
@@ -510,11 +475,14 @@ export class Lod {
     return false;
   }
 
-  /** Merges i (split, not in step 0, no split child): its diamond comes back. */
+  /**
+   * Merges i (split, not in step 0, no split child): its diamond comes back.
+   * The caller schedules i as a split candidate.
+   */
   merge(i) {
     const w = this.w;
     const x = i % w, y = (i / w) | 0;
-    const s = this.scratch;
+    const s = this.scratch4;
     const f = this.diamond(x, y, s);
     const o = f & (1 << 29) ? 2 : 0;
     const e = 2 - o;
@@ -529,9 +497,17 @@ export class Lod {
     if (use2) this.addTri((c2y * w + c2x) * 4 + edgeIndex(x - c2x, y - c2y), c2x, c2y, ax, ay, bx, by, -1);
     if (i === this.rootMid && this.rootsInside) this.addRoots();
     for (let k = 0; k < 4; k++) this.removeTri(i * 4 + k);
-    if (use1 && this.active[c1y * w + c1x] === 1) this.schedule(c1y * w + c1x, this.travel);
-    if (use2 && this.active[c2y * w + c2x] === 1) this.schedule(c2y * w + c2x, this.travel);
-    this.schedule(i, this.travel);
+    // An apex whose last split child this was may merge now.
+    const q = this.queue;
+    const a1 = c1y * w + c1x, a2 = c2y * w + c2x;
+    if (use1 && this.active[a1] === 1 && !this.hasActiveChild(a1)) q.push(a1, this.travel, 0, 0, 0, 0);
+    if (use2 && this.active[a2] === 1 && !this.hasActiveChild(a2)) q.push(a2, this.travel, 0, 0, 0, 0);
+    // i's child points whose triangles went with it are no longer candidates.
+    if ((f & (1 << 30)) === 0 && (f & 0xffffff) === 1) return;
+    for (let k = 0; k < 4; k++) {
+      const mx = (s[2 * k] + s[(2 * k + 2) & 7]) >> 1, my = (s[2 * k + 1] + s[(2 * k + 3) & 7]) >> 1;
+      if (this.inGrid(mx, my) && !this.isCandidate(my * w + mx)) q.remove(my * w + mx);
+    }
   }
 
   // ---- the criterion ------------------------------------------------------
@@ -545,6 +521,19 @@ export class Lod {
 
   /** `distance` with the diamond `f`, `s` of (x, y) already computed. */
   distanceOf(i, x, y, f, s, bound) {
+    this.sphereOf(i, f, s, bound);
+    const e = this.eye;
+    const dx = e[0] - (x - (this.w - 1) / 2) * this.cellX;
+    const dy = e[1] - ((this.h - 1) / 2 - y) * this.cellY;
+    const dz = e[2] - this.sphereZ;
+    return Math.sqrt(dx * dx + dy * dy + dz * dz) - this.sphereR;
+  }
+
+  /**
+   * The sphere around i's diamond `f`, `s` (its grid samples and `bound`
+   * above and below them) into this.sphereZ (centre height) and sphereR.
+   */
+  sphereOf(i, f, s, bound) {
     const t = f & 0xffffff;
     const { w, h, z } = this;
     let zmin = z[i], zmax = zmin;
@@ -557,11 +546,8 @@ export class Lod {
     }
     const rh = (f & (1 << 30) ? t * SQRT2 : t) * this.cell;
     const rz = (zmax - zmin) / 2 + bound;
-    const e = this.eye;
-    const dx = e[0] - (x - (w - 1) / 2) * this.cellX;
-    const dy = e[1] - ((h - 1) / 2 - y) * this.cellY;
-    const dz = e[2] - (zmin + zmax) / 2;
-    return Math.sqrt(dx * dx + dy * dy + dz * dz) - Math.sqrt(rh * rh + rz * rz);
+    this.sphereZ = (zmin + zmax) / 2;
+    this.sphereR = Math.sqrt(rh * rh + rz * rz);
   }
 
   /** Screen-space error in pixels of leaving i's diamond unsplit, with `bound`. */
@@ -571,13 +557,13 @@ export class Lod {
     return d <= 0 ? Infinity : (bound * this.K) / d;
   }
 
-  schedule(i, key) {
-    this.heap.set(i, key);
-  }
-
-  /** Decides for i now, and schedules it again where its slack runs out. */
+  /**
+   * Decides for i from the grid (its state, its diamond's sphere and bound),
+   * and acts or schedules it again where its slack runs out.
+   */
   evaluate(i) {
     this.evaluations++;
+    this.fullEvaluations++;
     const a = this.active[i];
     if (a === 2) return;
     const step = this.stepOf[i];
@@ -591,31 +577,61 @@ export class Lod {
       const root = i === this.rootMid && this.rootsInside;
       if (!root && !this.present(s[o], s[o + 1]) && !this.present(s[o + 4], s[o + 5])) return;
     } else if (this.childActiveIn(f, s)) {
-      return;
+      return; // scheduled again when its last split child merges
     }
     const bound = this.bounds[step];
     if (bound === 0) {
       if (a === 1) this.merge(i);
-      return;
+      return; // exact: never needs a split
     }
-    const d = this.distanceOf(i, x, y, f, s, bound);
-    // At this distance the diamond's screen error is the target.
-    const dTarget = (bound * this.K) / this.targetPx;
-    if (a === 0) {
-      if (d < dTarget / SPLIT_FRACTION) this.split(i);
-      else this.heap.set(i, this.travel + (d - dTarget));
+    this.sphereOf(i, f, s, bound);
+    // At this distance from the sphere the diamond's screen error is the target.
+    const dT = (bound * this.K) / this.targetPx;
+    this.decide(i, a + 1, this.sphereZ, this.sphereR, dT);
+  }
+
+  /**
+   * The decision for candidate i of `kind` (1: may split, 2: may merge) from
+   * its sphere (centre height cz, radius r) and target distance dT: acts, or
+   * schedules it again at the travel where its decision can change (the
+   * distance to the sphere changes no faster than the eye moves). A split
+   * candidate splits when nearer than dT / SPLIT_FRACTION, a split point merges
+   * beyond dT / MERGE_FRACTION.
+   */
+  decide(i, kind, cz, r, dT) {
+    const e = this.eye;
+    const y = (i / this.w) | 0, x = i - y * this.w;
+    const dx = e[0] - (x - (this.w - 1) / 2) * this.cellX;
+    const dy = e[1] - ((this.h - 1) / 2 - y) * this.cellY;
+    const dz = e[2] - cz;
+    const D = Math.sqrt(dx * dx + dy * dy + dz * dz);
+    const t = this.travel;
+    if (kind === 1) {
+      const key = t + (D - r - dT);
+      if (D - r < dT / SPLIT_FRACTION || !(key > t)) {
+        this.split(i);
+        // Now a merge candidate, its slack known (D − r < dT < dT / MERGE_FRACTION).
+        this.queue.push(i, t + (r + dT / MERGE_FRACTION - D), 2, cz, r, dT);
+      } else {
+        this.queue.push(i, key, 1, cz, r, dT);
+      }
     } else {
-      const dMerge = dTarget / MERGE_FRACTION;
-      if (d > dMerge) this.merge(i);
-      else this.heap.set(i, this.travel + (dMerge - d));
+      const key = t + (r + dT / MERGE_FRACTION - D);
+      if (key > t) {
+        this.queue.push(i, key, 2, cz, r, dT);
+      } else {
+        this.merge(i);
+        this.queue.push(i, t + (D - r - dT), 1, cz, r, dT);
+      }
     }
   }
 
   /**
-   * Moves the eye and remeshes: pops every candidate whose slack is used up.
-   * `K` = viewport height in pixels / (2 tan(fovY / 2)). Stops after
-   * `budgetMs` (the rest waits for the next frame). Returns the number of
-   * candidates evaluated.
+   * Moves the eye and remeshes: takes out every candidate whose slack is used
+   * up. `K` = viewport height in pixels / (2 tan(fovY / 2)). Stops before
+   * `budgetMs` would be passed, judging the next slice of CLOCK_EVERY
+   * candidates by the last (the rest waits for the next frame). Returns the
+   * number of candidates evaluated.
    */
   update(eye, K, targetPx, budgetMs = FRAME_BUDGET_MS) {
     this.frame++;
@@ -629,16 +645,34 @@ export class Lod {
       this.targetPx = targetPx;
       this.rescheduleAll();
     }
-    const heap = this.heap;
+    const q = this.queue;
     const t0 = performance.now();
+    let tLast = t0;
     let n = 0;
     this.pending = false;
-    while (heap.size > 0 && heap.keys[0] <= this.travel) {
-      this.evaluate(heap.pop());
-      if (++n % CLOCK_EVERY === 0 && performance.now() - t0 > budgetMs) {
+    q.begin(this.travel);
+    for (;;) {
+      const got = q.popDue(this.travel, SCAN_EVERY);
+      if (got === 0) break;
+      if (got === 1) {
+        const i = q.node;
+        if (q.kind === 0) {
+          this.evaluate(i);
+        } else {
+          // The entry carries the decision's constants: no look at the grid
+          // unless the decision acts.
+          this.evaluations++;
+          this.decide(i, q.kind, q.cz, q.r, q.dT);
+        }
+        if (++n % CLOCK_EVERY !== 0) continue;
+      }
+      // Stop when the next slice, as long as the last, would end past the budget.
+      const now = performance.now();
+      if (2 * now - t0 - tLast > budgetMs) {
         this.pending = true;
         break;
       }
+      tLast = now;
     }
     return n;
   }
@@ -646,7 +680,7 @@ export class Lod {
   /** Every candidate is decided again at once (new viewport or target). */
   rescheduleAll() {
     for (let i = 0; i < this.w * this.h; i++) {
-      if (this.active[i] === 1 || this.isCandidate(i)) this.schedule(i, this.travel);
+      if (this.active[i] === 1 || this.isCandidate(i)) this.queue.push(i, this.travel, 0, 0, 0, 0);
     }
   }
 

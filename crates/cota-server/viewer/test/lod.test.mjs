@@ -151,3 +151,24 @@ test('a frame budget cuts refinement short, and still frames converge to the unb
   assert.deepEqual([...cut.lod.active], [...free.lod.active], 'the same split set as without a budget');
   checkInvariants(cut.lod, cut.d, K, 1);
 });
+
+test('steps decoded after the eye has moved are refined at once', () => {
+  const K = 720 / (2 * Math.tan(Math.PI / 6));
+  const late = setup('s29w072-129x97', 0);
+  const early = setup('s29w072-129x97');
+  // Frames run (the eye travels, then stops) before the stream's first step arrives.
+  for (let k = 4; k >= 0; k--) late.lod.update([1000 * k, -2000, 3000], K, 1, Infinity);
+  const bytes = new Uint8Array(readFileSync(join(golden, 's29w072-129x97.cstream')));
+  const r = new StreamReader();
+  for (const info of r.push(bytes)) {
+    for (const i of info.points) {
+      late.lod.z[i] = r.decoder.heightM(i);
+      late.lod.stepOf[i] = info.index;
+    }
+    late.lod.addStep(info.index, info.maxErrorM, info.points);
+  }
+  late.lod.update([0, -2000, 3000], K, 1, Infinity);
+  early.lod.update([0, -2000, 3000], K, 1, Infinity);
+  checkInvariants(late.lod, late.d, K, 1);
+  assert.deepEqual([...late.lod.active], [...early.lod.active], 'the same split set as with the steps first');
+});
