@@ -281,39 +281,81 @@ pub enum GlbGeometry {
     Meshopt,
 }
 
-/// The positions' accessor, the node matrix and the node's axes.
-type Placed = (usize, Vec<f64>, [[f64; 3]; 3]);
+/// Where a tile's local positions go in the GLB: float32 about the centre
+/// (the node matrix a translation), or u16 over a box in the node's axes.
+struct Placement {
+    /// The node matrix (column-major).
+    matrix: Vec<f64>,
+    /// The node's axes, in glTF axes (identity for float32).
+    frame: [[f64; 3]; 3],
+    /// With meshopt: the box's smallest corner and size per axis, in the
+    /// node's axes.
+    boxed: Option<([f64; 3], [f64; 3])>,
+}
 
-/// The positions' accessor and the node matrix: float32 local positions
-/// and a translation to the centre `t`, or u16 positions over the local box
-/// and a matrix from `[0, 1]³` to it, with one scale on all three axes when
-/// `uniform` (a tile with normals: CesiumJS turns normals by the node matrix
-/// itself, not its inverse transpose, so a scale differing per axis would
-/// bend them; with one scale both agree).
-fn positions(
-    bin: &mut Bin,
-    local: &[[f64; 3]],
+/// The placement of `sets` of local positions about the centre `t`: a
+/// translation for float32; for u16 a matrix from `[0, 1]³` to the box of
+/// all of them, with one scale on all three axes when `uniform` (a tile
+/// with normals: CesiumJS turns normals by the node matrix itself, not its
+/// inverse transpose, so a scale differing per axis would bend them; with
+/// one scale both agree).
+fn placement(
+    sets: &[&[[f64; 3]]],
     [t, rect]: [[f64; 4]; 2],
     geometry: GlbGeometry,
     uniform: bool,
-) -> Result<Placed, MeshoptError> {
+) -> Placement {
     if geometry == GlbGeometry::Float32 {
-        let f: Vec<[f32; 3]> = local.iter().map(|p| p.map(|c| c as f32)).collect();
-        let m = vec![
+        let matrix = vec![
             1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, t[0], t[1], t[2], 1.0,
         ];
-        return Ok((bin.vec3(&f, true), m, IDENTITY));
+        return Placement {
+            matrix,
+            frame: IDENTITY,
+            boxed: None,
+        };
     }
     let frame = enu_frame(rect);
-    let turned: Vec<[f64; 3]> = local
-        .iter()
-        .map(|p| frame.map(|axis| axis[0] * p[0] + axis[1] * p[1] + axis[2] * p[2]))
-        .collect();
+    let turned: Vec<[f64; 3]> = sets.iter().flat_map(|s| turn(&frame, s)).collect();
     let (lo, mut scale) = quantization_box(&turned);
     if uniform {
         scale = [scale.iter().copied().fold(0.0, f64::max); 3];
     }
-    let q: Vec<[u16; 3]> = turned
+    let mut m = vec![0.0; 16];
+    for (k, axis) in frame.iter().enumerate() {
+        for r in 0..3 {
+            m[4 * k + r] = axis[r] * scale[k];
+            m[12 + r] += axis[r] * lo[k];
+        }
+    }
+    for r in 0..3 {
+        m[12 + r] += t[r];
+    }
+    m[15] = 1.0;
+    Placement {
+        matrix: m,
+        frame,
+        boxed: Some((lo, scale)),
+    }
+}
+
+/// `local` in the node's axes `frame`.
+fn turn(frame: &[[f64; 3]; 3], local: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    local
+        .iter()
+        .map(|p| frame.map(|axis| axis[0] * p[0] + axis[1] * p[1] + axis[2] * p[2]))
+        .collect()
+}
+
+/// The accessor of the local positions `local` placed as `place` says:
+/// float32, or u16 over the box (`KHR_mesh_quantization`, compressed with
+/// `EXT_meshopt_compression` in mode `ATTRIBUTES`, stride 8).
+fn positions(bin: &mut Bin, local: &[[f64; 3]], place: &Placement) -> Result<usize, MeshoptError> {
+    let Some((lo, scale)) = place.boxed else {
+        let f: Vec<[f32; 3]> = local.iter().map(|p| p.map(|c| c as f32)).collect();
+        return Ok(bin.vec3(&f, true));
+    };
+    let q: Vec<[u16; 3]> = turn(&place.frame, local)
         .iter()
         .map(|p| {
             std::array::from_fn(|k| {
@@ -337,26 +379,14 @@ fn positions(
         }
     }
     let accessor = json!({"componentType": 5123, "normalized": true, "count": q.len(), "type": "VEC3", "min": min, "max": max});
-    let a = bin.packed(
+    Ok(bin.packed(
         raw.len(),
         [8, q.len()],
         "ATTRIBUTES",
         &packed,
         Some(34962),
         accessor,
-    );
-    let mut m = vec![0.0; 16];
-    for (k, axis) in frame.iter().enumerate() {
-        for r in 0..3 {
-            m[4 * k + r] = axis[r] * scale[k];
-            m[12 + r] += axis[r] * lo[k];
-        }
-    }
-    for r in 0..3 {
-        m[12 + r] += t[r];
-    }
-    m[15] = 1.0;
-    Ok((a, m, frame))
+    ))
 }
 
 const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
@@ -418,8 +448,78 @@ pub fn u16_budget_m(scale: [f64; 3]) -> f64 {
         .sqrt()
 }
 
+/// How many levels coarser than a tile a neighbour may be whose gap its
+/// skirt still closes ([`skirt_depth_m`]; `docs/3dtiles-terrain.md` argues
+/// the figure for screen-space-error clients).
+pub const SKIRT_LEVELS: u8 = 4;
+
+/// How deep a tile's skirt hangs: the widest gap between its edge and a
+/// neighbour's, `e_m + coarse_e_m`, where `e_m` is the tile's zoom's bound
+/// and `coarse_e_m` the bound [`SKIRT_LEVELS`] zooms coarser (each drawn
+/// edge lies within its tile's bound of the same surface, so the two edges
+/// lie within the sum of each other), plus 5 % for the quantization and
+/// float32 budgets both tiles add to their bounds (under 0.5 % of a bound in
+/// the bundled fixture's pyramid), metres.
+pub fn skirt_depth_m(e_m: f64, coarse_e_m: f64) -> f64 {
+    1.05 * (e_m + coarse_e_m)
+}
+
+/// A tile's skirt for 3D Tiles clients that build none (all but CesiumJS,
+/// which builds its own from `CESIUM_tile_edges` and reads only the first
+/// primitive): every edge vertex copied, and copied again lowered along the
+/// ellipsoid normal, two triangles per edge segment facing outwards.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Skirt {
+    /// ECEF positions, metres: per edge (in [`ccw_edges`] order) its
+    /// vertices, then the same lowered.
+    pub positions: Vec<[f64; 3]>,
+    /// The tile's vertex each skirt vertex copies.
+    pub from: Vec<u32>,
+    /// Triangles (indices into `positions`), counter-clockwise seen from
+    /// outside the tile.
+    pub triangles: Vec<u32>,
+}
+
+/// The skirt of a decoded quantized-mesh tile over `rect` hanging
+/// `depth_m` below its edges. The top vertices are computed as
+/// [`ecef_positions`] computes them, so they are the surface's edge
+/// vertices bit for bit.
+pub fn skirt(tile: &DecodedTile, rect: [f64; 4], depth_m: f64) -> Skirt {
+    let mut s = Skirt {
+        positions: Vec::new(),
+        from: Vec::new(),
+        triangles: Vec::new(),
+    };
+    for list in ccw_edges(tile) {
+        let base = s.positions.len() as u32;
+        let n = list.len() as u32;
+        for lower in [0.0, depth_m] {
+            for &i in &list {
+                let [lon, lat, h] = tile.geodetic(i as usize, rect);
+                s.positions.push(ecef(lon, lat, h - lower));
+                s.from.push(i);
+            }
+        }
+        // The lists run clockwise seen from above (west side south to north,
+        // ...), so (top i, top i+1, bottom i) turns counter-clockwise seen
+        // from outside.
+        for k in 0..n.saturating_sub(1) {
+            if list[k as usize] == list[k as usize + 1] {
+                continue;
+            }
+            let (t0, t1, b0, b1) = (base + k, base + k + 1, base + n + k, base + n + k + 1);
+            s.triangles.extend_from_slice(&[t0, t1, b0, t1, b1, b0]);
+        }
+    }
+    s
+}
+
 /// The GLB of a decoded quantized-mesh tile over `rect`, with vertex normals
-/// when `normals` (and the tile has them), its geometry as `geometry` says.
+/// when `normals` (and the tile has them), its geometry as `geometry` says,
+/// and with `skirt_depth_m` a second primitive in the mesh: the tile's
+/// [`skirt`] hanging that deep (positions in the same node frame, u16 in the
+/// same box with meshopt, which then grows to hold it; normals copied from
+/// the edge vertices; no `CESIUM_tile_edges`).
 ///
 /// # Errors
 /// [`MeshoptError`] when meshopt cannot hold the tile's indices (more than
@@ -429,38 +529,72 @@ pub fn encode_glb(
     rect: [f64; 4],
     normals: bool,
     geometry: GlbGeometry,
+    skirt_depth_m: Option<f64>,
 ) -> Result<Vec<u8>, MeshoptError> {
     let centre = tile.header.center;
+    let to_local = |p: [f64; 3]| to_gltf([p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]]);
     let local: Vec<[f64; 3]> = ecef_positions(tile, rect)
         .into_iter()
-        .map(|p| to_gltf([p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]]))
+        .map(to_local)
+        .collect();
+    let skirt = skirt_depth_m.map(|d| skirt(tile, rect, d));
+    let skirt_local: Vec<[f64; 3]> = skirt
+        .iter()
+        .flat_map(|s| s.positions.iter().map(|&p| to_local(p)))
         .collect();
     let wide = local.len() > 65_535;
     let packed = geometry == GlbGeometry::Meshopt;
     let mut bin = Bin::default();
     let t = to_gltf(centre);
     let with_normals = normals && tile.normals.is_some();
-    let (position, matrix, frame) = positions(
-        &mut bin,
-        &local,
+    let place = placement(
+        &[&local, &skirt_local],
         [[t[0], t[1], t[2], 0.0], rect],
         geometry,
         with_normals,
-    )?;
+    );
+    let position = positions(&mut bin, &local, &place)?;
     let flat: Vec<u32> = tile.triangles.iter().flatten().copied().collect();
     let indices = bin.indices(&flat, wide, Some(34963), packed.then_some("TRIANGLES"))?;
     let edges = bin.edges(&ccw_edges(tile), wide);
+    let frame = place.frame;
+    // Unit normals in the node's frame (turned with the quantization box).
+    let turned_normals: Option<Vec<[f32; 3]>> =
+        tile.normals.as_ref().filter(|_| normals).map(|oct| {
+            oct.iter()
+                .map(|&e| {
+                    let n = to_gltf(oct_decode(e));
+                    frame.map(|axis| (axis[0] * n[0] + axis[1] * n[1] + axis[2] * n[2]) as f32)
+                })
+                .collect()
+        });
     let mut attributes = json!({"POSITION": position});
-    if let (true, Some(oct)) = (normals, &tile.normals) {
-        let n: Vec<[f32; 3]> = oct
-            .iter()
-            .map(|&e| {
-                let n = to_gltf(oct_decode(e));
-                frame.map(|axis| (axis[0] * n[0] + axis[1] * n[1] + axis[2] * n[2]) as f32)
-            })
-            .collect();
-        // In the node's frame (turned with the quantization box).
-        attributes["NORMAL"] = json!(bin.vec3(&n, false));
+    if let Some(n) = &turned_normals {
+        attributes["NORMAL"] = json!(bin.vec3(n, false));
+    }
+    let mut primitives = vec![json!({
+        "attributes": attributes,
+        "indices": indices,
+        "mode": 4,
+        "extensions": {"CESIUM_tile_edges": {
+            "left": edges[0], "bottom": edges[1], "right": edges[2], "top": edges[3]
+        }}
+    })];
+    if let Some(s) = &skirt {
+        let position = positions(&mut bin, &skirt_local, &place)?;
+        let wide = skirt_local.len() > 65_535;
+        let indices = bin.indices(
+            &s.triangles,
+            wide,
+            Some(34963),
+            packed.then_some("TRIANGLES"),
+        )?;
+        let mut attributes = json!({"POSITION": position});
+        if let Some(n) = &turned_normals {
+            let copied: Vec<[f32; 3]> = s.from.iter().map(|&i| n[i as usize]).collect();
+            attributes["NORMAL"] = json!(bin.vec3(&copied, false));
+        }
+        primitives.push(json!({"attributes": attributes, "indices": indices, "mode": 4}));
     }
     let meta = TileMeta::of(tile);
     let mut buffers = vec![json!({"byteLength": bin.bytes.len()})];
@@ -469,15 +603,8 @@ pub fn encode_glb(
         "extensionsUsed": ["CESIUM_tile_edges"],
         "scene": 0,
         "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0, "matrix": matrix}],
-        "meshes": [{"primitives": [{
-            "attributes": attributes,
-            "indices": indices,
-            "mode": 4,
-            "extensions": {"CESIUM_tile_edges": {
-                "left": edges[0], "bottom": edges[1], "right": edges[2], "top": edges[3]
-            }}
-        }]}],
+        "nodes": [{"mesh": 0, "matrix": place.matrix}],
+        "meshes": [{"primitives": primitives}],
     });
     if packed {
         buffers.push(json!({"byteLength": bin.fallback, "extensions": {"EXT_meshopt_compression": {"fallback": true}}}));
