@@ -42,8 +42,11 @@ pub struct DecodedGlb {
     pub quantized_scale: Option<[f64; 3]>,
     /// The second primitive (the skirt for clients that build none, which
     /// CesiumJS never reads): its ECEF positions and triangles, when present.
-    pub skirt: Option<(Vec<[f64; 3]>, Vec<[u32; 3]>)>,
+    pub skirt: Option<Triangles>,
 }
+
+/// A primitive's ECEF positions (metres) and triangles.
+pub type Triangles = (Vec<[f64; 3]>, Vec<[u32; 3]>);
 
 fn bad(what: impl Into<String>) -> GlbError {
     GlbError(what.into())
