@@ -16,7 +16,10 @@
 //!   the accessor says, so `KHR_mesh_quantization` alone is not an option
 //!   for it; with [`GlbGeometry::Meshopt`] it is u16 (normalized, stride 8)
 //!   over the tile's box in east, north, up axes, the node matrix mapping
-//!   `[0, 1]³` to the box (CesiumJS divides by 65 535 and applies it),
+//!   `[0, 1]³` to the box (CesiumJS divides by 65 535 and applies it; its
+//!   numbers rounded to 9 significant digits, the translation to 1 mm, for
+//!   a shorter JSON chunk, and the positions quantized through the rounded
+//!   matrix's inverse),
 //!   compressed with `EXT_meshopt_compression` ([`crate::meshopt`]), and
 //!   the indices too (triangles mode); the views' stand-in is a fallback
 //!   buffer without data, both extensions required;
@@ -294,9 +297,10 @@ struct Placement {
     matrix: Vec<f64>,
     /// The node's axes, in glTF axes (identity for float32).
     frame: [[f64; 3]; 3],
-    /// With meshopt: the box's smallest corner and size per axis, in the
-    /// node's axes.
-    boxed: Option<([f64; 3], [f64; 3])>,
+    /// With meshopt: what takes a local position to `[0, 1]³` through the
+    /// (rounded) node matrix: the shift to add (tile centre minus the
+    /// matrix's translation) and the inverse of its 3 × 3 part, rows.
+    boxed: Option<([f64; 3], [[f64; 3]; 3])>,
 }
 
 /// The placement of `sets` of local positions about the centre `t`: a
@@ -338,11 +342,41 @@ fn placement(
         m[12 + r] += t[r];
     }
     m[15] = 1.0;
+    // Shorter JSON: the columns to 9 significant digits, the translation to
+    // 1 mm; the positions are quantized through this matrix's inverse, so
+    // they land where the client puts them (within half a step per axis).
+    for (k, v) in m.iter_mut().enumerate().take(15) {
+        *v = if k >= 12 {
+            (*v * 1e3).round() / 1e3
+        } else {
+            format!("{v:.8e}").parse().unwrap_or(*v)
+        };
+    }
+    let columns: [[f64; 3]; 3] = std::array::from_fn(|k| [m[4 * k], m[4 * k + 1], m[4 * k + 2]]);
+    let shift = [t[0] - m[12], t[1] - m[13], t[2] - m[14]];
     Placement {
         matrix: m,
         frame,
-        boxed: Some((lo, scale)),
+        boxed: Some((shift, inverse(columns))),
     }
+}
+
+/// The inverse of the 3 × 3 matrix with columns `c` (row-major rows), by
+/// cofactors; the zero matrix when `c` is singular.
+fn inverse(c: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let rows = [cross(c[1], c[2]), cross(c[2], c[0]), cross(c[0], c[1])];
+    let det: f64 = (0..3).map(|r| rows[0][r] * c[0][r]).sum();
+    if det == 0.0 || !det.is_finite() {
+        return [[0.0; 3]; 3];
+    }
+    rows.map(|row| row.map(|v| v / det))
 }
 
 /// `local` in the node's axes `frame`.
@@ -357,15 +391,16 @@ fn turn(frame: &[[f64; 3]; 3], local: &[[f64; 3]]) -> Vec<[f64; 3]> {
 /// float32, or u16 over the box (`KHR_mesh_quantization`, compressed with
 /// `EXT_meshopt_compression` in mode `ATTRIBUTES`, stride 8).
 fn positions(bin: &mut Bin, local: &[[f64; 3]], place: &Placement) -> Result<usize, MeshoptError> {
-    let Some((lo, scale)) = place.boxed else {
+    let Some((shift, inv)) = place.boxed else {
         let f: Vec<[f32; 3]> = local.iter().map(|p| p.map(|c| c as f32)).collect();
         return Ok(bin.vec3(&f, true));
     };
-    let q: Vec<[u16; 3]> = turn(&place.frame, local)
+    let q: Vec<[u16; 3]> = local
         .iter()
         .map(|p| {
-            std::array::from_fn(|k| {
-                ((p[k] - lo[k]) / scale[k] * 65535.0)
+            let d = [p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]];
+            inv.map(|row| {
+                ((row[0] * d[0] + row[1] * d[1] + row[2] * d[2]) * 65535.0)
                     .round()
                     .clamp(0.0, 65535.0) as u16
             })
