@@ -18,7 +18,10 @@
 //! and the ellipsoid away from the data, within the zoom's bound plus
 //! float32's rounding ([`super::glb_tile::float32_budget_m`]) or the
 //! quantization's ([`super::glb_tile::u16_budget_m`]). With meshopt the
-//! triangles may be turned (same winding): compared as such.
+//! triangles may be turned (same winding): compared as such. With
+//! [`PyramidOptions::skirts`] each GLB also carries its skirt for clients
+//! that build none, [`skirt_depth`] deep (a second primitive, which
+//! CesiumJS and the check never read).
 //!
 //! Atomic and resumable as the quantized-mesh writer: each file goes to a
 //! temporary name and is renamed; the manifest `OUT/.cota-tiles.json` says
