@@ -1056,6 +1056,14 @@ pub struct TilesArgs {
     /// reads them). Default: off (float32 positions, plain indices).
     #[arg(long)]
     pub meshopt: bool,
+    /// With --format 3dtiles: no skirts. By default each GLB carries a
+    /// second primitive, a skirt hanging below the tile's edges, that closes
+    /// the cracks between tiles of different levels in 3D Tiles clients that
+    /// build no skirts (3DTilesRendererJS, loaders.gl); CesiumJS reads only
+    /// the first primitive and builds its own from CESIUM_tile_edges, so a
+    /// pyramid for CesiumJS alone can leave them out (fewer bytes).
+    #[arg(long)]
+    pub no_skirts: bool,
     /// Also write shaded-relief imagery beside the terrain: PNG tiles
     /// OUT/imagery/{z}/{x}/{y}.png (hillshade over a hypsometric tint, the
     /// same geographic tiling and TMS rows) and OUT/imagery/imagery.json,

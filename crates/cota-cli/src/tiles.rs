@@ -116,6 +116,9 @@ fn refuse_archive_mismatch(a: &TilesArgs) -> anyhow::Result<()> {
     if a.meshopt && a.format != TileFormatArg::Tiles3d {
         anyhow::bail!("--meshopt compresses 3D Tiles GLBs: expected --format 3dtiles with it");
     }
+    if a.no_skirts && a.format != TileFormatArg::Tiles3d {
+        anyhow::bail!("--no-skirts leaves the skirts out of 3D Tiles GLBs: expected --format 3dtiles with it (quantized-mesh clients build their own)");
+    }
     if is_mbtiles(&a.output) && a.format == TileFormatArg::Tiles3d {
         anyhow::bail!(
             "{}: expected a directory for --format 3dtiles, found an .mbtiles name; 3D Tiles archives are not written yet",
@@ -510,6 +513,7 @@ fn pyramid_options(a: &TilesArgs) -> PyramidOptions {
         .with_force(a.force)
         .with_check(a.check)
         .with_meshopt(a.meshopt)
+        .with_skirts(!a.no_skirts)
         .with_format(match a.format {
             TileFormatArg::QuantizedMesh => TileFormat::QuantizedMesh,
             TileFormatArg::Tiles3d => TileFormat::Tiles3d,

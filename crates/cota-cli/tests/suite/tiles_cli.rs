@@ -624,6 +624,27 @@ fn three_d_tiles_pyramid_and_its_refusals() {
         "{}",
         stderr(&r)
     );
+    // Skirts by default (a second primitive); --no-skirts is another
+    // setting for an output made with them, and 3D Tiles only.
+    assert!(String::from_utf8_lossy(&glb).contains(r#""mode":4},{"attributes""#));
+    let r = cota(
+        &[
+            &args[..],
+            &["--meshopt", "--no-skirts", "-o", packed.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    assert!(
+        !r.status.success() && stderr(&r).contains("other settings"),
+        "{}",
+        stderr(&r)
+    );
+    let r = cota(&["tiles", "--no-skirts", "-o", packed.to_str().unwrap()]);
+    assert!(
+        !r.status.success() && stderr(&r).contains("--format 3dtiles"),
+        "{}",
+        stderr(&r)
+    );
     let mb = dir.path().join("t.mbtiles");
     let r = cota(&["tiles", "--format", "3dtiles", "-o", mb.to_str().unwrap()]);
     assert!(

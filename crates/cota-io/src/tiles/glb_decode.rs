@@ -6,7 +6,9 @@
 //! by [`crate::meshopt::decode`], which shares no code with the encoders),
 //! and the first node's `matrix` followed by glTF's Y-up to Z-up turn, to
 //! ECEF positions in f64. It shares no code with the encoder, so the
-//! pyramid's check measures the bytes a client draws.
+//! pyramid's check measures the bytes a client draws. A second primitive
+//! (the skirt for other clients) is decoded apart, positions and triangles,
+//! and never enters the check.
 
 use std::borrow::Cow;
 
@@ -38,7 +40,13 @@ pub struct DecodedGlb {
     /// axis (the length of each column: the size of the box the u16 values
     /// span, metres).
     pub quantized_scale: Option<[f64; 3]>,
+    /// The second primitive (the skirt for clients that build none, which
+    /// CesiumJS never reads): its ECEF positions and triangles, when present.
+    pub skirt: Option<Triangles>,
 }
+
+/// A primitive's ECEF positions (metres) and triangles.
+pub type Triangles = (Vec<[f64; 3]>, Vec<[u32; 3]>);
 
 fn bad(what: impl Into<String>) -> GlbError {
     GlbError(what.into())
@@ -283,6 +291,17 @@ pub fn decode_glb(bytes: &[u8]) -> Result<DecodedGlb, GlbError> {
         None => None,
     };
     let meta = read_meta(&doc["asset"]["extras"]["cota"]);
+    let skirt = match doc["meshes"][0]["primitives"].get(1) {
+        Some(p) => {
+            let local = floats(&doc, bin, index(&p["attributes"]["POSITION"], "POSITION")?)?;
+            let flat = indices(&doc, bin, index(&p["indices"], "indices")?)?;
+            Some((
+                local.iter().map(|&q| place(&m, q, 1.0)).collect(),
+                flat.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+            ))
+        }
+        None => None,
+    };
     Ok(DecodedGlb {
         positions,
         triangles,
@@ -290,6 +309,7 @@ pub fn decode_glb(bytes: &[u8]) -> Result<DecodedGlb, GlbError> {
         normals,
         meta,
         quantized_scale,
+        skirt,
     })
 }
 

@@ -16,7 +16,10 @@
 //!   the accessor says, so `KHR_mesh_quantization` alone is not an option
 //!   for it; with [`GlbGeometry::Meshopt`] it is u16 (normalized, stride 8)
 //!   over the tile's box in east, north, up axes, the node matrix mapping
-//!   `[0, 1]³` to the box (CesiumJS divides by 65 535 and applies it),
+//!   `[0, 1]³` to the box (CesiumJS divides by 65 535 and applies it; its
+//!   numbers rounded to 9 significant digits, the translation to 1 mm, for
+//!   a shorter JSON chunk, and the positions quantized through the rounded
+//!   matrix's inverse),
 //!   compressed with `EXT_meshopt_compression` ([`crate::meshopt`]), and
 //!   the indices too (triangles mode); the views' stand-in is a fallback
 //!   buffer without data, both extensions required;
@@ -31,6 +34,12 @@
 //!   compressed: CesiumJS reads meshopt normals as its own int8 octahedral
 //!   pairs; with them the quantization box has one scale on all axes, as
 //!   CesiumJS turns normals by the node matrix, not its inverse transpose).
+//!
+//! A second primitive of the same mesh, on request, is the tile's [`skirt`]
+//! for clients that build none (CesiumJS reads the first primitive only):
+//! the edge vertices and the same lowered by [`skirt_depth_m`], its
+//! positions placed as the surface's (u16 in the same box with meshopt),
+//! normals copied from the edge vertices.
 //!
 //! The tile is made from the decoded quantized-mesh tile of the same
 //! hierarchy (same vertices, triangles and edges; the vertices where a
@@ -281,43 +290,117 @@ pub enum GlbGeometry {
     Meshopt,
 }
 
-/// The positions' accessor, the node matrix and the node's axes.
-type Placed = (usize, Vec<f64>, [[f64; 3]; 3]);
+/// Where a tile's local positions go in the GLB: float32 about the centre
+/// (the node matrix a translation), or u16 over a box in the node's axes.
+struct Placement {
+    /// The node matrix (column-major).
+    matrix: Vec<f64>,
+    /// The node's axes, in glTF axes (identity for float32).
+    frame: [[f64; 3]; 3],
+    /// With meshopt: what takes a local position to `[0, 1]³` through the
+    /// (rounded) node matrix: the shift to add (tile centre minus the
+    /// matrix's translation) and the inverse of its 3 × 3 part, rows.
+    boxed: Option<([f64; 3], [[f64; 3]; 3])>,
+}
 
-/// The positions' accessor and the node matrix: float32 local positions
-/// and a translation to the centre `t`, or u16 positions over the local box
-/// and a matrix from `[0, 1]³` to it, with one scale on all three axes when
-/// `uniform` (a tile with normals: CesiumJS turns normals by the node matrix
-/// itself, not its inverse transpose, so a scale differing per axis would
-/// bend them; with one scale both agree).
-fn positions(
-    bin: &mut Bin,
-    local: &[[f64; 3]],
+/// The placement of `sets` of local positions about the centre `t`: a
+/// translation for float32; for u16 a matrix from `[0, 1]³` to the box of
+/// all of them, with one scale on all three axes when `uniform` (a tile
+/// with normals: CesiumJS turns normals by the node matrix itself, not its
+/// inverse transpose, so a scale differing per axis would bend them; with
+/// one scale both agree).
+fn placement(
+    sets: &[&[[f64; 3]]],
     [t, rect]: [[f64; 4]; 2],
     geometry: GlbGeometry,
     uniform: bool,
-) -> Result<Placed, MeshoptError> {
+) -> Placement {
     if geometry == GlbGeometry::Float32 {
-        let f: Vec<[f32; 3]> = local.iter().map(|p| p.map(|c| c as f32)).collect();
-        let m = vec![
+        let matrix = vec![
             1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, t[0], t[1], t[2], 1.0,
         ];
-        return Ok((bin.vec3(&f, true), m, IDENTITY));
+        return Placement {
+            matrix,
+            frame: IDENTITY,
+            boxed: None,
+        };
     }
     let frame = enu_frame(rect);
-    let turned: Vec<[f64; 3]> = local
-        .iter()
-        .map(|p| frame.map(|axis| axis[0] * p[0] + axis[1] * p[1] + axis[2] * p[2]))
-        .collect();
+    let turned: Vec<[f64; 3]> = sets.iter().flat_map(|s| turn(&frame, s)).collect();
     let (lo, mut scale) = quantization_box(&turned);
     if uniform {
         scale = [scale.iter().copied().fold(0.0, f64::max); 3];
     }
-    let q: Vec<[u16; 3]> = turned
+    let mut m = vec![0.0; 16];
+    for (k, axis) in frame.iter().enumerate() {
+        for r in 0..3 {
+            m[4 * k + r] = axis[r] * scale[k];
+            m[12 + r] += axis[r] * lo[k];
+        }
+    }
+    for r in 0..3 {
+        m[12 + r] += t[r];
+    }
+    m[15] = 1.0;
+    // Shorter JSON: the columns to 9 significant digits, the translation to
+    // 1 mm; the positions are quantized through this matrix's inverse, so
+    // they land where the client puts them (within half a step per axis).
+    for (k, v) in m.iter_mut().enumerate().take(15) {
+        *v = if k >= 12 {
+            (*v * 1e3).round() / 1e3
+        } else {
+            format!("{v:.8e}").parse().unwrap_or(*v)
+        };
+    }
+    let columns: [[f64; 3]; 3] = std::array::from_fn(|k| [m[4 * k], m[4 * k + 1], m[4 * k + 2]]);
+    let shift = [t[0] - m[12], t[1] - m[13], t[2] - m[14]];
+    Placement {
+        matrix: m,
+        frame,
+        boxed: Some((shift, inverse(columns))),
+    }
+}
+
+/// The inverse of the 3 × 3 matrix with columns `c` (row-major rows), by
+/// cofactors; the zero matrix when `c` is singular.
+fn inverse(c: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let rows = [cross(c[1], c[2]), cross(c[2], c[0]), cross(c[0], c[1])];
+    let det: f64 = (0..3).map(|r| rows[0][r] * c[0][r]).sum();
+    if det == 0.0 || !det.is_finite() {
+        return [[0.0; 3]; 3];
+    }
+    rows.map(|row| row.map(|v| v / det))
+}
+
+/// `local` in the node's axes `frame`.
+fn turn(frame: &[[f64; 3]; 3], local: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    local
+        .iter()
+        .map(|p| frame.map(|axis| axis[0] * p[0] + axis[1] * p[1] + axis[2] * p[2]))
+        .collect()
+}
+
+/// The accessor of the local positions `local` placed as `place` says:
+/// float32, or u16 over the box (`KHR_mesh_quantization`, compressed with
+/// `EXT_meshopt_compression` in mode `ATTRIBUTES`, stride 8).
+fn positions(bin: &mut Bin, local: &[[f64; 3]], place: &Placement) -> Result<usize, MeshoptError> {
+    let Some((shift, inv)) = place.boxed else {
+        let f: Vec<[f32; 3]> = local.iter().map(|p| p.map(|c| c as f32)).collect();
+        return Ok(bin.vec3(&f, true));
+    };
+    let q: Vec<[u16; 3]> = local
         .iter()
         .map(|p| {
-            std::array::from_fn(|k| {
-                ((p[k] - lo[k]) / scale[k] * 65535.0)
+            let d = [p[0] + shift[0], p[1] + shift[1], p[2] + shift[2]];
+            inv.map(|row| {
+                ((row[0] * d[0] + row[1] * d[1] + row[2] * d[2]) * 65535.0)
                     .round()
                     .clamp(0.0, 65535.0) as u16
             })
@@ -337,26 +420,14 @@ fn positions(
         }
     }
     let accessor = json!({"componentType": 5123, "normalized": true, "count": q.len(), "type": "VEC3", "min": min, "max": max});
-    let a = bin.packed(
+    Ok(bin.packed(
         raw.len(),
         [8, q.len()],
         "ATTRIBUTES",
         &packed,
         Some(34962),
         accessor,
-    );
-    let mut m = vec![0.0; 16];
-    for (k, axis) in frame.iter().enumerate() {
-        for r in 0..3 {
-            m[4 * k + r] = axis[r] * scale[k];
-            m[12 + r] += axis[r] * lo[k];
-        }
-    }
-    for r in 0..3 {
-        m[12 + r] += t[r];
-    }
-    m[15] = 1.0;
-    Ok((a, m, frame))
+    ))
 }
 
 const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
@@ -418,8 +489,78 @@ pub fn u16_budget_m(scale: [f64; 3]) -> f64 {
         .sqrt()
 }
 
+/// How many levels coarser than a tile a neighbour may be whose gap its
+/// skirt still closes ([`skirt_depth_m`]; `docs/3dtiles-terrain.md` argues
+/// the figure for screen-space-error clients).
+pub const SKIRT_LEVELS: u8 = 4;
+
+/// How deep a tile's skirt hangs: the widest gap between its edge and a
+/// neighbour's, `e_m + coarse_e_m`, where `e_m` is the tile's zoom's bound
+/// and `coarse_e_m` the bound [`SKIRT_LEVELS`] zooms coarser (each drawn
+/// edge lies within its tile's bound of the same surface, so the two edges
+/// lie within the sum of each other), plus 5 % for the quantization and
+/// float32 budgets both tiles add to their bounds (under 0.5 % of a bound in
+/// the bundled fixture's pyramid), metres.
+pub fn skirt_depth_m(e_m: f64, coarse_e_m: f64) -> f64 {
+    1.05 * (e_m + coarse_e_m)
+}
+
+/// A tile's skirt for 3D Tiles clients that build none (all but CesiumJS,
+/// which builds its own from `CESIUM_tile_edges` and reads only the first
+/// primitive): every edge vertex copied, and copied again lowered along the
+/// ellipsoid normal, two triangles per edge segment facing outwards.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Skirt {
+    /// ECEF positions, metres: per edge (in [`ccw_edges`] order) its
+    /// vertices, then the same lowered.
+    pub positions: Vec<[f64; 3]>,
+    /// The tile's vertex each skirt vertex copies.
+    pub from: Vec<u32>,
+    /// Triangles (indices into `positions`), counter-clockwise seen from
+    /// outside the tile.
+    pub triangles: Vec<u32>,
+}
+
+/// The skirt of a decoded quantized-mesh tile over `rect` hanging
+/// `depth_m` below its edges. The top vertices are computed as
+/// [`ecef_positions`] computes them, so they are the surface's edge
+/// vertices bit for bit.
+pub fn skirt(tile: &DecodedTile, rect: [f64; 4], depth_m: f64) -> Skirt {
+    let mut s = Skirt {
+        positions: Vec::new(),
+        from: Vec::new(),
+        triangles: Vec::new(),
+    };
+    for list in ccw_edges(tile) {
+        let base = s.positions.len() as u32;
+        let n = list.len() as u32;
+        for lower in [0.0, depth_m] {
+            for &i in &list {
+                let [lon, lat, h] = tile.geodetic(i as usize, rect);
+                s.positions.push(ecef(lon, lat, h - lower));
+                s.from.push(i);
+            }
+        }
+        // The lists run clockwise seen from above (west side south to north,
+        // ...), so (top i, top i+1, bottom i) turns counter-clockwise seen
+        // from outside.
+        for k in 0..n.saturating_sub(1) {
+            if list[k as usize] == list[k as usize + 1] {
+                continue;
+            }
+            let (t0, t1, b0, b1) = (base + k, base + k + 1, base + n + k, base + n + k + 1);
+            s.triangles.extend_from_slice(&[t0, t1, b0, t1, b1, b0]);
+        }
+    }
+    s
+}
+
 /// The GLB of a decoded quantized-mesh tile over `rect`, with vertex normals
-/// when `normals` (and the tile has them), its geometry as `geometry` says.
+/// when `normals` (and the tile has them), its geometry as `geometry` says,
+/// and with `skirt_depth_m` a second primitive in the mesh: the tile's
+/// [`skirt`] hanging that deep (positions in the same node frame, u16 in the
+/// same box with meshopt, which then grows to hold it; normals copied from
+/// the edge vertices; no `CESIUM_tile_edges`).
 ///
 /// # Errors
 /// [`MeshoptError`] when meshopt cannot hold the tile's indices (more than
@@ -429,38 +570,68 @@ pub fn encode_glb(
     rect: [f64; 4],
     normals: bool,
     geometry: GlbGeometry,
+    skirt_depth_m: Option<f64>,
 ) -> Result<Vec<u8>, MeshoptError> {
     let centre = tile.header.center;
+    let to_local = |p: [f64; 3]| to_gltf([p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]]);
     let local: Vec<[f64; 3]> = ecef_positions(tile, rect)
         .into_iter()
-        .map(|p| to_gltf([p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]]))
+        .map(to_local)
+        .collect();
+    let skirt = skirt_depth_m.map(|d| skirt(tile, rect, d));
+    let skirt_local: Vec<[f64; 3]> = skirt
+        .iter()
+        .flat_map(|s| s.positions.iter().map(|&p| to_local(p)))
         .collect();
     let wide = local.len() > 65_535;
     let packed = geometry == GlbGeometry::Meshopt;
     let mut bin = Bin::default();
     let t = to_gltf(centre);
     let with_normals = normals && tile.normals.is_some();
-    let (position, matrix, frame) = positions(
-        &mut bin,
-        &local,
+    let place = placement(
+        &[&local, &skirt_local],
         [[t[0], t[1], t[2], 0.0], rect],
         geometry,
         with_normals,
-    )?;
+    );
+    let position = positions(&mut bin, &local, &place)?;
     let flat: Vec<u32> = tile.triangles.iter().flatten().copied().collect();
     let indices = bin.indices(&flat, wide, Some(34963), packed.then_some("TRIANGLES"))?;
     let edges = bin.edges(&ccw_edges(tile), wide);
+    let frame = place.frame;
+    // Unit normals in the node's frame (turned with the quantization box).
+    let turned_normals: Option<Vec<[f32; 3]>> =
+        tile.normals.as_ref().filter(|_| normals).map(|oct| {
+            oct.iter()
+                .map(|&e| {
+                    let n = to_gltf(oct_decode(e));
+                    frame.map(|axis| (axis[0] * n[0] + axis[1] * n[1] + axis[2] * n[2]) as f32)
+                })
+                .collect()
+        });
     let mut attributes = json!({"POSITION": position});
-    if let (true, Some(oct)) = (normals, &tile.normals) {
-        let n: Vec<[f32; 3]> = oct
-            .iter()
-            .map(|&e| {
-                let n = to_gltf(oct_decode(e));
-                frame.map(|axis| (axis[0] * n[0] + axis[1] * n[1] + axis[2] * n[2]) as f32)
-            })
-            .collect();
-        // In the node's frame (turned with the quantization box).
-        attributes["NORMAL"] = json!(bin.vec3(&n, false));
+    if let Some(n) = &turned_normals {
+        attributes["NORMAL"] = json!(bin.vec3(n, false));
+    }
+    let mut primitives = vec![json!({
+        "attributes": attributes,
+        "indices": indices,
+        "mode": 4,
+        "extensions": {"CESIUM_tile_edges": {
+            "left": edges[0], "bottom": edges[1], "right": edges[2], "top": edges[3]
+        }}
+    })];
+    if let Some(s) = &skirt {
+        let copied = turned_normals
+            .as_ref()
+            .map(|n| s.from.iter().map(|&i| n[i as usize]).collect::<Vec<_>>());
+        primitives.push(skirt_primitive(
+            &mut bin,
+            s,
+            &skirt_local,
+            &place,
+            copied.as_deref(),
+        )?);
     }
     let meta = TileMeta::of(tile);
     let mut buffers = vec![json!({"byteLength": bin.bytes.len()})];
@@ -469,15 +640,8 @@ pub fn encode_glb(
         "extensionsUsed": ["CESIUM_tile_edges"],
         "scene": 0,
         "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0, "matrix": matrix}],
-        "meshes": [{"primitives": [{
-            "attributes": attributes,
-            "indices": indices,
-            "mode": 4,
-            "extensions": {"CESIUM_tile_edges": {
-                "left": edges[0], "bottom": edges[1], "right": edges[2], "top": edges[3]
-            }}
-        }]}],
+        "nodes": [{"mesh": 0, "matrix": place.matrix}],
+        "meshes": [{"primitives": primitives}],
     });
     if packed {
         buffers.push(json!({"byteLength": bin.fallback, "extensions": {"EXT_meshopt_compression": {"fallback": true}}}));
@@ -492,6 +656,35 @@ pub fn encode_glb(
     doc["bufferViews"] = json!(bin.views);
     doc["buffers"] = json!(buffers);
     Ok(glb(&doc, bin.bytes))
+}
+
+/// The skirt's primitive: its positions placed as the surface's, its
+/// triangles, and with `normals` (copied from the edge vertices, in the
+/// node's frame) a float32 NORMAL, as the surface's. (Normalized i8
+/// normals compressed with meshopt made the fixture's gzipped meshopt
+/// pyramid 0.8 % larger: gzip codes the float32 copies as repeats of the
+/// surface's normals.)
+fn skirt_primitive(
+    bin: &mut Bin,
+    s: &Skirt,
+    local: &[[f64; 3]],
+    place: &Placement,
+    normals: Option<&[[f32; 3]]>,
+) -> Result<Value, MeshoptError> {
+    let packed = place.boxed.is_some();
+    let position = positions(bin, local, place)?;
+    let wide = local.len() > 65_535;
+    let indices = bin.indices(
+        &s.triangles,
+        wide,
+        Some(34963),
+        packed.then_some("TRIANGLES"),
+    )?;
+    let mut attributes = json!({"POSITION": position});
+    if let Some(n) = normals {
+        attributes["NORMAL"] = json!(bin.vec3(n, false));
+    }
+    Ok(json!({"attributes": attributes, "indices": indices, "mode": 4}))
 }
 
 /// The tile's edge lists (sorted along each edge, south to north and west

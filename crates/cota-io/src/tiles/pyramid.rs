@@ -33,6 +33,7 @@ use rayon::prelude::*;
 
 use super::decode::{decode, DecodeError};
 use super::drawn::{check_random, check_samples, Against, DrawnTile};
+use super::glb_tile::SKIRT_LEVELS;
 use super::journal::{make_dirs, Journal, PathIo};
 use super::layer::{layer_json, run_manifest};
 use super::quantized_mesh::{encode_tile, EncodeError, TileExtensions};
@@ -140,6 +141,10 @@ pub struct PyramidOptions {
     /// `EXT_meshopt_compression` geometry ([`super::glb_tile::GlbGeometry`]).
     /// Default: false (float32 positions, plain indices).
     pub meshopt: bool,
+    /// With [`TileFormat::Tiles3d`]: a skirt in each GLB, for clients that
+    /// build none ([`super::glb_tile::skirt`], as deep as
+    /// [`super::glb_tile::skirt_depth_m`]). Default: true.
+    pub skirts: bool,
 }
 
 /// The format of a pyramid's tiles.
@@ -163,7 +168,14 @@ impl PyramidOptions {
         check: true,
         format: TileFormat::QuantizedMesh,
         meshopt: false,
+        skirts: true,
     };
+
+    /// Sets [`PyramidOptions::skirts`].
+    pub const fn with_skirts(mut self, on: bool) -> Self {
+        self.skirts = on;
+        self
+    }
 
     /// Sets [`PyramidOptions::meshopt`].
     pub const fn with_meshopt(mut self, on: bool) -> Self {
@@ -496,6 +508,9 @@ pub(crate) fn manifest(
         want["format"] = "3dtiles".into();
         if opts.meshopt {
             want["compression"] = "meshopt".into();
+        }
+        if opts.skirts {
+            want["skirts"] = SKIRT_LEVELS.into();
         }
     }
     let want = want.to_string();

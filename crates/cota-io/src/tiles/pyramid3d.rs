@@ -18,7 +18,10 @@
 //! and the ellipsoid away from the data, within the zoom's bound plus
 //! float32's rounding ([`super::glb_tile::float32_budget_m`]) or the
 //! quantization's ([`super::glb_tile::u16_budget_m`]). With meshopt the
-//! triangles may be turned (same winding): compared as such.
+//! triangles may be turned (same winding): compared as such. With
+//! [`PyramidOptions::skirts`] each GLB also carries its skirt for clients
+//! that build none, [`skirt_depth`] deep (a second primitive, which
+//! CesiumJS and the check never read).
 //!
 //! Atomic and resumable as the quantized-mesh writer: each file goes to a
 //! temporary name and is renamed; the manifest `OUT/.cota-tiles.json` says
@@ -39,7 +42,8 @@ use super::decode::{decode, DecodeError, DecodedTile};
 use super::drawn::{Against, DrawnTile};
 use super::glb_decode::{decode_glb, same_triangles};
 use super::glb_tile::{
-    ccw_edges, encode_glb, float32_budget_m, u16_budget_m, GlbGeometry, TileMeta,
+    ccw_edges, encode_glb, float32_budget_m, skirt_depth_m, u16_budget_m, GlbGeometry, TileMeta,
+    SKIRT_LEVELS,
 };
 use super::pyramid::{
     check_drawn, finish_tile, fold, io_err, manifest, write_file_atomically, MadeTile, Outcome,
@@ -84,7 +88,8 @@ pub fn make_glb_tile(
     } else {
         GlbGeometry::Float32
     };
-    made.bytes = encode_glb(&decoded, rect, opts.extensions.normals, geometry)
+    let skirt = opts.skirts.then(|| skirt_depth(prep, t.z));
+    made.bytes = encode_glb(&decoded, rect, opts.extensions.normals, geometry, skirt)
         .map_err(|e| glb_error(t, e))?;
     if opts.check {
         if let Some(against) = source {
@@ -93,6 +98,15 @@ pub fn make_glb_tile(
         }
     }
     Ok((made, TileMeta::of(&decoded)))
+}
+
+/// The skirt depth of zoom `z`'s tiles ([`skirt_depth_m`]): its bound and
+/// the bound [`SKIRT_LEVELS`] zooms coarser (the first zoom's, nearer the
+/// roots).
+pub fn skirt_depth(prep: &Prepared<'_>, z: u8) -> f64 {
+    let e = |z: u8| prep.zoom(z).map_or(0.0, |p| p.max_error_m);
+    let first = prep.zooms().first().map_or(0, |p| p.zoom);
+    skirt_depth_m(e(z), e(z.saturating_sub(SKIRT_LEVELS).max(first)))
 }
 
 /// The GLB decoded independently, its structure against the quantized-mesh

@@ -15,8 +15,10 @@ use std::collections::HashSet;
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
 use cota_core::{fill_voids, FillOptions, LonLat};
 use cota_io::tiles::drawn::{check_samples, Against, DrawnTile, SourceGrid};
-use cota_io::tiles::glb_decode::{decode_glb, same_triangles};
-use cota_io::tiles::glb_tile::{float32_budget_m, u16_budget_m};
+use cota_io::tiles::ellipsoid::geodetic;
+use cota_io::tiles::glb_decode::{decode_glb, same_triangles, DecodedGlb};
+use cota_io::tiles::glb_tile::{float32_budget_m, u16_budget_m, SKIRT_LEVELS};
+use cota_io::tiles::pyramid3d::skirt_depth;
 use cota_io::tiles::tileset3d::glb_rel_path;
 use cota_io::tiles::{
     decode, make_glb_tile, make_tile, write_tiles3d, PyramidError, PyramidOptions, TileExtensions,
@@ -105,6 +107,7 @@ fn pyramid_within_bounds_and_resumable(opts: PyramidOptions) {
             "{t}: {got} m as drawn, bound {bound} m"
         );
         worst = worst.max(got / z.max_error_m);
+        skirt_hangs_outwards(&glb, &prep, t, budget);
     }
     eprintln!("worst error as drawn / e_z over the GLB tiles: {worst:.3}");
     // The subtrees mark exactly the tiles written: count them.
@@ -145,10 +148,71 @@ fn pyramid_within_bounds_and_resumable(opts: PyramidOptions) {
     for other in [
         qm.with_format(TileFormat::Tiles3d),
         opts.with_meshopt(!opts.meshopt),
+        opts.with_skirts(false),
     ] {
         let err = write_tiles3d(&prep, out.path(), &other, None, &|_| {}).unwrap_err();
         assert!(matches!(err, PyramidError::Changed { .. }), "{err}");
     }
+}
+
+/// The GLB's second primitive: every edge vertex (bit for bit the surface's)
+/// and the same lowered along the ellipsoid normal by the zoom's skirt
+/// depth (within the positions' budget), two triangles per edge segment,
+/// each facing away from the tile's centre.
+fn skirt_hangs_outwards(glb: &DecodedGlb, prep: &Prepared<'_>, t: TileId, budget: f64) {
+    let (pos, tris) = glb.skirt.as_ref().expect("a skirt");
+    let depth = skirt_depth(prep, t.z);
+    let e = prep.zoom(t.z).unwrap().max_error_m;
+    assert!(
+        depth >= e * (1.0 + 2f64.powi(i32::from(SKIRT_LEVELS.min(t.z)))),
+        "{t}"
+    );
+    let mut at = 0;
+    let mut segments = 0;
+    for list in &glb.edges {
+        let n = list.len();
+        for (k, &i) in list.iter().enumerate() {
+            assert_eq!(pos[at + k], glb.positions[i as usize], "{t}: skirt top");
+            let [lon, lat, h] = geodetic(pos[at + k]);
+            let [lon2, lat2, h2] = geodetic(pos[at + n + k]);
+            assert!(
+                (h - h2 - depth).abs() <= 2.0 * budget + 1e-6,
+                "{t}: {} m deep, want {depth}",
+                h - h2
+            );
+            let east = (lon - lon2).abs() * lat.to_radians().cos();
+            let moved = east.max((lat - lat2).abs()) * 111_000.0;
+            assert!(
+                lat.abs() > 89.0 || moved <= 2.0 * budget + 1e-3,
+                "{t}: the skirt leans {moved} m"
+            );
+        }
+        at += 2 * n;
+        segments += n - 1;
+    }
+    assert_eq!(pos.len(), at, "{t}");
+    assert_eq!(tris.len(), 2 * segments, "{t}");
+    if t.z >= 2 {
+        let c = glb.meta.unwrap().sphere;
+        for tri in tris {
+            let [a, b, d] = tri.map(|i| pos[i as usize]);
+            let (u, v) = (sub(b, a), sub(d, a));
+            let n = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            let out = sub(a, [c[0], c[1], c[2]]);
+            assert!(
+                n[0] * out[0] + n[1] * out[1] + n[2] * out[2] > 0.0,
+                "{t}: a skirt triangle faces inwards"
+            );
+        }
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 /// Every written tile with a child has all four (REPLACE refinement draws
@@ -194,6 +258,8 @@ fn fills_complete_the_tree(
         // Made again with the check: as drawn within e_z (plus float32's
         // rounding) of the source's samples and of the ellipsoid.
         let (made, _) = make_glb_tile(prep, f, &opts().with_check(true), Some(against)).unwrap();
+        let (bare, _) = make_glb_tile(prep, f, &opts().with_skirts(false), None).unwrap();
+        assert!(decode_glb(&bare.bytes).unwrap().skirt.is_none(), "{f}");
         let bound = prep.zoom(f.z).unwrap().max_error_m + float32_budget_m(1e7);
         assert!(made.drawn_error_m <= bound, "{f}: {} m", made.drawn_error_m);
     }

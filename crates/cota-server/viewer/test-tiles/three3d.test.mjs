@@ -8,7 +8,8 @@
 //  * an oblique view a few km over the data and a view from 250 km down:
 //    tiles drawn at more than one implicit level, meshes with triangles, and
 //    terrain pixels in the screenshot (the lower half of the oblique view all
-//    terrain but for cracks, shaded, not flat; the 250 km view terrain wherever
+//    terrain, shaded, not flat: at most 0.05 % black, i.e. no cracks between
+//    tiles of different levels: cota's skirts; the 250 km view terrain wherever
 //    a plain globe is, i.e. no hole where a refined tile lacks a child: cota's
 //    fill tiles);
 //  * the decode time of every tile in the same browser: GLB (this pyramid, and
@@ -157,10 +158,14 @@ if (!dir) {
     const { px } = await view('ground', {
       lon: best.lon, lat: best.lat - 0.12, height: best.h + 2500, lookLon: best.lon, lookLat: best.lat, lookHeight: best.h,
     });
-    // Not all: 3DTilesRendererJS draws no skirts (it does not read CESIUM_tile_edges),
-    // so a crack shows where tiles of two levels meet (0.5 % of the lower half
-    // measured; docs/3dtiles-terrain.md).
-    assert.ok(px.terrainLower > 0.97, `holes in the lower half of the view: ${(100 * px.terrainLower).toFixed(2)} % terrain`);
+    // The lower half is all ground: every black pixel there is a crack where
+    // tiles of two levels meet. 3DTilesRendererJS builds no skirts (it does
+    // not read CESIUM_tile_edges); cota's GLBs carry their own (a second
+    // primitive). Without them 0.8 % of the lower half was cracks, black
+    // slits along the level changes (docs/3dtiles-terrain.md).
+    const cracks = 1 - px.terrainLower;
+    console.log(`# ground: cracks ${(100 * cracks).toFixed(3)} % of the lower half (${Math.round(cracks * 800 * 300)} pixels)`);
+    assert.ok(cracks <= 0.0005, `cracks between tiles: ${(100 * cracks).toFixed(3)} % of the lower half of the view is black`);
   });
 
   test('3DTilesRendererJS draws the tileset: from 250 km, looking down', async () => {
