@@ -8,8 +8,9 @@
 //! a run of samples whose deviations are all at most the maximum already
 //! found can be left out without changing it.
 //!
-//! Per row of the lattice's grid, per run of [`BLOCK`] columns, the lowest
-//! and highest heights and their columns are kept once. Along a row the
+//! Per row of the lattice's grid, per run of [`BLOCK`] columns and per long
+//! run of 16 runs (256 columns), the lowest and highest heights and their
+//! columns are kept once. Along a row the
 //! plane is linear, so over a run it lies between its values at the run's
 //! two ends `p_a`, `p_b`, and every deviation in the run is at most
 //! `max(max(p_a, p_b) − h_lo, h_hi − min(p_a, p_b))`. A row span is read as:
@@ -19,8 +20,10 @@
 //!    its lowest and highest samples: a lower bound of the answer, usually
 //!    close to it. [`super::cap::own_rows`] takes it over every row of the
 //!    triangle first;
+//!    (Within a long run wholly in the span, only its lowest and highest.)
 //! 2. [`RowBlocks::row_rest`]: each whole run whose bound, plus a rounding
-//!    margin, exceeds the triangle's maximum so far, one by one.
+//!    margin, exceeds the triangle's maximum so far, one by one; a long
+//!    run's runs only when the long run's own bound exceeds it.
 //!
 //! Every deviation is computed by the same expression as in the one-by-one
 //! loop ([`max_deviation`]), and a run is left out only when its bound is
@@ -36,6 +39,9 @@ use crate::mesh::raster::Plane;
 /// Columns per run.
 pub(crate) const BLOCK: usize = 16;
 
+/// Runs per long run (256 columns: offsets still fit a byte).
+const LONG: usize = 16;
+
 /// Relative rounding margin of a run's bound (see the module docs).
 const MARGIN: f64 = 1e-9;
 
@@ -48,11 +54,32 @@ struct Run {
     at_hi: u8,
 }
 
-/// The runs of every row of a grid (whole runs only).
+/// The runs of every row of a grid (whole runs only), and the long runs
+/// of [`LONG`] runs.
 #[derive(Debug, Clone)]
 pub(crate) struct RowBlocks {
     per_row: usize,
     runs: Vec<Run>,
+    long_per_row: usize,
+    long: Vec<Run>,
+}
+
+/// Where a row span's whole runs lie: runs `k0..k1`, of which the long
+/// runs `l0..l1` cover runs `LONG·l0..LONG·l1` (none when `l0 == l1`).
+#[derive(Debug, Clone, Copy)]
+struct Layout {
+    k0: usize,
+    k1: usize,
+    l0: usize,
+    l1: usize,
+}
+
+impl Layout {
+    /// The runs outside the long runs.
+    fn loose(&self) -> impl Iterator<Item = usize> {
+        let (a, b) = (LONG * self.l0, LONG * self.l1);
+        (self.k0..a.max(self.k0).min(self.k1)).chain(b.max(self.k0).min(self.k1)..self.k1)
+    }
 }
 
 impl RowBlocks {
@@ -70,14 +97,32 @@ impl RowBlocks {
                     }
                 });
         }
-        RowBlocks { per_row, runs }
+        let long_per_row = per_row / LONG;
+        let long = if long_per_row > 0 {
+            runs.chunks_exact(per_row)
+                .flat_map(|row| row.chunks_exact(LONG).take(long_per_row).map(merge))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        RowBlocks {
+            per_row,
+            runs,
+            long_per_row,
+            long,
+        }
     }
 
-    /// The whole runs of columns `i..=j` of row `r`, or `None` when there
-    /// are fewer than two (the span is then read one by one).
-    fn whole_runs(&self, (i, j): (usize, usize)) -> Option<(usize, usize)> {
+    /// The whole runs of columns `i..=j`, or `None` when there are fewer
+    /// than two (the span is then read one by one).
+    fn layout(&self, (i, j): (usize, usize)) -> Option<Layout> {
         let (k0, k1) = (i.div_ceil(BLOCK), ((j + 1) / BLOCK).min(self.per_row));
-        (k1 >= k0 + 2).then_some((k0, k1))
+        if k1 < k0 + 2 {
+            return None;
+        }
+        let (l0, l1) = (k0.div_ceil(LONG), (k1 / LONG).min(self.long_per_row));
+        let (l0, l1) = if l1 > l0 { (l0, l1) } else { (0, 0) };
+        Some(Layout { k0, k1, l0, l1 })
     }
 
     /// First pass over the columns `i..=j` of the grid's row `r` (heights
@@ -95,22 +140,27 @@ impl RowBlocks {
         x_i: i64,
         y: f64,
     ) -> f64 {
-        let Some((k0, k1)) = self.whole_runs((i, j)) else {
+        let Some(at) = self.layout((i, j)) else {
             return max_deviation(plane, x_i, y, &row[i..=j]);
         };
-        let (s, t) = (k0 * BLOCK, k1 * BLOCK);
-        let at = |c: usize| x_i + (c - i) as i64;
-        let dev = |c: usize| (plane.at(at(c) as f64, y) - f64::from(row[c])).abs();
+        let (s, t) = (at.k0 * BLOCK, at.k1 * BLOCK);
+        let x = |c: usize| x_i + (c - i) as i64;
+        let dev = |c: usize| (plane.at(x(c) as f64, y) - f64::from(row[c])).abs();
         let mut e = max_deviation(plane, x_i, y, &row[i..s]);
         if t <= j {
-            e = e.max(max_deviation(plane, at(t), y, &row[t..=j]));
+            e = e.max(max_deviation(plane, x(t), y, &row[t..=j]));
         }
-        let runs = &self.runs[r * self.per_row + k0..r * self.per_row + k1];
-        for (k, run) in (k0..).zip(runs) {
-            let c = k * BLOCK;
-            e = e
-                .max(dev(c + usize::from(run.at_lo)))
-                .max(dev(c + usize::from(run.at_hi)));
+        let extremes = |c: usize, run: &Run| {
+            dev(c + usize::from(run.at_lo)).max(dev(c + usize::from(run.at_hi)))
+        };
+        for k in at.loose() {
+            e = e.max(extremes(k * BLOCK, &self.runs[r * self.per_row + k]));
+        }
+        for l in at.l0..at.l1 {
+            e = e.max(extremes(
+                l * LONG * BLOCK,
+                &self.long[r * self.long_per_row + l],
+            ));
         }
         e
     }
@@ -130,23 +180,34 @@ impl RowBlocks {
         y: f64,
         (z_abs, floor): (f64, f64),
     ) -> f64 {
-        let Some((k0, k1)) = self.whole_runs((i, j)) else {
+        let Some(at) = self.layout((i, j)) else {
             return floor;
         };
-        let at = |c: usize| x_i + (c - i) as i64;
-        let runs = &self.runs[r * self.per_row + k0..r * self.per_row + k1];
-        let mut e = floor;
-        for (k, run) in (k0..).zip(runs) {
-            let c = k * BLOCK;
-            let (pa, pb) = (
-                plane.at(at(c) as f64, y),
-                plane.at(at(c + BLOCK - 1) as f64, y),
-            );
+        let x = |c: usize| x_i + (c - i) as i64;
+        // Can a run of `n` columns from column `c` exceed `e`?
+        let open = |c: usize, n: usize, run: &Run, e: f64| {
+            let (pa, pb) = (plane.at(x(c) as f64, y), plane.at(x(c + n - 1) as f64, y));
             let (lo, hi) = (f64::from(run.lo), f64::from(run.hi));
             let bound = (pa.max(pb) - lo).max(hi - pa.min(pb));
-            let margin = MARGIN * (1.0 + z_abs + lo.abs() + hi.abs());
-            if bound + margin > e {
-                e = e.max(max_deviation(plane, at(c), y, &row[c..c + BLOCK]));
+            bound + MARGIN * (1.0 + z_abs + lo.abs() + hi.abs()) > e
+        };
+        let read = |k: usize, e: f64| {
+            let c = k * BLOCK;
+            if open(c, BLOCK, &self.runs[r * self.per_row + k], e) {
+                e.max(max_deviation(plane, x(c), y, &row[c..c + BLOCK]))
+            } else {
+                e
+            }
+        };
+        let mut e = at.loose().fold(floor, |e, k| read(k, e));
+        for l in at.l0..at.l1 {
+            if open(
+                l * LONG * BLOCK,
+                LONG * BLOCK,
+                &self.long[r * self.long_per_row + l],
+                e,
+            ) {
+                e = (l * LONG..(l + 1) * LONG).fold(e, |e, k| read(k, e));
             }
         }
         e
@@ -170,6 +231,22 @@ fn summarise(s: &[f32]) -> Run {
         }
     }
     run
+}
+
+/// The long run of `LONG` runs: their lowest and highest, offsets from the
+/// long run's first column.
+fn merge(runs: &[Run]) -> Run {
+    let mut out = runs[0];
+    for (m, run) in runs.iter().enumerate().skip(1) {
+        let base = (m * BLOCK) as u8;
+        if run.lo < out.lo {
+            (out.lo, out.at_lo) = (run.lo, base + run.at_lo);
+        }
+        if run.hi > out.hi {
+            (out.hi, out.at_hi) = (run.hi, base + run.at_hi);
+        }
+    }
+    out
 }
 
 /// Largest `|plane(x, y) − h|` over `heights`, the samples of row `y` from
@@ -204,7 +281,7 @@ mod tests {
     /// for every span, over planes of many slopes.
     #[test]
     fn runs_give_the_one_by_one_maximum_bit_for_bit() {
-        let w = 100;
+        let w = 1000;
         let heights: Vec<f32> = (0..w * 3)
             .map(|k| {
                 let x = k as f32;
@@ -228,8 +305,8 @@ mod tests {
             let plane = Plane::new(p, z).expect("plane");
             let r = n % 3;
             let row = &grid.heights()[r * w..(r + 1) * w];
-            for i in (0..w).step_by(7) {
-                for j in (i..w).step_by(5) {
+            for i in (0..w).step_by(37) {
+                for j in (i..w).step_by(23) {
                     let a = max_deviation(&plane, 1000 + i as i64, 7.0, &row[i..=j]);
                     let x_i = 1000 + i as i64;
                     let seed = blocks.row_seed(&plane, row, r, (i, j), x_i, 7.0);
