@@ -23,7 +23,7 @@
 //! # Runtime
 //! `O(window samples)` per level, two passes (sides and halves of each
 //! square), in parallel; a few dozen coarse levels at most. Each triangle's
-//! rows are read in two passes ([`super::row_blocks`]): a few samples per
+//! rows are read in two passes (`tiles/row_blocks.rs`): a few samples per
 //! run of 16 columns first, then only the runs whose bound can exceed the
 //! triangle's maximum so far, with the same result.
 
