@@ -166,50 +166,14 @@ impl Adjacency {
         for &v in tris.iter().flatten() {
             degree[v as usize] = degree[v as usize].saturating_add(1);
         }
-        // Triangles still to come around each vertex (ODD: never finished).
-        let mut left = degree.clone();
-        let key = |u: u32, v: u32| (u64::from(u) << 32) | u64::from(v);
-        // Directed edges of unfinished vertices: their triangle, and
-        // whether their twin was found.
-        let mut open: FxHashMap<u64, (u32, bool)> = FxHashMap::default();
-        let mut swept = 1024usize;
-        let mut nb = Neighbours::new(tris.len());
-        for (i, t) in tris.iter().enumerate() {
-            for k in 0..3 {
-                let (u, v) = (t[k], t[(k + 1) % 3]);
-                let twin = match open.get_mut(&key(v, u)) {
-                    Some((j, matched)) if !*matched => {
-                        *matched = true;
-                        Some(*j)
-                    }
-                    // Its twin taken: (u, v) is held twice.
-                    Some(_) => return None,
-                    None => None,
-                };
-                if open.insert(key(u, v), (i as u32, twin.is_some())).is_some() {
-                    return None;
-                }
-                if let Some(j) = twin {
-                    nb.set(i, k, j);
-                    let o = tris[j as usize];
-                    let r = (0..3).find(|&r| o[r] == v && o[(r + 1) % 3] == u)?;
-                    nb.set(j as usize, r, i as u32);
-                }
-            }
-            for &v in t {
-                let l = &mut left[v as usize];
-                if *l != ODD {
-                    *l -= 1;
-                }
-            }
-            // No later triangle holds an edge of a finished vertex.
-            if open.len() > 2 * swept {
-                open.retain(|&e, _| left[(e >> 32) as usize] != 0 && left[e as u32 as usize] != 0);
-                swept = open.len().max(1024);
-            }
-        }
-        drop(open);
-        drop(left);
+        let nb = match_along(tris, &degree)?;
+        Some(Adjacency::walked(tris, nb, degree))
+    }
+
+    /// The fans walked across `nb`, the vertices where a walk misses part
+    /// of the fan (T-junctions, pinched fans) keeping theirs whole.
+    fn walked(tris: &[[u32; 3]], nb: Neighbours, degree: Vec<u8>) -> Self {
+        let nv = degree.len();
         let mut first = vec![u32::MAX; nv];
         for (i, t) in tris.iter().enumerate() {
             for &v in t {
@@ -226,8 +190,6 @@ impl Adjacency {
                 odd: FxHashMap::default(),
             },
         };
-        // The vertices whose walk misses part of their fan (T-junctions,
-        // pinched fans) keep their fan whole.
         let mut odd: FxHashMap<u32, Vec<u32>> = FxHashMap::default();
         let mut buf = Vec::new();
         for q in 0..nv as u32 {
@@ -235,10 +197,12 @@ impl Adjacency {
                 odd.insert(q, Vec::new());
             }
         }
-        for (i, t) in tris.iter().enumerate() {
-            for &v in t {
-                if let Some(f) = odd.get_mut(&v) {
-                    f.push(i as u32);
+        if !odd.is_empty() {
+            for (i, t) in tris.iter().enumerate() {
+                for &v in t {
+                    if let Some(f) = odd.get_mut(&v) {
+                        f.push(i as u32);
+                    }
                 }
             }
         }
@@ -248,7 +212,7 @@ impl Adjacency {
             }
             *o = odd;
         }
-        Some(adj)
+        adj
     }
 
     /// Walks around `q` across the neighbours, into `out`: true when the
@@ -316,6 +280,56 @@ impl Adjacency {
             }
         }
     }
+}
+
+/// The neighbours of `tris` (see [`Adjacency::new`]), matched along the
+/// order with only the directed edges of unfinished vertices (by `degree`,
+/// [`ODD`] never finished) in memory; `None` when a directed edge is held
+/// twice.
+fn match_along(tris: &[[u32; 3]], degree: &[u8]) -> Option<Neighbours> {
+    // Triangles still to come around each vertex (ODD: never finished).
+    let mut left = degree.to_vec();
+    let key = |u: u32, v: u32| (u64::from(u) << 32) | u64::from(v);
+    // Directed edges of unfinished vertices: their triangle, and
+    // whether their twin was found.
+    let mut open: FxHashMap<u64, (u32, bool)> = FxHashMap::default();
+    let mut swept = 1024usize;
+    let mut nb = Neighbours::new(tris.len());
+    for (i, t) in tris.iter().enumerate() {
+        for k in 0..3 {
+            let (u, v) = (t[k], t[(k + 1) % 3]);
+            let twin = match open.get_mut(&key(v, u)) {
+                Some((j, matched)) if !*matched => {
+                    *matched = true;
+                    Some(*j)
+                }
+                // Its twin taken: (u, v) is held twice.
+                Some(_) => return None,
+                None => None,
+            };
+            if open.insert(key(u, v), (i as u32, twin.is_some())).is_some() {
+                return None;
+            }
+            if let Some(j) = twin {
+                nb.set(i, k, j);
+                let o = tris[j as usize];
+                let r = (0..3).find(|&r| o[r] == v && o[(r + 1) % 3] == u)?;
+                nb.set(j as usize, r, i as u32);
+            }
+        }
+        for &v in t {
+            let l = &mut left[v as usize];
+            if *l != ODD {
+                *l -= 1;
+            }
+        }
+        // No later triangle holds an edge of a finished vertex.
+        if open.len() > 2 * swept {
+            open.retain(|&e, _| left[(e >> 32) as usize] != 0 && left[e as u32 as usize] != 0);
+            swept = open.len().max(1024);
+        }
+    }
+    Some(nb)
 }
 
 /// One bit per triangle.
