@@ -66,7 +66,12 @@
 //! # Runtime
 //! Build: `O(n log n)`, each level touching every sample about twice, in
 //! parallel over rows of blocks. Refine: proportional to the number of blocks
-//! created. Memory: 32 bytes per block of side ≥ 2 (about `n·11/3` bytes).
+//! created. Memory: 16 bytes per block of side ≥ 2 (about `n·16/3` bytes):
+//! each side error is kept as the 16-bit code of [`crate::bitree::error_code`]
+//! (an upper bound within 0.4 %), and a decision the code cannot settle
+//! (a pure vertical bound between the code's value and the one below it,
+//! or any other criterion) recomputes the leaf's exact error, so every
+//! mesh is the one of the exact errors.
 
 mod refine;
 pub mod templates;

@@ -6,6 +6,7 @@
 use rayon::prelude::*;
 
 use super::templates::side_pieces;
+use crate::bitree::error_code::{encode_up, INFINITE};
 use crate::bitree::round_up_f32;
 use crate::error::MeshError;
 use crate::grid::HeightGrid;
@@ -19,9 +20,12 @@ pub(super) struct Level {
     pub(super) size: u32,
     pub(super) cols: u32,
     pub(super) rows: u32,
-    /// `[side·2 + with_midpoint]`, metres rounded up; `+∞` for straddling
-    /// blocks; empty for unit blocks.
-    pub(super) side_err: Vec<[f32; 8]>,
+    /// `[side·2 + with_midpoint]`: the error in metres rounded up to an
+    /// `f32`, stored as its 16-bit code ([`crate::bitree::error_code`]: an
+    /// upper bound within 0.4 %, never below it; the exact value is
+    /// recomputed where a decision needs it, [`QuadTree::exact_side`]);
+    /// `+∞` for straddling blocks; empty for unit blocks.
+    pub(super) side_err: Vec<[u16; 8]>,
 }
 
 /// A restricted quadtree with exact per-side errors, ready for refinement.
@@ -119,32 +123,47 @@ impl<'g> QuadTree<'g> {
             && (j as u64 + 1) * s < self.hier.height() as u64
     }
 
+    /// The exact error (rounded up to `f32`) of side `side` of the inside
+    /// block `(i, j)` of depth `d`, with or without its midpoint: the value
+    /// [`Level::side_err`] holds the code of.
+    pub(super) fn exact_side(&self, d: usize, i: u32, j: u32, side: usize, with_mid: bool) -> f32 {
+        side_error(self.grid, self.levels[d].size, i, j, side, with_mid)
+    }
+
     pub(super) fn in_range(&self, d: usize, i: i64, j: i64) -> Option<(u32, u32)> {
         let l = &self.levels[d];
         (i >= 0 && j >= 0 && i < l.cols as i64 && j < l.rows as i64).then_some((i as u32, j as u32))
     }
 }
 
-/// The 8 side errors of block `(i, j)` of side `size` (`+∞` when it straddles).
-fn block_side_errors(grid: &HeightGrid, hier: &Hierarchy, size: u32, i: u32, j: u32) -> [f32; 8] {
+/// The codes of the 8 side errors of block `(i, j)` of side `size` (`+∞`
+/// when it straddles).
+fn block_side_errors(grid: &HeightGrid, hier: &Hierarchy, size: u32, i: u32, j: u32) -> [u16; 8] {
     let (x0, y0) = (i as u64 * size as u64, j as u64 * size as u64);
     if x0 + size as u64 >= hier.width() as u64 || y0 + size as u64 >= hier.height() as u64 {
-        return [f32::INFINITY; 8];
+        return [INFINITE; 8];
     }
-    let half = size / 2;
-    let at = |p: Pt| [i * size + p[0] * half, j * size + p[1] * half];
-    let mut out = [0f32; 8];
+    let mut out = [0u16; 8];
     for side in 0..4 {
         for with_mid in [false, true] {
-            let (a, b) = side_pieces(side, with_mid);
-            let mut e = piece_error(grid, a.map(at));
-            if let Some(b) = b {
-                e = e.max(piece_error(grid, b.map(at)));
-            }
-            out[side * 2 + usize::from(with_mid)] = round_up_f32(e);
+            let e = side_error(grid, size, i, j, side, with_mid);
+            out[side * 2 + usize::from(with_mid)] = encode_up(e);
         }
     }
     out
+}
+
+/// The error of one side's fan piece of the inside block `(i, j)` of side
+/// `size`, rounded up to `f32`.
+fn side_error(grid: &HeightGrid, size: u32, i: u32, j: u32, side: usize, with_mid: bool) -> f32 {
+    let half = size / 2;
+    let at = |p: Pt| [i * size + p[0] * half, j * size + p[1] * half];
+    let (a, b) = side_pieces(side, with_mid);
+    let mut e = piece_error(grid, a.map(at));
+    if let Some(b) = b {
+        e = e.max(piece_error(grid, b.map(at)));
+    }
+    round_up_f32(e)
 }
 
 /// Largest |plane − h| over the samples in or on triangle `t` (grid

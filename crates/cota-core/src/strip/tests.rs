@@ -90,6 +90,14 @@ fn rough(w: usize, h: usize) -> HeightGrid {
     HeightGrid::new(w, h, heights, GeoRef::unreferenced(30.0)).unwrap()
 }
 
+/// On a mesh large enough for neighbours more than 2^15 apart in the
+/// order (kept in the map), the matched adjacency is the rows'.
+#[test]
+fn far_neighbours_are_the_rows() {
+    let order = traversal::bitree_order(&full_bitree_mesh(257, 257)).unwrap();
+    assert_eq!(guided::matched_is_rows(&order), Some(true));
+}
+
 #[test]
 fn full_mesh_helper_matches_extraction() {
     let (w, h) = (129, 97);
@@ -140,6 +148,15 @@ fn counted_references_are_the_strips_own() {
             }
         }
         for m in &meshes {
+            // The keyed order and the matched adjacency are the traversal's
+            // and the compressed rows'.
+            let ids = traversal::bitree_order_ids(m).unwrap();
+            let keyed = traversal::order_by_keys(m.vertices.len(), &m.triangles, |i| {
+                m.vertices.get(i as usize).map(|v| [v.col, v.row])
+            });
+            assert_eq!(keyed.as_ref(), Some(&ids));
+            let order: Vec<[u32; 3]> = ids.iter().map(|&k| m.triangles[k as usize]).collect();
+            assert_eq!(guided::matched_is_rows(&order), Some(true));
             for method in methods {
                 let want = stripify_bitree_with(m, method).unwrap().strip.refs();
                 assert_eq!(bitree_strip_refs(m.clone(), method).unwrap(), want);
@@ -154,6 +171,7 @@ fn counted_references_are_the_strips_own() {
                 let crit = MaxVerticalError { max_error_m: e };
                 let plan = MeshPlan::new(&crit).with_hierarchy(HierarchyKind::Quadtree(q));
                 let m = mesher.mesh(&plan).unwrap().mesh;
+                assert_eq!(guided::matched_is_rows(&m.triangles), Some(true));
                 assert_eq!(quadtree_strip_refs(m.clone()), stripify_quadtree(&m).refs());
             }
         }
@@ -163,4 +181,22 @@ fn counted_references_are_the_strips_own() {
     bad.triangles[0] = [0, 1, 20];
     assert!(bitree_strip_refs(bad.clone(), StripMethod::Guided).is_err());
     assert!(stripify_bitree_with(&bad, StripMethod::Guided).is_err());
+    let keyed = |m: &Mesh| {
+        traversal::order_by_keys(m.vertices.len(), &m.triangles, |i| {
+            m.vertices.get(i as usize).map(|v| [v.col, v.row])
+        })
+    };
+    assert_eq!(keyed(&bad), None);
+    // A triangle twice, and one inside another: the traversal's answer.
+    let mut twice = full_bitree_mesh(9, 9);
+    twice.triangles.push(twice.triangles[5]);
+    assert_eq!(keyed(&twice), None);
+    assert!(bitree_strip_refs(twice.clone(), StripMethod::Guided).is_err());
+    assert_eq!(guided::matched_is_rows(&twice.triangles), None);
+    // A directed edge held twice: the rows strip it.
+    let mut order = traversal::bitree_order(&full_bitree_mesh(9, 9)).unwrap();
+    order.push(order[3]);
+    let refs = guided_refs(&order);
+    assert_eq!(refs, stripify_guided(&order).refs());
+    assert!(refs > 0);
 }

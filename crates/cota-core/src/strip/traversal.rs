@@ -51,7 +51,12 @@ pub fn bitree_order(mesh: &Mesh) -> Result<Vec<[u32; 3]>, StripError> {
 /// # Errors
 /// As [`super::stripify_bitree`].
 pub(crate) fn into_bitree_order(mesh: Mesh) -> Result<Vec<[u32; 3]>, StripError> {
-    let mut ids = bitree_order_ids(&mesh)?;
+    let mut ids = match order_by_keys(mesh.vertices.len(), &mesh.triangles, |i| {
+        mesh.vertices.get(i as usize).map(|v| [v.col, v.row])
+    }) {
+        Some(ids) => ids,
+        None => bitree_order_ids(&mesh)?,
+    };
     let Mesh {
         vertices,
         mut triangles,
@@ -81,6 +86,132 @@ pub(crate) fn into_bitree_order(mesh: Mesh) -> Result<Vec<[u32; 3]>, StripError>
         }
     }
     Ok(triangles)
+}
+
+/// [`bitree_order_ids`] in less memory, for a mesh whose triangles are
+/// bitree triangles that the traversal reaches once each (what every
+/// extraction and refinement makes): each triangle's place in the
+/// traversal is a key, the path of first/second choices from its root
+/// (found by descending towards its centroid, entering each triangle as
+/// the traversal does), left-aligned in 64 bits with its length in the low
+/// 6; the indices sorted by key are the traversal's order exactly when no
+/// triangle's key interval meets the next one's (no triangle twice, none
+/// inside another). `None` for any other mesh (a bad index, a triangle not
+/// of the hierarchy, two vertices on one sample, overlaps, a hierarchy too
+/// deep for the key): [`bitree_order_ids`] then gives the answer or the
+/// error. Holds 8 bytes per triangle for the keys and 4 for the order,
+/// instead of the sample table, the 20-byte leaf records and their rows.
+pub(crate) fn order_by_keys(
+    vertex_count: usize,
+    triangles: &[[u32; 3]],
+    pos: impl Fn(u32) -> Option<Pt> + Sync,
+) -> Option<Vec<u32>> {
+    use rayon::prelude::*;
+    if triangles.is_empty() || u32::try_from(triangles.len()).is_err() {
+        return None;
+    }
+    let (mut w, mut h) = (2u32, 2u32);
+    for i in 0..vertex_count as u32 {
+        let p = pos(i)?;
+        w = w.max(p[0].saturating_add(1));
+        h = h.max(p[1].saturating_add(1));
+    }
+    // Two vertices on one sample: the sample table keeps one of them.
+    let mut seen = vec![0u64; (w as usize * h as usize).div_ceil(64)];
+    for i in 0..vertex_count as u32 {
+        let p = pos(i)?;
+        let k = p[1] as usize * w as usize + p[0] as usize;
+        let (word, bit) = (k / 64, 1u64 << (k % 64));
+        if seen[word] & bit != 0 {
+            return None;
+        }
+        seen[word] |= bit;
+    }
+    drop(seen);
+    let hier = Hierarchy::new(w, h);
+    // 1 root bit and 2 per level of the padded square: at most 58 bits.
+    if 1 + 2 * u64::from(hier.size().trailing_zeros()) > 58 {
+        return None;
+    }
+    let keys: Vec<u64> = triangles
+        .par_iter()
+        .map(|t| {
+            let p = [pos(t[0])?, pos(t[1])?, pos(t[2])?];
+            traversal_key(&hier, p)
+        })
+        .collect::<Option<_>>()?;
+    let mut ids: Vec<u32> = (0..triangles.len() as u32).collect();
+    ids.par_sort_unstable_by_key(|&k| keys[k as usize]);
+    let span = |k: u64| (k & !63, (k & !63) as u128 + (1u128 << (64 - (k & 63))));
+    let disjoint = ids.windows(2).all(|pair| {
+        let (_, end) = span(keys[pair[0] as usize]);
+        let (start, _) = span(keys[pair[1] as usize]);
+        end <= start as u128
+    });
+    disjoint.then_some(ids)
+}
+
+/// The traversal key of the bitree triangle with corners `p` (see
+/// [`order_by_keys`]); `None` when it is not a triangle of `hier` that the
+/// traversal can reach.
+fn traversal_key(hier: &Hierarchy, p: [Pt; 3]) -> Option<u64> {
+    let apex = right_angle(p)?;
+    let (c, a, b) = (p[apex], p[(apex + 1) % 3], p[(apex + 2) % 3]);
+    let leg2 = |t: &Tri| {
+        let dx = t.c[0] as i64 - t.a[0] as i64;
+        let dy = t.c[1] as i64 - t.a[1] as i64;
+        dx * dx + dy * dy
+    };
+    let target = Tri { a, b, c };
+    let size = leg2(&target);
+    // Three times the centroid: strictly inside the triangle, so strictly
+    // on one side of every split line of its ancestors.
+    let g = [0, 1].map(|k| p.iter().map(|q| i128::from(q[k])).sum::<i128>());
+    let side = |u: Pt, v: Pt, q: [i128; 2], scale: i128| {
+        let (ux, uy) = (i128::from(u[0]) * scale, i128::from(u[1]) * scale);
+        let (vx, vy) = (i128::from(v[0]) * scale, i128::from(v[1]) * scale);
+        ((vx - ux) * (q[1] - uy) - (vy - uy) * (q[0] - ux)).signum()
+    };
+    let roots = hier.roots();
+    // Root 0 (north-east of the `\` diagonal) is visited first.
+    let second_root = g[1] > g[0];
+    let mut t = roots[usize::from(second_root)];
+    let mut enter = t.a;
+    let mut key = u64::from(second_root);
+    let mut bits = 1u32;
+    loop {
+        if t.c == c && ((t.a == a && t.b == b) || (t.a == b && t.b == a)) {
+            break;
+        }
+        if t.is_unit() || hier.place(&t) == Placement::Outside || leg2(&t) <= size {
+            return None;
+        }
+        let m = t.mid();
+        let near_a = Tri {
+            a: t.c,
+            b: t.a,
+            c: m,
+        };
+        let near_b = Tri {
+            a: t.b,
+            b: t.c,
+            c: m,
+        };
+        // near_a lies on t.a's side of the split line t.c–m.
+        let in_a =
+            side(t.c, m, g, 3) == side(t.c, m, [t.a[0], t.a[1]].map(|x| 3 * i128::from(x)), 3);
+        let first_is_a = enter == t.a;
+        let (next, second) = match (in_a, first_is_a) {
+            (true, true) => ((near_a, t.a), false),
+            (false, true) => ((near_b, t.c), true),
+            (false, false) => ((near_b, t.b), false),
+            (true, false) => ((near_a, t.c), true),
+        };
+        (t, enter) = next;
+        key = (key << 1) | u64::from(second);
+        bits += 1;
+    }
+    Some((key << (64 - bits)) | u64::from(bits))
 }
 
 /// True when `ids` holds each of `0..ids.len()` once.
