@@ -186,17 +186,8 @@ fn traversal_key(hier: &Hierarchy, p: [Pt; 3]) -> Option<u64> {
         if t.is_unit() || hier.place(&t) == Placement::Outside || leg2(&t) <= size {
             return None;
         }
+        let (near_a, near_b) = t.children();
         let m = t.mid();
-        let near_a = Tri {
-            a: t.c,
-            b: t.a,
-            c: m,
-        };
-        let near_b = Tri {
-            a: t.b,
-            b: t.c,
-            c: m,
-        };
         // near_a lies on t.a's side of the split line t.c–m.
         let in_a =
             side(t.c, m, g, 3) == side(t.c, m, [t.a[0], t.a[1]].map(|x| 3 * i128::from(x)), 3);
@@ -251,17 +242,7 @@ pub(crate) fn bitree_order_ids(mesh: &Mesh) -> Result<Vec<u32>, StripError> {
         if t.is_unit() || hier.place(&t) == Placement::Outside {
             continue;
         }
-        let m = t.mid();
-        let near_a = Tri {
-            a: t.c,
-            b: t.a,
-            c: m,
-        };
-        let near_b = Tri {
-            a: t.b,
-            b: t.c,
-            c: m,
-        };
+        let (near_a, near_b) = t.children();
         let (first, second) = if enter == t.a {
             ((near_a, t.a), (near_b, t.c))
         } else {

@@ -32,7 +32,7 @@ use rustc_hash::FxHashMap as HashMap;
 use rayon::prelude::*;
 
 use super::lattice::Lattice;
-use super::row_blocks::{max_deviation, RowBlocks};
+use super::row_blocks::{max_deviation, RowBlocks, RowSpan};
 use crate::bitree::error_code;
 use crate::bitree::{round_up_f32, Bitree};
 use crate::hierarchy::{Pt, RowSpans, Tri};
@@ -318,12 +318,18 @@ pub(crate) fn own_rows(
             let [ox, oy] = lattice.origin();
             let r = (y - oy as i64) as usize;
             let row = &g.heights()[r * g.width()..(r + 1) * g.width()];
-            let span = ((ca - ox as i64) as usize, (cb - ox as i64) as usize);
-            let yf = y as f64;
+            let span = RowSpan {
+                row,
+                r,
+                i: (ca - ox as i64) as usize,
+                j: (cb - ox as i64) as usize,
+                x_i: ca,
+                y: y as f64,
+            };
             e = e.max(match (blocks, floor) {
-                (Some(b), None) => b.row_seed(&plane, row, r, span, ca, yf),
-                (Some(b), Some(f)) => b.row_rest(&plane, row, r, span, ca, yf, (z_abs, f)),
-                (None, _) => max_deviation(&plane, ca, yf, &row[span.0..=span.1]),
+                (Some(b), None) => b.row_seed(&plane, span),
+                (Some(b), Some(f)) => b.row_rest(&plane, span, (z_abs, f)),
+                (None, _) => max_deviation(&plane, ca, span.y, &row[span.i..=span.j]),
             });
         }
         e

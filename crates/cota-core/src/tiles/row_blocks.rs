@@ -64,6 +64,18 @@ pub(crate) struct RowBlocks {
     long: Vec<Run>,
 }
 
+/// The columns `i..=j` of the grid's row `r` (heights `row`), column `i`
+/// being lattice column `x_i`, at lattice row `y`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RowSpan<'a> {
+    pub(crate) row: &'a [f32],
+    pub(crate) r: usize,
+    pub(crate) i: usize,
+    pub(crate) j: usize,
+    pub(crate) x_i: i64,
+    pub(crate) y: f64,
+}
+
 /// Where a row span's whole runs lie: runs `k0..k1`, of which the long
 /// runs `l0..l1` cover runs `LONG·l0..LONG·l1` (none when `l0 == l1`).
 #[derive(Debug, Clone, Copy)]
@@ -125,21 +137,19 @@ impl RowBlocks {
         Some(Layout { k0, k1, l0, l1 })
     }
 
-    /// First pass over the columns `i..=j` of the grid's row `r` (heights
-    /// `row`), column `i` being lattice column `x_i`, at lattice row `y`:
-    /// `|plane − h|` at the columns outside whole runs and at each run's
+    /// First pass over `span`: `|plane − h|` at the columns outside whole runs and at each run's
     /// lowest and highest samples (every column when there are fewer than
     /// two whole runs). A lower bound of the span's largest deviation, and
     /// with [`Self::row_rest`] over the same span, equal to it.
-    pub(crate) fn row_seed(
-        &self,
-        plane: &Plane,
-        row: &[f32],
-        r: usize,
-        (i, j): (usize, usize),
-        x_i: i64,
-        y: f64,
-    ) -> f64 {
+    pub(crate) fn row_seed(&self, plane: &Plane, span: RowSpan<'_>) -> f64 {
+        let RowSpan {
+            row,
+            r,
+            i,
+            j,
+            x_i,
+            y,
+        } = span;
         let Some(at) = self.layout((i, j)) else {
             return max_deviation(plane, x_i, y, &row[i..=j]);
         };
@@ -169,17 +179,20 @@ impl RowBlocks {
     /// whole runs whose bound can exceed `floor` (a value of the first
     /// pass, or of any sample), read one by one; `floor` when none can.
     /// `z_abs` is the largest |height| of the plane's corners.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn row_rest(
         &self,
         plane: &Plane,
-        row: &[f32],
-        r: usize,
-        (i, j): (usize, usize),
-        x_i: i64,
-        y: f64,
+        span: RowSpan<'_>,
         (z_abs, floor): (f64, f64),
     ) -> f64 {
+        let RowSpan {
+            row,
+            r,
+            i,
+            j,
+            x_i,
+            y,
+        } = span;
         let Some(at) = self.layout((i, j)) else {
             return floor;
         };
@@ -308,10 +321,17 @@ mod tests {
             for i in (0..w).step_by(37) {
                 for j in (i..w).step_by(23) {
                     let a = max_deviation(&plane, 1000 + i as i64, 7.0, &row[i..=j]);
-                    let x_i = 1000 + i as i64;
-                    let seed = blocks.row_seed(&plane, row, r, (i, j), x_i, 7.0);
-                    let b =
-                        seed.max(blocks.row_rest(&plane, row, r, (i, j), x_i, 7.0, (400.0, seed)));
+                    let (x_i, y) = (1000 + i as i64, 7.0);
+                    let span = RowSpan {
+                        row,
+                        r,
+                        i,
+                        j,
+                        x_i,
+                        y,
+                    };
+                    let seed = blocks.row_seed(&plane, span);
+                    let b = seed.max(blocks.row_rest(&plane, span, (400.0, seed)));
                     assert_eq!(a.to_bits(), b.to_bits(), "span {i}..={j}");
                     checked += 1;
                 }

@@ -584,10 +584,8 @@ mod test {
         assert!(a <= 0.0 && b >= 4.0);
     }
 
-    /// Square by square (a separable set) and sample by sample (the same
-    /// samples listed) give the same codes, bit for bit.
-    #[test]
-    fn squares_and_samples_give_the_same_codes() {
+    /// A rough 37² grid at 10° E, 1° N, 0.01° apart, and its lattice frame.
+    fn rough_grid() -> (HeightGrid, LatticeFrame) {
         let n = 37;
         let v: Vec<f32> = (0..n * n)
             .map(|k| ((k * 7919) % 1000) as f32 * 0.37 + (k % n) as f32)
@@ -603,6 +601,14 @@ mod test {
         };
         let grid = HeightGrid::new(n, n, v, g).unwrap();
         let frame = LatticeFrame::of(&grid, &LatticeOptions::DEFAULT).unwrap();
+        (grid, frame)
+    }
+
+    /// Square by square (a separable set) and sample by sample (the same
+    /// samples listed) give the same codes, bit for bit.
+    #[test]
+    fn squares_and_samples_give_the_same_codes() {
+        let (grid, frame) = rough_grid();
         let part = SourcePart {
             grid: &grid,
             offset: [0, 0],
@@ -628,21 +634,7 @@ mod test {
     /// a grid are by squares and rows.
     #[test]
     fn listed_samples_are_measured_at_every_size() {
-        let n = 37;
-        let v: Vec<f32> = (0..n * n)
-            .map(|k| ((k * 7919) % 1000) as f32 * 0.37 + (k % n) as f32)
-            .collect();
-        let g = GeoRef {
-            crs: Crs::WGS84,
-            origin_x: 10.0,
-            origin_y: 1.0,
-            pixel_x: 0.01,
-            pixel_y: -0.01,
-            pixel_is: PixelIs::Point,
-            known: true,
-        };
-        let grid = HeightGrid::new(n, n, v, g).unwrap();
-        let frame = LatticeFrame::of(&grid, &LatticeOptions::DEFAULT).unwrap();
+        let (grid, frame) = rough_grid();
         let part = SourcePart {
             grid: &grid,
             offset: [0, 0],
