@@ -27,7 +27,7 @@
 //! tiles' lines; then those tiles are made again).
 
 use std::collections::{BTreeSet, HashSet};
-use std::fs::{File, OpenOptions};
+use std::fs::{File, OpenOptions, TryLockError};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -51,8 +51,9 @@ pub const JOURNAL_DIR: &str = ".cota-journal";
 pub(crate) struct Journal {
     file: Mutex<File>,
     path: PathBuf,
-    /// Earlier runs' journals whose unfinished tiles this run makes again.
-    redone: Vec<PathBuf>,
+    /// Gone runs' journals (held locked) whose unfinished tiles, if any,
+    /// this run makes again.
+    redone: Vec<(PathBuf, File)>,
 }
 
 /// The tiles an earlier journal began and did not end.
@@ -78,9 +79,75 @@ fn unfinished(text: &str) -> HashSet<TileId> {
     open
 }
 
+/// What a look at another run's journal found.
+enum Owner {
+    /// Its run is gone (its lock was free): held locked by this run now.
+    Gone(File),
+    /// Its run still writes (its lock is held), or the journal is gone.
+    Live,
+    /// The file system keeps no locks: a journal with no unfinished tile
+    /// may be a live run's between two tiles.
+    Unknown(File),
+}
+
+/// Takes the lock of the journal at `p` if its run is gone.
+fn owner(p: &Path) -> Result<Owner, PathIo> {
+    let file = match File::open(p) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Owner::Live),
+        Err(e) => return Err(io_err(p)(e)),
+    };
+    match file.try_lock() {
+        Ok(()) => Ok(Owner::Gone(file)),
+        Err(TryLockError::WouldBlock) => Ok(Owner::Live),
+        Err(TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {
+            Ok(Owner::Unknown(file))
+        }
+        Err(TryLockError::Error(e)) => Err(io_err(p)(e)),
+    }
+}
+
+/// Locks the journal folder while a run looks at the journals in it, so that
+/// two runs starting together never take each other's for a gone run's.
+/// `None` where folders cannot be opened or locked (a run then relies on the
+/// journals' own locks).
+fn lock_folder(dir: &Path) -> Option<File> {
+    let f = File::open(dir).ok()?;
+    f.lock().ok()?;
+    Some(f)
+}
+
+/// Makes the journal folder and locks it; made again if a run that ended
+/// removed it before the lock was taken.
+fn make_and_lock_folder(dir: &Path) -> Result<Option<File>, PathIo> {
+    loop {
+        std::fs::create_dir_all(dir).map_err(io_err(dir))?;
+        let lock = lock_folder(dir);
+        if dir.is_dir() {
+            return Ok(lock);
+        }
+    }
+}
+
+/// The unfinished tiles of a journal, read from its open `file`.
+fn read_unfinished(p: &Path, mut file: &File) -> Result<HashSet<TileId>, PathIo> {
+    let mut text = String::new();
+    std::io::Read::read_to_string(&mut file, &mut text).map_err(io_err(p))?;
+    Ok(unfinished(&text))
+}
+
+/// Removes a file (a tile's, a journal's), if there.
+fn remove_tile(tile: &Path) -> Result<(), PathIo> {
+    match std::fs::remove_file(tile) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(io_err(tile)(e)),
+        _ => Ok(()),
+    }
+}
+
 impl Journal {
-    /// Removes the files of `tiles` that earlier runs left unfinished, then
-    /// opens this run's journal under `out`.
+    /// Removes the files of `tiles` that earlier runs, now gone, left
+    /// unfinished, then opens this run's journal under `out`, locked while
+    /// the run lasts (a journal whose lock is free is a gone run's).
     ///
     /// # Errors
     /// The journal or tile that could not be read, removed or created.
@@ -90,24 +157,22 @@ impl Journal {
         path_of: impl Fn(TileId) -> PathBuf,
     ) -> Result<Journal, PathIo> {
         let dir = out.join(JOURNAL_DIR);
-        std::fs::create_dir_all(&dir).map_err(io_err(&dir))?;
+        let _looking = make_and_lock_folder(&dir)?;
         let mine: HashSet<TileId> = tiles.iter().copied().collect();
         let mut redone = Vec::new();
         for entry in std::fs::read_dir(&dir).map_err(io_err(&dir))? {
             let p = entry.map_err(io_err(&dir))?.path();
-            let text = std::fs::read_to_string(&p).map_err(io_err(&p))?;
-            let open = unfinished(&text);
+            let (file, known_gone) = match owner(&p)? {
+                Owner::Gone(f) => (f, true),
+                Owner::Unknown(f) => (f, false),
+                Owner::Live => continue,
+            };
+            let open = read_unfinished(&p, &file)?;
             for &t in open.iter().filter(|t| mine.contains(t)) {
-                let tile = path_of(t);
-                match std::fs::remove_file(&tile) {
-                    Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-                        return Err(io_err(&tile)(e))
-                    }
-                    _ => {}
-                }
+                remove_tile(&path_of(t))?;
             }
-            if !open.is_empty() && open.iter().all(|t| mine.contains(t)) {
-                redone.push(p);
+            if (known_gone || !open.is_empty()) && open.iter().all(|t| mine.contains(t)) {
+                redone.push((p, file));
             }
         }
         let nanos = SystemTime::now()
@@ -119,6 +184,11 @@ impl Journal {
             .append(true)
             .open(&path)
             .map_err(io_err(&path))?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(TryLockError::Error(e)) if e.kind() == std::io::ErrorKind::Unsupported => {}
+            Err(e) => return Err(io_err(&path)(e.into())),
+        }
         Ok(Journal {
             file: Mutex::new(file),
             path,
@@ -155,14 +225,49 @@ impl Journal {
     /// # Errors
     /// A journal that could not be removed.
     pub(crate) fn finish(self) -> Result<(), PathIo> {
-        drop(self.file);
-        for p in self.redone.iter().chain([&self.path]) {
-            std::fs::remove_file(p).map_err(io_err(p))?;
-        }
+        // The folder's lock first: no run starting now may take this journal
+        // for a gone run's once its own lock goes with the file.
         let dir = self.path.parent().unwrap_or(Path::new("."));
+        let _ending = lock_folder(dir);
+        drop(self.file);
+        for (p, _locked) in &self.redone {
+            remove_tile(p)?; // absent only where no lock is kept (Owner::Unknown)
+        }
+        std::fs::remove_file(&self.path).map_err(io_err(&self.path))?;
         let _ = std::fs::remove_dir(dir); // only when empty: other runs may be writing
         Ok(())
     }
+}
+
+/// The reduce's clean-up, once every shard has recorded its end: removes
+/// the journals of gone runs that left no tile unfinished (a run killed
+/// between two tiles), and the folder when empty. Returns the gone runs'
+/// journals that name unfinished tiles, left in place.
+///
+/// # Errors
+/// The journal that could not be read or removed.
+pub(crate) fn clear_gone_journals(out: &Path) -> Result<Vec<(PathBuf, Vec<TileId>)>, PathIo> {
+    let dir = out.join(JOURNAL_DIR);
+    if !dir.is_dir() {
+        return Ok(Vec::new());
+    }
+    let _looking = lock_folder(&dir);
+    let mut left = Vec::new();
+    for entry in std::fs::read_dir(&dir).map_err(io_err(&dir))? {
+        let p = entry.map_err(io_err(&dir))?.path();
+        let Owner::Gone(file) = owner(&p)? else {
+            continue;
+        };
+        let mut open: Vec<TileId> = read_unfinished(&p, &file)?.into_iter().collect();
+        if open.is_empty() {
+            remove_tile(&p)?;
+        } else {
+            open.sort_by_key(|t| (t.z, t.x, t.y));
+            left.push((p, open));
+        }
+    }
+    let _ = std::fs::remove_dir(&dir);
+    Ok(left)
 }
 
 /// Makes every directory the tiles of `tiles` go into, once each.
@@ -194,5 +299,62 @@ mod tests {
         let open = unfinished(text);
         assert_eq!(open, [t(3, 1, 3), t(4, 9, 9)].into_iter().collect());
         assert!(unfinished("").is_empty());
+    }
+
+    fn tile_at(out: &Path) -> impl Fn(TileId) -> PathBuf + '_ {
+        move |t| out.join(format!("{}-{}-{}.terrain", t.z, t.x, t.y))
+    }
+
+    #[test]
+    fn a_killed_runs_journal_goes_even_with_no_tile_unfinished() {
+        let out = tempfile::tempdir().unwrap();
+        let dir = out.path().join(JOURNAL_DIR);
+        std::fs::create_dir_all(&dir).unwrap();
+        // Killed between two tiles (no lock held: the process is gone).
+        std::fs::write(dir.join("1-1.log"), "b 3 1 2\ne 3 1 2\n").unwrap();
+        let tiles = [TileId { z: 3, x: 1, y: 3 }];
+        let j = Journal::open(out.path(), &tiles, tile_at(out.path())).unwrap();
+        assert_eq!(j.redone.len(), 1);
+        j.finish().unwrap();
+        assert!(!dir.exists(), "the gone run's journal was left");
+    }
+
+    #[test]
+    fn a_live_runs_journal_is_neither_taken_nor_removed() {
+        let out = tempfile::tempdir().unwrap();
+        let t = |y| TileId { z: 3, x: 1, y };
+        let live = Journal::open(out.path(), &[t(1)], tile_at(out.path())).unwrap();
+        live.line('b', t(1)).unwrap();
+        std::fs::write(tile_at(out.path())(t(1)), b"half").unwrap();
+        let other = Journal::open(out.path(), &[t(1), t(2)], tile_at(out.path())).unwrap();
+        assert!(other.redone.is_empty());
+        assert!(
+            tile_at(out.path())(t(1)).is_file(),
+            "a live run's tile was removed"
+        );
+        other.finish().unwrap();
+        assert!(live.path.is_file());
+        assert!(clear_gone_journals(out.path()).unwrap().is_empty());
+        assert!(
+            live.path.is_file(),
+            "the reduce removed a live run's journal"
+        );
+        live.finish().unwrap();
+        assert!(!out.path().join(JOURNAL_DIR).exists());
+    }
+
+    #[test]
+    fn the_reduce_keeps_and_names_journals_with_unfinished_tiles() {
+        let out = tempfile::tempdir().unwrap();
+        let dir = out.path().join(JOURNAL_DIR);
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("1-1.log"), "b 3 1 2\ne 3 1 2\n").unwrap();
+        std::fs::write(dir.join("2-1.log"), "b 4 0 0\n").unwrap();
+        let left = clear_gone_journals(out.path()).unwrap();
+        assert_eq!(
+            left,
+            vec![(dir.join("2-1.log"), vec![TileId { z: 4, x: 0, y: 0 }])]
+        );
+        assert!(!dir.join("1-1.log").exists());
     }
 }

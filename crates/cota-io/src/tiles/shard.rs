@@ -26,12 +26,13 @@
 //! * The record `OUT/.cota-shard-I-of-N.json` holds the run manifest and the
 //!   text of `layer.json`; the reduce refuses records that disagree or are
 //!   missing (naming them), removes the temporary files a killed process
-//!   left, writes `layer.json` and removes the records and the frame.
+//!   left and the journals of killed runs that left no tile unfinished
+//!   ([`super::journal`]; one that did is refused), writes `layer.json` and removes the records and the frame.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use cota_core::tiles::{BandCorners, Prepared, Shard, SourcePart};
+use cota_core::tiles::{BandCorners, Prepared, Shard, SourcePart, TileId};
 use serde_json::{json, Value};
 
 use super::coarse::{
@@ -40,6 +41,7 @@ use super::coarse::{
 use super::frame::{
     read_record, read_shard_frame, shard_frame_path, write_shard_frame, ShardFrame,
 };
+use super::journal::clear_gone_journals;
 use super::layer::run_manifest;
 use super::pyramid::{
     fold, layer_text, write_file_atomically, write_tiles, PyramidError, PyramidOptions,
@@ -128,6 +130,28 @@ fn remove_temporaries(out: &Path) -> Result<(), PyramidError> {
     Ok(())
 }
 
+/// Refuses the reduce while a gone run's journal names tiles it began and
+/// did not end: no shard made them again since, so they may be partial.
+fn refuse_unfinished(left: Vec<(PathBuf, Vec<TileId>)>) -> Result<(), PyramidError> {
+    let Some((path, tiles)) = left.into_iter().next() else {
+        return Ok(());
+    };
+    let named: Vec<String> = tiles
+        .iter()
+        .take(4)
+        .map(|t| format!("{}/{}/{}", t.z, t.x, t.y))
+        .collect();
+    Err(PyramidError::Shard {
+        path,
+        message: format!(
+            "expected every tile ended, found {} begun by a killed run and not made again ({}); \
+             run the shard holding them again",
+            tiles.len(),
+            named.join(", ")
+        ),
+    })
+}
+
 /// What [`reduce_shards`] found.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
 pub struct ReduceReport {
@@ -214,6 +238,7 @@ pub fn reduce_shards(
         .collect::<Result<Vec<_>, _>>()?;
     let (layer, tiles) = agreed(&paths, &records, &run, &manifest)?;
     remove_temporaries(out)?;
+    refuse_unfinished(clear_gone_journals(out)?)?;
     // After a plan step the shards hold only the band zoom and finer: the
     // coarser tiles are cut here from their partial maxima, and count too.
     let frame = read_shard_frame(out, shards)?;
