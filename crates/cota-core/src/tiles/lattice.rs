@@ -21,9 +21,11 @@
 //!    surrounding source samples. Outside it, the terrain is 0 m (the
 //!    ellipsoid, what a globe shows with no terrain): the footprint's edge
 //!    value is held one cell beyond it (so the unit cells across the edge
-//!    interpolate the source's edge) and falls linearly to 0 over
-//!    [`ramp_cells`] cells (an eighth of a maximum-zoom tile): no terrain is
-//!    shown farther than that from the data, and the window's last
+//!    interpolate the source's edge) and falls to 0 over [`ramp_cells`]
+//!    cells (the rest of a maximum-zoom tile) along a smoothstep
+//!    ([`ramp_factor`]), level at both ends: the data's edge is seen held
+//!    flat, with no wall, apron or kink at it, and no terrain is shown
+//!    farther than one finest tile from the data. The window's last
 //!    alignment tile is 0 m like everything beyond it.
 //! 4. **Across the antimeridian.** A source whose longitudes go past ±180°
 //!    (179.5° to 180.5°, or -180.5° to -179.5°) is laid on a lattice whose
@@ -630,12 +632,25 @@ pub(crate) fn fit_tolerance_m(s: &GeographicScheme, pixel_deg: f64, opts: &Latti
 }
 
 /// Lattice cells over which the data's edge falls to the ellipsoid beyond
-/// the footprint: an eighth of a maximum-zoom tile (8 cells for tiles of 64,
-/// 600 m at zoom 12), at least one. Narrow, so that no terrain shows beyond
-/// the data; not a cliff, so that its steps stay near the terrain's own
+/// the footprint, after the edge value held one cell: a maximum-zoom tile
+/// less that cell (the window's margin, [`window_at`]), at least one. Along
+/// it the height follows [`ramp_factor`], level at both ends, so that no
+/// wall or apron shows at the data's edge and the ellipsoid is reached
+/// within one finest tile of the data; its steps stay near the terrain's own
 /// (they set the quantization margin, [`super::plan`]).
 pub fn ramp_cells(s: &GeographicScheme) -> f64 {
-    f64::from((s.tile_cells / 8).max(1))
+    f64::from(s.tile_cells.saturating_sub(1).max(1))
+}
+
+/// The share of the edge's height kept `cells` lattice cells beyond the
+/// footprint: 1 up to one cell, then a smoothstep `1 − 3t² + 2t³` with
+/// `t = (cells − 1) / ramp`, 0 from `ramp + 1` cells on. Level where it
+/// leaves the edge (the data's edge seen held flat, not cut) and where it
+/// meets the ellipsoid; its steepest slope is `1.5 / ramp` of the edge's
+/// height per cell.
+pub fn ramp_factor(cells: f64, ramp: f64) -> f64 {
+    let t = ((cells - 1.0) / ramp).clamp(0.0, 1.0);
+    1.0 - t * t * (3.0 - 2.0 * t)
 }
 
 /// Per lattice column (or row): the source's first sample index, the
@@ -668,16 +683,16 @@ fn axis(
             let i0 = (sx.floor() as usize).min(n - 2);
             // Full edge value up to one cell beyond the footprint, so the
             // unit cells across its edge interpolate the source's edge, then
-            // down to 0 m over `ramp` cells (never into the zero band).
-            let ramp = if gx < fp0 - 1.0 {
-                let end = (fp0 - 1.0 - ramp_cells).max(w0);
-                ((gx - end) / (fp0 - 1.0 - end).max(1.0)).clamp(0.0, 1.0)
-            } else if gx > fp1 + 1.0 {
-                let end = (fp1 + 1.0 + ramp_cells).min(w1);
-                ((end - gx) / (end - fp1 - 1.0).max(1.0)).clamp(0.0, 1.0)
+            // down to 0 m over `ramp_cells` cells, shortened where the zero
+            // band (or the world's edge) comes sooner.
+            let (beyond, room) = if gx < fp0 {
+                (fp0 - gx, fp0 - w0)
+            } else if gx > fp1 {
+                (gx - fp1, w1 - fp1)
             } else {
-                1.0
+                (0.0, f64::INFINITY)
             };
+            let ramp = ramp_factor(beyond, ramp_cells.min(room - 1.0).max(1.0));
             Axis {
                 i0,
                 frac: sx - i0 as f64,
@@ -983,6 +998,42 @@ mod test {
                 assert_eq!(g.get(c, r), 0.0);
             }
         }
+    }
+
+    #[test]
+    fn beyond_the_edge_the_terrain_is_held_level_then_eases_to_0_within_a_tile() {
+        let src = smooth_source();
+        let lat = Lattice::resample(&src, &LatticeOptions::DEFAULT).unwrap();
+        let s = lat.scheme();
+        let (fp, tile) = (lat.footprint(), f64::from(s.tile_cells));
+        // Along the row through the footprint's middle, eastwards past its edge.
+        let y = ((fp[1] + fp[3]) / 2.0).round() as u64;
+        let first = fp[2].floor() as u64 + 1;
+        let edge = lat.height_at(fp[2].floor() as u64, y);
+        let h: Vec<f64> = (first..first + s.tile_cells as u64 + 4)
+            .map(|x| f64::from(lat.height_at(x, y)))
+            .collect();
+        assert!(edge > 100.0);
+        // Level at the edge: the first cell beyond holds the edge's value
+        // within one cell of the source's slope, the next steps are small.
+        let steps: Vec<f64> = h.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+        let largest = steps.iter().cloned().fold(0.0, f64::max);
+        assert!(
+            largest <= 1.5 * f64::from(edge) / (tile - 1.0) + 1.0,
+            "steps {steps:?}"
+        );
+        assert!(steps[1] < largest / 3.0, "not level at the edge: {steps:?}");
+        // Down monotonically, and 0 m from one finest tile out on.
+        assert!(h.windows(2).all(|w| w[1] <= w[0] + 1e-6), "{h:?}");
+        let beyond = |x: u64| x as f64 - fp[2];
+        for (k, v) in h.iter().enumerate() {
+            if beyond(first + k as u64) >= tile {
+                assert_eq!(*v, 0.0, "{} cells out", beyond(first + k as u64));
+            }
+        }
+        assert_eq!(ramp_factor(1.0, 10.0), 1.0);
+        assert_eq!(ramp_factor(11.0, 10.0), 0.0);
+        assert!((ramp_factor(6.0, 10.0) - 0.5).abs() < 1e-12);
     }
 
     #[test]

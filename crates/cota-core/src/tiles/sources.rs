@@ -24,7 +24,8 @@
 //!    no crack and no seam of NaN;
 //! 3. else (beyond the data) the nearest source's edge, held for one
 //!    lattice cell, falling to 0 m over [`super::lattice::ramp_cells`]
-//!    cells: the ellipsoid, as for a single source.
+//!    cells along [`super::lattice::ramp_factor`]: the ellipsoid, as for a
+//!    single source.
 //!
 //! # Samples
 //! Every source sample counts (the fit, the errors against the source, the
@@ -58,8 +59,8 @@ use super::coverage::Coverage;
 use super::error::TilesError;
 use super::fit::fit;
 use super::lattice::{
-    choose_window, fit_tolerance_m, ramp_cells, scheme_for_pixel, Lattice, LatticeFrame,
-    LatticeOptions,
+    choose_window, fit_tolerance_m, ramp_cells, ramp_factor, scheme_for_pixel, Lattice,
+    LatticeFrame, LatticeOptions,
 };
 use super::samples::{Listed, SampleSet};
 use super::scheme::GeographicScheme;
@@ -486,7 +487,7 @@ fn height_at(placed: &[Placed<'_>], s: &GeographicScheme, x: f64, y: f64, ramp: 
     }
     let (cells, v) = nearest;
     // The edge held one cell beyond the data, then down to 0 m.
-    v * (1.0 - (cells - 1.0) / ramp).clamp(0.0, 1.0)
+    v * ramp_factor(cells, ramp)
 }
 
 /// How far (in the source's pixels) WGS 84 `(lon, lat)` lies beyond the

@@ -238,15 +238,23 @@ fn fills_complete_the_tree(
         let n = kids(t).iter().filter(|c| written.contains(c)).count();
         assert!(n == 0 || n == 4, "{t}: {n} of 4 children written");
     }
+    let mut far_fills = 0;
     for &f in fills {
         assert!(kids(f).iter().all(|c| !written.contains(c)), "{f}");
         assert!(make_tile(prep, f, &PyramidOptions::DEFAULT, None).is_err());
         let glb = decode_glb(&std::fs::read(out.join(glb_rel_path(f))).unwrap()).unwrap();
         assert_eq!(glb.edges.iter().filter(|e| e.len() >= 2).count(), 4, "{f}");
         let rect = prep.lattice().scheme().tile_rect_deg(f);
-        // Wholly 0.05° or more from the data: the ellipsoid, a few triangles.
-        let far = rect[2] < -72.05 || rect[0] > -70.95 || rect[3] < -29.05 || rect[1] > -27.95;
+        // Wholly a finest tile (the ramp) or more from the data: the
+        // ellipsoid, a few triangles.
+        let s = prep.lattice().scheme();
+        let d = 180.0 / f64::from(1u32 << s.max_zoom) + s.cell_deg();
+        let far = rect[2] < -72.0 - d
+            || rect[0] > -71.0 + d
+            || rect[3] < -29.0 - d
+            || rect[1] > -28.0 + d;
         if far {
+            far_fills += 1;
             let meta = glb.meta.unwrap();
             assert_eq!((meta.min_height_m, meta.max_height_m), (0.0, 0.0), "{f}");
             assert!(
@@ -263,6 +271,7 @@ fn fills_complete_the_tree(
         let bound = prep.zoom(f.z).unwrap().max_error_m + float32_budget_m(1e7);
         assert!(made.drawn_error_m <= bound, "{f}: {} m", made.drawn_error_m);
     }
+    assert!(far_fills > 0, "no fill tile a finest tile from the data");
 }
 
 #[test]
