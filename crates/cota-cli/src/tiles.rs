@@ -8,8 +8,9 @@ use anyhow::Context;
 use cota_core::tiles::plan::{plan, plan_with};
 use cota_core::tiles::sources::deviation_of_with_progress;
 use cota_core::tiles::{
-    resampling_deviation_with_progress, shard_plan, BandCorners, Deviation, GeographicScheme,
-    Lattice, LatticeFrame, Prepared, Shard, Source, SourcePart, TilerOptions, ZoomPlan,
+    addressed, resampling_deviation_with_progress, shard_plan, BandCorners, Deviation,
+    GeographicScheme, Lattice, LatticeFrame, Prepared, Shard, Source, SourcePart, TileRange,
+    TilerOptions, ZoomPlan,
 };
 use cota_core::{HeightGrid, LonLat};
 use cota_io::tiles::drawn::{Against, SourceGrid};
@@ -499,6 +500,7 @@ fn print_plan_step(
     let zooms = plan_with(f, &frame.stats, opts)?;
     print_plan(
         &zooms,
+        &f.scheme,
         a.shards,
         frame.band_zoom,
         frame.coarse_tiles,
@@ -594,9 +596,11 @@ fn reduce(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
 }
 
 /// `--plan`: each shard's tiles, zoom by zoom (the band zoom and finer; the
-/// reduce cuts the `coarse` tiles above it).
+/// reduce cuts the `coarse` tiles above it), as addresses (a range split
+/// in two where it crosses the antimeridian).
 fn print_plan(
     zooms: &[ZoomPlan],
+    scheme: &GeographicScheme,
     shards: u32,
     band: u8,
     coarse: u64,
@@ -606,12 +610,17 @@ fn print_plan(
         .iter()
         .map(|s| s.from_zoom(band))
         .collect();
+    let addressed = |s: &Shard| -> Vec<(u8, TileRange)> {
+        s.ranges
+            .iter()
+            .flat_map(|&(z, r)| addressed(scheme, z, r).into_iter().map(move |r| (z, r)))
+            .collect()
+    };
     if as_json {
         let v: Vec<serde_json::Value> = plan
             .iter()
             .map(|s| {
-                let ranges: Vec<serde_json::Value> = s
-                    .ranges
+                let ranges: Vec<serde_json::Value> = addressed(s)
                     .iter()
                     .map(|(z, r)| json!({"zoom": z, "x0": r.x0, "x1": r.x1, "y0": r.y0, "y1": r.y1}))
                     .collect();
@@ -627,8 +636,7 @@ fn print_plan(
     println!("reduce     {coarse:>6}  zooms below {band} (from the shards' partial maxima)");
     println!("shard       tiles  zoom: columns x rows (TMS)");
     for s in &plan {
-        let parts: Vec<String> = s
-            .ranges
+        let parts: Vec<String> = addressed(s)
             .iter()
             .map(|(z, r)| format!("{z}: {}..={} x {}..={}", r.x0, r.x1, r.y0, r.y1))
             .collect();

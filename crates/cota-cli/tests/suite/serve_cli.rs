@@ -191,3 +191,50 @@ fn the_texture_and_the_inputs_warnings_are_served() {
     assert_eq!(w.len(), 1, "{w:?}");
     assert!(w[0].as_str().unwrap().contains("21 void samples"), "{w:?}");
 }
+
+/// Two SRTM tiles across the antimeridian (the real N00E010 and N00E011
+/// relabelled N00E179 and N00W180) are served as one grid: the stream, and
+/// on-demand tiles on both sides of 180° (`available` in two ranges).
+#[test]
+fn a_pair_across_the_antimeridian_is_served_as_one_grid() {
+    let (Some(a), Some(b)) = (
+        common::shared("srtm/N00E010.hgt"),
+        common::shared("srtm/N00E011.hgt.zip"),
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (e179, w180) = (
+        dir.path().join("N00E179.hgt"),
+        dir.path().join("N00W180.hgt.zip"),
+    );
+    std::fs::copy(a, &e179).unwrap();
+    std::fs::copy(b, &w180).unwrap();
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_cota"))
+        .args(["serve", s(&e179), s(&w180), "--addr", "127.0.0.1:0"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let addr = listening(&mut child);
+    let (_, meta) = get(&addr, "/meta.json");
+    let (_, layer) = get(&addr, "/tiles/layer.json");
+    // Zoom 9: 179°..180° is address column 1022, 180°..181° column 0.
+    let east = get(&addr, "/tiles/9/1022/256.terrain");
+    let west = get(&addr, "/tiles/9/0/256.terrain");
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let meta: serde_json::Value = serde_json::from_slice(&meta).unwrap();
+    assert_eq!(meta["width"], 2401, "{meta}");
+    let layer: serde_json::Value = serde_json::from_slice(&layer).unwrap();
+    assert_eq!(
+        layer["available"][9].as_array().unwrap().len(),
+        2,
+        "{layer}"
+    );
+    for (status, body) in [east, west] {
+        assert_eq!(status, 200);
+        let tile = cota_io::tiles::decode(&body).unwrap();
+        assert!(tile.u.len() > 4, "{} vertices", tile.u.len());
+    }
+}

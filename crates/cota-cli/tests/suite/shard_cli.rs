@@ -164,6 +164,96 @@ fn copied_pair() -> Option<(tempfile::TempDir, PathBuf, PathBuf)> {
     Some((dir, wa, eb))
 }
 
+/// The real pair relabelled across the antimeridian (N00E010 as N00E179,
+/// N00E011 as N00W180: their shared column at ±180°) in a temporary
+/// directory: the directory, the eastern-hemisphere and the
+/// western-hemisphere file; `None` without the shared data.
+fn pair_across_the_antimeridian() -> Option<(tempfile::TempDir, PathBuf, PathBuf)> {
+    let a = common::shared("srtm/N00E010.hgt")?;
+    let b = common::shared("srtm/N00E011.hgt.zip")?;
+    let dir = tempfile::tempdir().unwrap();
+    let (e179, w180) = (
+        dir.path().join("N00E179.hgt"),
+        dir.path().join("N00W180.hgt.zip"),
+    );
+    std::fs::copy(&a, &e179).unwrap();
+    std::fs::copy(&b, &w180).unwrap();
+    Some((dir, e179, w180))
+}
+
+/// Across the antimeridian (the lattice counted from 0°, tiles addressed
+/// modulo the world): the plan step (in parts, the files read alone), the
+/// shards over parts and the reduce, and shards without a plan step, each
+/// give the plain run's directory byte for byte; the easternmost of 4
+/// shards over parts reads the W180 file alone.
+#[test]
+fn shards_equal_plain_run_across_the_antimeridian() {
+    let Some((dir, e179, w180)) = pair_across_the_antimeridian() else {
+        return;
+    };
+    let (east, west) = (e179.to_str().unwrap(), w180.to_str().unwrap());
+    // (No --normals: their reach would make every shard read both files.)
+    let base = [
+        "tiles",
+        east,
+        west,
+        "--max-zoom",
+        "9",
+        "--watermask",
+        "--metadata",
+    ];
+    let plain = dir.path().join("plain");
+    run_ok(&[&base[..], &["-o", plain.to_str().unwrap()]].concat());
+    let want = files(&plain);
+    let layer: serde_json::Value = serde_json::from_slice(&want[Path::new("layer.json")]).unwrap();
+    assert_eq!(
+        layer["bounds"],
+        serde_json::json!([179.0, 0.0, -179.0, 1.0])
+    );
+    assert!(
+        want.keys().any(|k| k.starts_with("9/0")),
+        "no tile east of 180°"
+    );
+    let out = dir.path().join("parts");
+    let o = out.to_str().unwrap();
+    let plan = run_ok(&[&base[..], &["-o", o, "--plan", "--shards", "4", "--json"]].concat());
+    // The plan's ranges are addresses: shard 1 ends at 180°, shard 2
+    // starts there (Cesium's column 0).
+    let plan: serde_json::Value = serde_json::from_str(&plan).unwrap();
+    let x = |i: usize, k: &str| plan["plan"][i]["ranges"][0][k].as_u64();
+    assert_eq!((x(1, "x1"), x(2, "x0")), (Some(1023), Some(0)), "{plan}");
+    let frame = std::fs::read_to_string(out.join(".cota-shards-4.json")).unwrap();
+    assert!(frame.contains("\"from_greenwich\":true"), "{frame}");
+    let mut read = Vec::new();
+    for i in 0..4 {
+        let r = run_ok(
+            &[
+                &base[..],
+                &["-o", o, "--shard", &format!("{i}/4"), "--json"],
+            ]
+            .concat(),
+        );
+        let r: serde_json::Value = serde_json::from_str(&r).unwrap();
+        read.push(r["part"]["files_read"].clone());
+    }
+    assert_eq!(read[3], serde_json::json!([west]), "{read:?}");
+    run_ok(&["tiles", "-o", o, "--reduce", "--shards", "4"]);
+    assert!(
+        files(&out) == want,
+        "4 shards over parts differ from the plain run"
+    );
+    let out = dir.path().join("whole");
+    let o = out.to_str().unwrap();
+    for i in 0..2 {
+        run_ok(&[&base[..], &["-o", o, "--shard", &format!("{i}/2")]].concat());
+    }
+    run_ok(&["tiles", "-o", o, "--reduce", "--shards", "2"]);
+    assert!(
+        files(&out) == want,
+        "2 shards without a plan step differ from the plain run"
+    );
+}
+
 /// After the plan step, a shard reads only the files its part of the
 /// lattice needs: with N=4 on the two-tile mosaic the westmost shard runs
 /// with the eastern tile gone, holds a lattice part narrower than the

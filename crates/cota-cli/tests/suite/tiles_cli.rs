@@ -503,6 +503,38 @@ fn a_footprint_across_the_antimeridian_is_tiled_on_both_sides_without_a_seam() {
         seams >= 10 && on_land > 20,
         "{seams} seams, {on_land} border vertices on land"
     );
+    // The same pair is one grid for `cota info` (its footprint across
+    // 180°, west > east) and `cota mesh` (2401 x 1201 samples, checked).
+    let (e, w) = (east.to_str().unwrap(), west.to_str().unwrap());
+    let r = cota(&["info", "--json", e, w]);
+    assert!(r.status.success(), "{}", stderr(&r));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&r)).unwrap();
+    let fp: Vec<f64> = v["footprint_deg"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(
+        (v["width"].as_u64(), v["hole_samples"].as_u64()),
+        (Some(2401), Some(0)),
+        "{v}"
+    );
+    assert!(
+        (fp[0] - 179.0).abs() < 1e-9 && (fp[2] + 179.0).abs() < 1e-9,
+        "{fp:?}"
+    );
+    let mesh = dir.path().join("pair.ply");
+    let args = ["mesh", e, w, "--max-error", "50", "--check", "--json", "-o"];
+    let r = cota(&[&args[..], &[mesh.to_str().unwrap()]].concat());
+    assert!(r.status.success(), "{}", stderr(&r));
+    let v: serde_json::Value = serde_json::from_str(&stdout(&r)).unwrap();
+    assert_eq!(
+        (v["width"].as_u64(), v["checked"].as_bool()),
+        (Some(2401), Some(true)),
+        "{v}"
+    );
+    assert_eq!(v["seams"]["max_abs_diff_m"].as_f64(), Some(0.0), "{v}");
     // Touching 180° without crossing it: one side only, as before.
     let out = dir.path().join("touching");
     tiles_checked(&[&east], &out, &[]);

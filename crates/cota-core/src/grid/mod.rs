@@ -19,6 +19,7 @@ mod frame;
 pub mod geo;
 pub mod mosaic;
 pub mod voids;
+mod wrap;
 
 use std::fmt;
 

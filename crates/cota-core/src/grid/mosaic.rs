@@ -14,15 +14,19 @@
 //!    orientation), and a sample-centre origin an integer number of pixels away
 //!    (within 1e-6 pixel). Tiles may mix [`PixelIs::Area`] and
 //!    [`PixelIs::Point`]: positions are compared at sample centres.
-//! 2. **Extent**: the union of the tiles' bounding boxes. Its size is checked
+//! 2. **Across the antimeridian**: geographic tiles whose union is narrower
+//!    with their longitudes taken modulo 360° (an `E179` and a `W180` tile)
+//!    are moved by whole turns to lie side by side (`grid::wrap`); tiles
+//!    already contiguous are left exactly as they are.
+//! 3. **Extent**: the union of the tiles' bounding boxes. Its size is checked
 //!    with [`check_dimensions`], and the part of it covered by no tile (the
 //!    *holes*, counted exactly from the tile rectangles) must not exceed
 //!    [`MosaicOptions::max_hole_fraction`]; both are checked before anything is
 //!    allocated, so absurdly distant tiles give an error, not an allocation.
-//! 3. **Placement**: the output starts all void (NaN); tiles are copied row by
+//! 4. **Placement**: the output starts all void (NaN); tiles are copied row by
 //!    row in input order, a sample being written only while the output there is
 //!    still void. This is [`SeamPolicy::First`], and a void never wins over data.
-//! 4. **Seams**: wherever two or more tiles overlap (adjacent SRTM tiles share
+//! 5. **Seams**: wherever two or more tiles overlap (adjacent SRTM tiles share
 //!    their edge row or column), every sample is visited once, the valid values
 //!    of all the tiles covering it are compared and, for [`SeamPolicy::Mean`],
 //!    replaced by their mean. The [`SeamReport`] gives how many samples were
@@ -34,7 +38,8 @@
 //!
 //! # Output georeference
 //! CRS, pixel size and [`PixelIs`] convention of tile 0; origin at the
-//! north-west corner of the union. The placement itself does not depend on the
+//! north-west corner of the union (across the antimeridian, its longitudes
+//! run on past 180°: 179° to 181°, say). The placement itself does not depend on the
 //! order of the tiles; only the seam values under [`SeamPolicy::First`] do.
 //!
 //! # Memory and runtime
@@ -415,6 +420,12 @@ pub fn layout(tiles: &[TileShape], opts: &MosaicOptions) -> Result<MosaicLayout,
     for (index, tile) in tiles.iter().enumerate() {
         offsets.push(lattice_offset(index, &tile.georef, g0)?);
     }
+    let turns = wrap_turns(tiles, &offsets);
+    if let Some((turn, k)) = &turns {
+        for (o, k) in offsets.iter_mut().zip(k) {
+            o.0 += k * turn;
+        }
+    }
     let min_col = offsets.iter().map(|o| o.0).min().unwrap_or(0);
     let min_row = offsets.iter().map(|o| o.1).min().unwrap_or(0);
     let end_col = tiles
@@ -456,7 +467,11 @@ pub fn layout(tiles: &[TileShape], opts: &MosaicOptions) -> Result<MosaicLayout,
             max_percent: 100.0 * opts.max_hole_fraction,
         });
     }
-    let georef = output_georef(tiles, &offsets, min_col, min_row);
+    let shifts_deg: Vec<f64> = match &turns {
+        Some((_, k)) => k.iter().map(|&k| 360.0 * k as f64).collect(),
+        None => vec![0.0; tiles.len()],
+    };
+    let georef = output_georef(tiles, &offsets, &shifts_deg, min_col, min_row);
     Ok(MosaicLayout {
         width,
         height,
@@ -598,12 +613,46 @@ fn covered_samples(placements: &[TilePlacement]) -> u64 {
     covered
 }
 
+/// The columns in a turn (360°) and the turns to move each tile by
+/// ([`super::wrap`]) when the tiles are geographic, their columns run east,
+/// a turn is a whole number of columns, every tile lies within ±360° of
+/// longitude, and the moved tiles' union is narrower; `None` otherwise
+/// (the tiles are laid out as they are).
+fn wrap_turns(tiles: &[TileShape], offsets: &[(i64, i64)]) -> Option<(i64, Vec<i64>)> {
+    let g0 = &tiles[0].georef;
+    if !g0.crs.is_geographic() || g0.pixel_x <= 0.0 {
+        return None;
+    }
+    let turn = 360.0 / g0.pixel_x;
+    let whole = turn.round();
+    if (turn - whole).abs() > ALIGN_TOL_PX * whole || !(1.0..=MAX_OFFSET_PX).contains(&whole) {
+        return None;
+    }
+    let on_world = tiles.iter().all(|t| {
+        let (west, _) = t.georef.sample_xy(0.0, 0.0);
+        let (east, _) = t.georef.sample_xy(t.width as f64 - 1.0, 0.0);
+        (-360.0..=360.0).contains(&west) && (-360.0..=360.0).contains(&east)
+    });
+    if !on_world {
+        return None;
+    }
+    let cols: Vec<(i64, i64)> = tiles
+        .iter()
+        .zip(offsets)
+        .map(|(t, o)| (o.0, t.width as i64))
+        .collect();
+    let turn = whole as i64;
+    super::wrap::turns(&cols, turn).map(|k| (turn, k))
+}
+
 /// Tile 0's CRS, pixel size and convention, with the origin moved to the union's
 /// north-west corner. Each coordinate of the origin is taken from a tile that
-/// reaches that edge, so that it is exact when the conventions agree.
+/// reaches that edge, so that it is exact when the conventions agree; its x
+/// moved by that tile's `shifts_deg` (whole turns, across the antimeridian).
 fn output_georef(
     tiles: &[TileShape],
     offsets: &[(i64, i64)],
+    shifts_deg: &[f64],
     min_col: i64,
     min_row: i64,
 ) -> GeoRef {
@@ -613,6 +662,9 @@ fn output_georef(
     let west = offsets.iter().position(|o| o.0 == min_col).unwrap_or(0);
     let north = offsets.iter().position(|o| o.1 == min_row).unwrap_or(0);
     out.origin_x = origin_in(&tiles[west].georef, g0.pixel_is, true);
+    if shifts_deg[west] != 0.0 {
+        out.origin_x += shifts_deg[west];
+    }
     out.origin_y = origin_in(&tiles[north].georef, g0.pixel_is, false);
     out
 }
@@ -1002,6 +1054,48 @@ mod test {
             matches!(err, MosaicError::Grid(GridError::TooLarge { .. })),
             "{err}"
         );
+    }
+
+    #[test]
+    fn tiles_across_the_antimeridian_are_joined_modulo_360() {
+        let px = 0.25;
+        // E179 and W180 (its samples one turn east, at 180..181).
+        let e = tile(5, 5, 179.0, 1.0, px, surface(179.0, 1.0, px));
+        let w = tile(5, 5, -180.0, 1.0, px, surface(180.0, 1.0, px));
+        for tiles in [vec![e.clone(), w.clone()], vec![w.clone(), e.clone()]] {
+            let m = mosaic(tiles, &opts()).unwrap();
+            assert_eq!((m.grid.width(), m.grid.height()), (9, 5));
+            assert_eq!(m.grid.georef().origin_x, 179.0);
+            assert_eq!((m.hole_samples, m.seams.max_abs_diff_m), (0, 0.0));
+            let f = surface(179.0, 1.0, px);
+            for r in 0..5 {
+                for c in 0..9 {
+                    assert_eq!(m.grid.get(c, r), f(c, r), "({c},{r})");
+                }
+            }
+        }
+        // Touching 180° from either side: laid out as before, no turn.
+        let west = tile(5, 5, 178.0, 1.0, px, |_, _| 1.0);
+        let m = mosaic(vec![e.clone(), west], &opts()).unwrap();
+        assert_eq!((m.grid.width(), m.grid.georef().origin_x), (9, 178.0));
+        let east = tile(5, 5, -179.0, 1.0, px, |_, _| 1.0);
+        let m = mosaic(vec![w.clone(), east], &opts()).unwrap();
+        assert_eq!((m.grid.width(), m.grid.georef().origin_x), (9, -180.0));
+        // Projected tiles are never wrapped; across 180° and 0° is refused.
+        let projected = |t: &HeightGrid| {
+            let mut t = t.clone();
+            let g = GeoRef {
+                crs: Crs::Epsg(32660),
+                ..t.georef().clone()
+            };
+            t.set_georef(g);
+            t
+        };
+        let err = mosaic(vec![projected(&e), projected(&w)], &opts()).unwrap_err();
+        assert!(matches!(err, MosaicError::TooSparse { .. }), "{err}");
+        let zero = tile(5, 5, 0.0, 1.0, px, |_, _| 1.0);
+        let err = mosaic(vec![e, w, zero], &opts()).unwrap_err();
+        assert!(matches!(err, MosaicError::TooSparse { .. }), "{err}");
     }
 
     #[test]

@@ -707,7 +707,7 @@ const PREPARE_WEIGHTS: [usize; 6] = [6, 13, 31, 8, 37, 5];
 /// ([`GeographicScheme::address`]): `r` itself, or, on a lattice counted
 /// from 0°, its parts east and west of the antimeridian, each moved by half
 /// the world (two rectangles where `r` crosses it, west to east).
-fn addressed(s: &GeographicScheme, z: u8, r: TileRange) -> Vec<TileRange> {
+pub fn addressed(s: &GeographicScheme, z: u8, r: TileRange) -> Vec<TileRange> {
     if !s.from_greenwich {
         return vec![r];
     }

@@ -875,7 +875,9 @@ pub fn resampling_deviation_with_progress(
 ) -> Deviation {
     let g = source.georef();
     let s = lattice.scheme();
-    let (d, off) = (s.cell_deg(), lattice.frame().source_lon_offset());
+    // The source's own longitudes (a part of the source may be one file
+    // west of the antimeridian, in its own convention).
+    let (d, off) = (s.cell_deg(), s.lon_offset(g.origin_x));
     let [ox, oy] = lattice.origin();
     let grid = lattice.grid();
     let (sw, src) = (source.width(), source.heights());

@@ -27,7 +27,7 @@ use std::sync::Mutex;
 use super::cap::{own_rows, square_tris, t_heights, Cap};
 use super::cut::rules_of;
 use super::cut::{
-    above_cap, in_window, mesh_of_leaves, walk_leaves, water_of, TileMesh, WaterMask, UP,
+    above_cap, addressed, in_window, mesh_of_leaves, walk_leaves, water_of, TileMesh, WaterMask, UP,
 };
 use super::drawn::{LevelRule, ZoomRules};
 use super::error::TilesError;
@@ -258,11 +258,14 @@ impl CoarseHierarchy {
         }
     }
 
-    /// The tiles this hierarchy cuts: every tile coarser than the band zoom.
+    /// The tiles this hierarchy cuts: every tile coarser than the band zoom
+    /// (addresses, as [`super::Prepared::tiles`] gives them).
     pub fn tiles(&self) -> impl Iterator<Item = TileId> + '_ {
-        self.rules.iter().flat_map(|(p, _)| {
+        let s = self.frame.scheme;
+        self.rules.iter().flat_map(move |(p, _)| {
             let (r, z) = (p.range, p.zoom);
-            (r.y0..=r.y1).flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z, x, y }))
+            (r.y0..=r.y1)
+                .flat_map(move |y| (r.x0..=r.x1).map(move |x| s.address(TileId { z, x, y })))
         })
     }
 
@@ -305,25 +308,26 @@ impl CoarseHierarchy {
             .or_else(|| self.fine.get(&key([x as u32, y as u32])).map(|f| f.1))
     }
 
-    /// Cuts tile `t` (coarser than the band zoom), as
+    /// Cuts tile `t` (an address, coarser than the band zoom), as
     /// [`super::Prepared::cut`] cuts it from the whole lattice.
     ///
     /// # Errors
     /// [`TilesError::NoSuchTile`] for a tile it does not cut,
     /// [`TilesError::BadOptions`] when a shard's data is missing.
     pub fn cut(&self, t: TileId, normals: bool, water: bool) -> Result<TileMesh, TilesError> {
+        let s = self.frame.scheme;
+        let lt = s.address(t);
         let (i, (plan, _)) = self
             .rules
             .iter()
             .enumerate()
-            .find(|(_, (p, _))| p.zoom == t.z && p.range.contains(t.x, t.y))
+            .find(|(_, (p, _))| p.zoom == t.z && p.range.contains(lt.x, lt.y))
             .ok_or(TilesError::NoSuchTile {
                 tile: t,
                 min_zoom: self.rules.first().map_or(0, |p| p.0.zoom),
                 max_zoom: self.band.saturating_sub(1),
             })?;
-        let s = self.frame.scheme;
-        let (cells, o) = (s.cells_at(t.z), s.tile_origin(t));
+        let (cells, o) = (s.cells_at(t.z), s.tile_origin(lt));
         let leaves = walk_leaves(o, cells, |tri| self.splits(tri, i));
         let missing: Cell<Option<[u64; 2]>> = Cell::new(None);
         let mesh = mesh_of_leaves(&leaves, o, |x, y| {
@@ -338,7 +342,7 @@ impl CoarseHierarchy {
             )));
         }
         let normals_enu = normals.then(|| self.normals(&mesh, o, t.z)).transpose()?;
-        let water_mask = water.then(|| self.water(t, o, cells)).transpose()?;
+        let water_mask = water.then(|| self.water(lt, o, cells)).transpose()?;
         Ok(TileMesh {
             tile: t,
             cells,
@@ -349,9 +353,9 @@ impl CoarseHierarchy {
             max_error_m: plan.max_error_m,
             source_bound_m: plan.max_error_m.max(self.residual_m + plan.margin_m),
             threshold_m: plan.threshold_m,
-            children: children_in(t, self.zooms.iter().find(|p| p.zoom == t.z + 1))
-                .into_iter()
-                .collect(),
+            children: children_in(lt, self.zooms.iter().find(|p| p.zoom == t.z + 1))
+                .map(|r| addressed(&s, t.z + 1, r))
+                .unwrap_or_default(),
         })
     }
 
@@ -380,7 +384,8 @@ impl CoarseHierarchy {
             .collect()
     }
 
-    /// The water mask: the shards' samples, land beyond the window.
+    /// The water mask of lattice tile `t`: the shards' samples, land
+    /// beyond the window.
     fn water(&self, t: TileId, o: [u64; 2], cells: u64) -> Result<WaterMask, TilesError> {
         let [x0, y0, x1, y1] = self.frame.window;
         let grid = self.water.get(&t);

@@ -66,7 +66,7 @@ pub mod source_error;
 pub mod sources;
 
 pub use coverage::Coverage;
-pub use cut::{Prepared, TileMesh, WaterMask, NORMAL_REACH_CELLS};
+pub use cut::{addressed, Prepared, TileMesh, WaterMask, NORMAL_REACH_CELLS};
 pub use drawn::{DrawnBound, LevelStats};
 pub use error::TilesError;
 pub use estimate::{estimate, Estimate};

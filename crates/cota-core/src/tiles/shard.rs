@@ -59,7 +59,9 @@ impl Shard {
     }
 
     /// The tiles it makes, zoom by zoom (rows, then columns, as
-    /// [`super::Prepared::tiles`] orders them).
+    /// [`super::Prepared::tiles`] orders them). Like every range of the
+    /// plan, these are lattice tiles: [`GeographicScheme::address`] gives
+    /// their addresses (the same unless the lattice counts from 0°).
     pub fn tiles(&self) -> impl Iterator<Item = TileId> + '_ {
         self.made.iter().flat_map(|&(z, r)| {
             (r.y0..=r.y1).flat_map(move |y| (r.x0..=r.x1).map(move |x| TileId { z, x, y }))

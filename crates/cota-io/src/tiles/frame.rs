@@ -3,6 +3,10 @@
 //! (its frame, statistics and where each input file lies), written once by
 //! the plan step ([`super::shard::write_plan`]) and read by every shard and
 //! the reduce. JSON, with every `f64` as the hexadecimal of its bits.
+//!
+//! `from_greenwich` records a lattice counted from 0° (a footprint across
+//! the antimeridian, [`GeographicScheme::from_greenwich`]); a frame without
+//! it (written before it was recorded) counts from 180° W.
 
 use std::path::{Path, PathBuf};
 
@@ -61,6 +65,7 @@ impl ShardFrame {
             "coarse_tiles": self.coarse_tiles,
             "max_zoom": f.scheme.max_zoom,
             "tile_cells": f.scheme.tile_cells,
+            "from_greenwich": f.scheme.from_greenwich,
             "footprint": f.footprint.map(bits),
             "window": f.window,
             "align_zoom": f.align_zoom,
@@ -116,8 +121,12 @@ impl ShardFrame {
                 scheme: GeographicScheme {
                     max_zoom: small("max_zoom")?,
                     tile_cells: u32::try_from(v["tile_cells"].as_u64()?).ok()?,
-                    // Sharded runs refuse a footprint across the antimeridian.
-                    from_greenwich: false,
+                    // Absent from frames written before the antimeridian
+                    // was sharded: their lattices count from 180° W.
+                    from_greenwich: match v.get("from_greenwich") {
+                        None => false,
+                        Some(b) => b.as_bool()?,
+                    },
                 },
                 footprint: [fp[0], fp[1], fp[2], fp[3]],
                 window: <[u64; 4]>::try_from(win).ok()?,
@@ -168,8 +177,7 @@ pub fn plan_layout_path(out: &Path, shards: u32) -> PathBuf {
 /// Writes `frame` to [`shard_frame_path`] atomically.
 ///
 /// # Errors
-/// [`PyramidError::Io`]; [`PyramidError::Shard`] for a frame across the
-/// antimeridian (sharded runs are not made across it).
+/// [`PyramidError::Io`].
 pub fn write_shard_frame(out: &Path, frame: &ShardFrame) -> Result<(), PyramidError> {
     write_frame_to(&shard_frame_path(out, frame.shards), frame)
 }
@@ -184,12 +192,6 @@ pub fn write_plan_layout(out: &Path, frame: &ShardFrame) -> Result<(), PyramidEr
 }
 
 fn write_frame_to(path: &Path, frame: &ShardFrame) -> Result<(), PyramidError> {
-    if frame.frame.scheme.from_greenwich {
-        return Err(PyramidError::Shard {
-            path: path.to_path_buf(),
-            message: "expected a footprint on one side of the antimeridian for --plan/--shard, found one across it; tile it in one run without --plan".into(),
-        });
-    }
     let text = format!("{}\n", frame.to_json());
     write_file_atomically(path, text.as_bytes(), false)
 }
@@ -248,4 +250,73 @@ pub(super) fn read_record(path: &Path) -> Result<Value, PyramidError> {
         path: path.to_path_buf(),
         message: format!("expected a shard's record (JSON), found invalid JSON: {e}"),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    fn frame(from_greenwich: bool) -> ShardFrame {
+        let scheme = GeographicScheme {
+            max_zoom: 9,
+            tile_cells: 64,
+            from_greenwich,
+        };
+        ShardFrame {
+            key: "k".into(),
+            shards: 2,
+            band_zoom: 7,
+            coarse_tiles: 12,
+            frame: LatticeFrame {
+                scheme,
+                footprint: [10.5, 20.25, 30.0, 40.0],
+                window: [0, 0, 128, 64],
+                align_zoom: 5,
+                source_georef: GeoRef {
+                    crs: Crs::Epsg(4326),
+                    origin_x: 179.0,
+                    origin_y: 1.0,
+                    pixel_x: 1.0 / 1200.0,
+                    pixel_y: -1.0 / 1200.0,
+                    pixel_is: PixelIs::Point,
+                    known: true,
+                },
+                source_size: [2401, 1201],
+                fit_m: 0.5,
+            },
+            stats: LatticeStats {
+                lo_m: -3.0,
+                hi_m: 900.0,
+                max_step_m: 12.5,
+                levels: LevelStats {
+                    slope: vec![0.25],
+                    span_m: vec![3.0],
+                },
+                residual_m: 0.125,
+            },
+            files: vec![("a.hgt".into(), [0, 0, 1200, 1200])],
+        }
+    }
+
+    /// A lattice counted from 0° round-trips; a frame written before the
+    /// field was recorded (without it) reads as counted from 180° W.
+    #[test]
+    fn the_origin_of_the_columns_round_trips_and_old_frames_still_read() {
+        let dir = tempfile::tempdir().unwrap();
+        for g in [false, true] {
+            write_shard_frame(dir.path(), &frame(g)).unwrap();
+            let back = read_shard_frame(dir.path(), 2).unwrap().unwrap();
+            assert_eq!(back, frame(g));
+        }
+        let path = shard_frame_path(dir.path(), 2);
+        let mut v = read_record(&path).unwrap();
+        v.as_object_mut().unwrap().remove("from_greenwich");
+        std::fs::write(&path, v.to_string()).unwrap();
+        let old = read_shard_frame(dir.path(), 2).unwrap().unwrap();
+        assert_eq!(old, frame(false));
+        v["from_greenwich"] = json!("yes");
+        std::fs::write(&path, v.to_string()).unwrap();
+        assert!(read_shard_frame(dir.path(), 2).is_err());
+    }
 }

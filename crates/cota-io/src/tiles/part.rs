@@ -47,12 +47,19 @@ pub fn file_extents(files: &[DemSummary], whole: &GeoRef) -> Vec<(String, [usize
     out
 }
 
-/// The column and row of `part`'s sample (0, 0) in the grid of `whole`.
+/// The column and row of `part`'s sample (0, 0) in the grid of `whole`; in
+/// a geographic grid whose turn (360°) is a whole number of columns, the
+/// column modulo a turn, as the mosaic places a file across the
+/// antimeridian (`W180` one turn east of `E179`, `cota_core::grid::mosaic`).
 fn offset_in(part: &GeoRef, whole: &GeoRef) -> Option<[usize; 2]> {
     let (px, py) = part.sample_xy(0.0, 0.0);
     let (wx, wy) = whole.sample_xy(0.0, 0.0);
-    let c = ((px - wx) / whole.pixel_x).round();
+    let mut c = ((px - wx) / whole.pixel_x).round();
     let r = ((py - wy) / whole.pixel_y).round();
+    let turn = 360.0 / whole.pixel_x;
+    if whole.crs.is_geographic() && whole.pixel_x > 0.0 && (turn - turn.round()).abs() < 1e-6 {
+        c = c.rem_euclid(turn.round());
+    }
     (c >= 0.0 && r >= 0.0 && c.is_finite() && r.is_finite()).then_some([c as usize, r as usize])
 }
 

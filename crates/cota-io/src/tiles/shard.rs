@@ -84,7 +84,9 @@ pub fn write_shard(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<PyramidReport, PyramidError> {
     let t0 = Instant::now();
-    let tiles: Vec<_> = shard.tiles().collect();
+    // The plan's tiles are the lattice's; written at their addresses.
+    let s = *prep.lattice().scheme();
+    let tiles: Vec<_> = shard.tiles().map(|t| s.address(t)).collect();
     let outcomes = write_tiles(prep, out, opts, None, &tiles, progress)?;
     if let Some((f, source)) = frame {
         write_shard_partial(prep, source, out, f, shard.index, opts)?;
