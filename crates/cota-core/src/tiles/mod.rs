@@ -15,9 +15,9 @@
 //!    [`crate::grid::GeoTransform`], any resolution: [`sources`]): the data
 //!    resampled once onto the tiling's lattice at the maximum zoom, over a
 //!    window of whole tiles around its footprint, the ellipsoid (0 m) beyond
-//!    it after a short ramp ([`lattice`]); where the lattice is at least as
-//!    fine as the source, its points are then fitted to the source's samples
-//!    ([`fit`]) so that the lattice's unit triangles pass within `e_Z/2` of
+//!    it within one finest tile, along a level-ended ramp ([`lattice`]);
+//!    where the lattice is at least as fine as the source, its points are
+//!    then fitted to the source's samples ([`fit`]) so that the lattice's unit triangles pass within `e_Z/2` of
 //!    them;
 //! 2. [`Prepared::new`] / [`Prepared::new_sampled`]: one [`crate::Bitree`]
 //!    over that window, whose squares are the tiles of every zoom from the
