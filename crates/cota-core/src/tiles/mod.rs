@@ -17,8 +17,8 @@
 //!    window of whole tiles around its footprint, the ellipsoid (0 m) beyond
 //!    it within one finest tile, along a level-ended ramp ([`lattice`]);
 //!    where the lattice is at least as fine as the source, its points are
-//!    then fitted to the source's samples ([`fit`]) so that the lattice's unit triangles pass within `e_Z/2` of
-//!    them;
+//!    then fitted to the source's samples ([`fit`]) so that the lattice's
+//!    unit triangles pass within `e_Z/2` of them;
 //! 2. [`Prepared::new`] / [`Prepared::new_sampled`]: one [`crate::Bitree`]
 //!    over that window, whose squares are the tiles of every zoom from the
 //!    window's alignment zoom on, and the coarse levels above it ([`cap`]);
