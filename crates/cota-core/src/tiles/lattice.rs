@@ -633,7 +633,7 @@ pub(crate) fn fit_tolerance_m(s: &GeographicScheme, pixel_deg: f64, opts: &Latti
 
 /// Lattice cells over which the data's edge falls to the ellipsoid beyond
 /// the footprint, after the edge value held one cell: a maximum-zoom tile
-/// less that cell (the window's margin, [`window_at`]), at least one. Along
+/// less that cell (the window's margin holds it), at least one. Along
 /// it the height follows [`ramp_factor`], level at both ends, so that no
 /// wall or apron shows at the data's edge and the ellipsoid is reached
 /// within one finest tile of the data; its steps stay near the terrain's own
