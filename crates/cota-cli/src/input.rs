@@ -297,17 +297,17 @@ fn check_seams(
                 path_of(files, p.tiles[0]),
                 path_of(files, p.tiles[1])
             ),
-            format!(" at ({}, {})", num(p.x), num(p.y)),
+            format!(" at ({}, {})", num_short(p.x), num_short(p.y)),
         ),
         None => (name(files), String::new()),
     };
     let msg = format!(
-        "{pair} disagree by up to {} m{at} where they overlap (mean {} m over {} samples), \
-         more than --seam-tolerance {} m",
+        "{pair} disagree by up to {} m{at} where they overlap, more than --seam-tolerance {} m \
+         (over all {} samples where the inputs overlap, the mean difference is {} m)",
         num(s.max_abs_diff_m),
-        num(s.mean_abs_diff_m),
+        num(a.seam_tolerance_m),
         s.compared,
-        num(a.seam_tolerance_m)
+        num_short(s.mean_abs_diff_m)
     );
     if a.strict {
         anyhow::bail!("{msg} (--strict)");
