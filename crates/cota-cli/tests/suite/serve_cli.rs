@@ -147,25 +147,44 @@ fn get(addr: &str, path: &str) -> (u16, Vec<u8>) {
     panic!("{path}: 503 for a minute");
 }
 
+/// `cota serve ARGS --addr 127.0.0.1:0` started, and the address it listens on.
+fn serving(args: &[&str]) -> (std::process::Child, String) {
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_cota"))
+        .arg("serve")
+        .args(args)
+        .args(["--addr", "127.0.0.1:0"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let addr = listening(&mut child);
+    (child, addr)
+}
+
+/// Stops a server started by [`serving`].
+fn stop(mut child: std::process::Child) {
+    child.kill().unwrap();
+    child.wait().unwrap();
+}
+
 #[test]
 fn the_texture_and_the_inputs_warnings_are_served() {
     let (dem, img) = (
         common::fixture("olinda_dem_utm25s.tif"),
         common::fixture("L7_ETMs.tif"),
     );
-    let bin = env!("CARGO_BIN_EXE_cota");
-    let mut child = std::process::Command::new(bin)
-        .args(["serve", s(&dem), "--texture", s(&img), "--bands", "3,2,1"])
-        .args(["--texture-max-side", "100", "--addr", "127.0.0.1:0"])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let addr = listening(&mut child);
+    let (child, addr) = serving(&[
+        s(&dem),
+        "--texture",
+        s(&img),
+        "--bands",
+        "3,2,1",
+        "--texture-max-side",
+        "100",
+    ]);
     let (status, png) = get(&addr, "/texture.png");
     let (_, meta) = get(&addr, "/meta.json");
-    child.kill().unwrap();
-    child.wait().unwrap();
+    stop(child);
     assert_eq!(status, 200);
     // The PNG's IHDR: 100 x 100 (the image's own 347 held to the bound).
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
@@ -176,16 +195,9 @@ fn the_texture_and_the_inputs_warnings_are_served() {
     assert_eq!(meta["warnings"], serde_json::json!([]));
     // The bundled SRTM tile has 21 voids: filled, and said in the meta.
     let srtm = common::fixture("S29W072.hgt.zip");
-    let mut child = std::process::Command::new(bin)
-        .args(["serve", s(&srtm), "--addr", "127.0.0.1:0"])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let addr = listening(&mut child);
+    let (child, addr) = serving(&[s(&srtm)]);
     let (_, meta) = get(&addr, "/meta.json");
-    child.kill().unwrap();
-    child.wait().unwrap();
+    stop(child);
     let meta: serde_json::Value = serde_json::from_slice(&meta).unwrap();
     let w = meta["warnings"].as_array().unwrap();
     assert_eq!(w.len(), 1, "{w:?}");
@@ -210,20 +222,13 @@ fn a_pair_across_the_antimeridian_is_served_as_one_grid() {
     );
     std::fs::copy(a, &e179).unwrap();
     std::fs::copy(b, &w180).unwrap();
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_cota"))
-        .args(["serve", s(&e179), s(&w180), "--addr", "127.0.0.1:0"])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let addr = listening(&mut child);
+    let (child, addr) = serving(&[s(&e179), s(&w180)]);
     let (_, meta) = get(&addr, "/meta.json");
     let (_, layer) = get(&addr, "/tiles/layer.json");
     // Zoom 9: 179°..180° is address column 1022, 180°..181° column 0.
     let east = get(&addr, "/tiles/9/1022/256.terrain");
     let west = get(&addr, "/tiles/9/0/256.terrain");
-    child.kill().unwrap();
-    child.wait().unwrap();
+    stop(child);
     let meta: serde_json::Value = serde_json::from_slice(&meta).unwrap();
     assert_eq!(meta["width"], 2401, "{meta}");
     let layer: serde_json::Value = serde_json::from_slice(&layer).unwrap();

@@ -137,7 +137,7 @@ fn read_unfinished(p: &Path, mut file: &File) -> Result<HashSet<TileId>, PathIo>
 }
 
 /// Removes a file (a tile's, a journal's), if there.
-fn remove_tile(tile: &Path) -> Result<(), PathIo> {
+fn remove_if_there(tile: &Path) -> Result<(), PathIo> {
     match std::fs::remove_file(tile) {
         Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(io_err(tile)(e)),
         _ => Ok(()),
@@ -169,7 +169,7 @@ impl Journal {
             };
             let open = read_unfinished(&p, &file)?;
             for &t in open.iter().filter(|t| mine.contains(t)) {
-                remove_tile(&path_of(t))?;
+                remove_if_there(&path_of(t))?;
             }
             if (known_gone || !open.is_empty()) && open.iter().all(|t| mine.contains(t)) {
                 redone.push((p, file));
@@ -231,7 +231,7 @@ impl Journal {
         let _ending = lock_folder(dir);
         drop(self.file);
         for (p, _locked) in &self.redone {
-            remove_tile(p)?; // absent only where no lock is kept (Owner::Unknown)
+            remove_if_there(p)?; // absent only where no lock is kept (Owner::Unknown)
         }
         std::fs::remove_file(&self.path).map_err(io_err(&self.path))?;
         let _ = std::fs::remove_dir(dir); // only when empty: other runs may be writing
@@ -260,7 +260,7 @@ pub(crate) fn clear_gone_journals(out: &Path) -> Result<Vec<(PathBuf, Vec<TileId
         };
         let mut open: Vec<TileId> = read_unfinished(&p, &file)?.into_iter().collect();
         if open.is_empty() {
-            remove_tile(&p)?;
+            remove_if_there(&p)?;
         } else {
             open.sort_by_key(|t| (t.z, t.x, t.y));
             left.push((p, open));
