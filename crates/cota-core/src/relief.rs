@@ -218,7 +218,8 @@ impl Relief {
         })
     }
 
-    /// West, south, east and north of the samples, degrees.
+    /// West, south, east and north of the samples, degrees (west and east
+    /// past ±180° for a grid laid out across the antimeridian).
     pub fn bounds_deg(&self) -> [f64; 4] {
         let l = &self.levels[0];
         let (w, n) = self.origin;
@@ -243,7 +244,9 @@ impl Relief {
         z
     }
 
-    /// The tiles `(x, y)` of zoom `z` (TMS) that hold some of the data.
+    /// The tiles `(x, y)` of zoom `z` (TMS) that hold some of the data. A
+    /// grid that runs past ±180° (a mosaic across the antimeridian, laid out
+    /// from 179° to 181° say) has its tiles on both sides of it.
     pub fn tiles_at(&self, z: u8) -> impl Iterator<Item = (u32, u32)> {
         let [w, s, e, n] = self.bounds_deg();
         let d = tile_deg(z);
@@ -254,26 +257,54 @@ impl Relief {
             let b = ((hi - origin) / d).floor().clamp(0.0, (count - 1) as f64) as u32;
             a..=b
         };
-        let xs = span(w, e, -180.0, cols);
         let ys = span(s, n, -90.0, rows);
-        xs.flat_map(move |x| ys.clone().map(move |y| (x, y)))
+        let xs: Vec<u32> = if w >= -180.0 && e <= 180.0 {
+            span(w, e, -180.0, cols).collect()
+        } else {
+            // Whole columns from the west edge's to the east edge's, each
+            // taken modulo the world's columns, once.
+            let a = ((w + 180.0) / d).floor() as i64;
+            let b = ((e + 180.0) / d).floor() as i64;
+            let mut xs: Vec<u32> = (a..=b)
+                .take(cols as usize)
+                .map(|x| x.rem_euclid(cols as i64) as u32)
+                .collect();
+            xs.sort_unstable();
+            xs.dedup();
+            xs
+        };
+        xs.into_iter()
+            .flat_map(move |x| ys.clone().map(move |y| (x, y)))
+    }
+
+    /// The whole turns (−360°, 0 or 360°) that move tile `z/x/y` (TMS) onto
+    /// the data, if any: 0 unless the grid runs past ±180°.
+    fn turn_onto_data(&self, z: u8, x: u32, y: u32) -> Option<f64> {
+        let [w, s, e, n] = self.bounds_deg();
+        let [tw, ts, te, tn] = tile_bounds(z, x, y);
+        if ts > n || tn < s {
+            return None;
+        }
+        [0.0, 360.0, -360.0]
+            .into_iter()
+            .find(|t| tw + t <= e && te + t >= w)
     }
 
     /// True when tile `z/x/y` (TMS) holds some of the data.
     pub fn overlaps(&self, z: u8, x: u32, y: u32) -> bool {
-        let [w, s, e, n] = self.bounds_deg();
-        let [tw, ts, te, tn] = tile_bounds(z, x, y);
-        tw <= e && te >= w && ts <= n && tn >= s
+        self.turn_onto_data(z, x, y).is_some()
     }
 
     /// The RGBA pixels of tile `z/x/y` (TMS), rows from the north, or `None`
     /// when the tile holds none of the data.
     pub fn tile_rgba(&self, z: u8, x: u32, y: u32) -> Option<Vec<u8>> {
-        if z > 30 || !self.overlaps(z, x, y) {
+        if z > 30 {
             return None;
         }
+        let turn = self.turn_onto_data(z, x, y)?;
         let px = self.opts.tile_px as usize;
         let [west, _, _, north] = tile_bounds(z, x, y);
+        let west = west + turn;
         let d = tile_deg(z) / px as f64;
         let side = px + 2;
         let h = self.heights_around(west, north, d, side);
@@ -508,6 +539,36 @@ mod test {
         assert_eq!(at(10.5, 1.2)[3], 0, "north of the data");
         assert!(r.tile_rgba(7, 0, 0).is_none());
         assert!(!r.overlaps(7, 134, 64) || r.tiles_at(7).any(|t| t == (134, 64)));
+    }
+
+    #[test]
+    fn a_grid_across_the_antimeridian_has_tiles_on_both_sides() {
+        // The cone laid out from 179.5 to 180.5 degrees, as a mosaic of an
+        // E179 and a W180 tile is.
+        let mut g = cone(129);
+        let mut geo = g.georef().clone();
+        geo.origin_x = 179.5;
+        g.set_georef(geo);
+        let r = Relief::new(Arc::new(g), &ReliefOptions::DEFAULT).unwrap_or_else(|e| panic!("{e}"));
+        // Zoom 6: tiles of 2.8125 degrees; columns 0 (from -180) and 127
+        // (to 180) each hold half the data.
+        let tiles: Vec<_> = r.tiles_at(6).collect();
+        assert_eq!(tiles, vec![(0, 32), (127, 32)]);
+        let opaque = |x: u32| {
+            let px = r
+                .tile_rgba(6, x, 32)
+                .unwrap_or_else(|| panic!("no tile {x}"));
+            px.chunks(4).filter(|p| p[3] == 255).count()
+        };
+        let (east_of, west_of) = (opaque(0), opaque(127));
+        assert!(east_of > 1000 && west_of > 1000, "{east_of} and {west_of}");
+        assert!(
+            east_of.abs_diff(west_of) * 10 < east_of,
+            "{east_of} vs {west_of}"
+        );
+        assert!(r.overlaps(6, 0, 32) && r.overlaps(6, 127, 32));
+        assert!(!r.overlaps(6, 1, 32) && !r.overlaps(6, 126, 32));
+        assert!(r.tile_rgba(6, 64, 32).is_none());
     }
 
     #[test]

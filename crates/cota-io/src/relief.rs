@@ -41,8 +41,21 @@ pub fn relief_png(relief: &Relief, z: u8, x: u32, y: u32) -> Option<Vec<u8>> {
 }
 
 /// The description of a relief tile set (also served by `cota serve` at
-/// `/imagery.json`, with the template relative to the server's root).
+/// `/imagery.json`, with the template relative to the server's root). Its
+/// `bounds` are west, south, east, north within ±180°: across the
+/// antimeridian west is greater than east (RFC 7946's bounding boxes, as
+/// `layer.json` says it and `Rectangle.fromDegrees` takes it).
 pub fn imagery_json(relief: &Relief, template: &str) -> serde_json::Value {
+    let [w, s, e, n] = relief.bounds_deg();
+    let within = |lon: f64| {
+        if lon > 180.0 {
+            lon - 360.0
+        } else if lon < -180.0 {
+            lon + 360.0
+        } else {
+            lon
+        }
+    };
     serde_json::json!({
         "format": "png",
         "scheme": "tms",
@@ -50,7 +63,7 @@ pub fn imagery_json(relief: &Relief, template: &str) -> serde_json::Value {
         "tileSize": relief.tile_px(),
         "minzoom": 0,
         "maxzoom": relief.max_zoom(),
-        "bounds": relief.bounds_deg(),
+        "bounds": [within(w), s, within(e), n],
         "tiles": [template],
         "description": "shaded relief: hillshade (light from the north-west, 45 degrees up) over a hypsometric tint of the data's heights",
     })

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 
 use cota_core::tiles::plan::plan;
 use cota_core::tiles::{
-    shard_plan, BandCorners, ErrorSchedule, Lattice, LatticeOptions, Prepared, TilerOptions,
+    addressed, shard_plan, BandCorners, ErrorSchedule, Lattice, LatticeOptions, Prepared,
+    TilerOptions,
 };
 use cota_core::{FillOptions, HeightGrid};
 use cota_io::tiles::{
@@ -423,7 +424,8 @@ fn at_least_one(shards: u32) -> PyResult<u32> {
 
 /// The shard plan of `cota tiles --plan --shards n`: a list of `n` dicts
 /// (`shard`, `shards`, `tiles`, `ranges`: a list of `(zoom, x0, x1, y0, y1)`,
-/// TMS, inclusive). Deterministic: every process computes the same.
+/// tile addresses, TMS, inclusive; a range across the antimeridian is given
+/// as its two parts). Deterministic: every process computes the same.
 #[pyfunction]
 #[pyo3(signature = (paths, shards, *, min_zoom = 0, max_zoom = None, tile_cells = 64,
     error_factor = None, max_error_m_at_max_zoom = None))]
@@ -446,10 +448,11 @@ pub(crate) fn tiles_plan<'py>(
         error_factor,
         max_error_m_at_max_zoom,
     );
-    let parts = py.detach(|| -> PyResult<_> {
+    let (parts, scheme) = py.detach(|| -> PyResult<_> {
         let (_, lat) = lattice(&paths, &s)?;
         let zooms = plan(&lat, &tiler(&s)).map_err(errors::mesh)?;
-        shard_plan(&zooms, shards).map_err(errors::value)
+        let parts = shard_plan(&zooms, shards).map_err(errors::value)?;
+        Ok((parts, *lat.scheme()))
     })?;
     let list = PyList::empty(py);
     for p in parts {
@@ -460,7 +463,8 @@ pub(crate) fn tiles_plan<'py>(
         let ranges: Vec<(u8, u32, u32, u32, u32)> = p
             .ranges
             .iter()
-            .map(|(z, r)| (*z, r.x0, r.x1, r.y0, r.y1))
+            .flat_map(|&(z, r)| addressed(&scheme, z, r).into_iter().map(move |r| (z, r)))
+            .map(|(z, r)| (z, r.x0, r.x1, r.y0, r.y1))
             .collect();
         d.set_item("ranges", ranges)?;
         list.append(d)?;

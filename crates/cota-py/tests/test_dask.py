@@ -230,3 +230,32 @@ def test_plan_step_in_parts_equals_plain(pair, tmp_path):
     assert same(files(out), plain)
     single = cota.tiles_plan_layout(west, tmp_path / "single", 2, **PAIR_SETTINGS)
     assert single == {"streamed": False, "files": 0}
+
+
+def test_shards_across_the_antimeridian_name_tile_addresses(tmp_path):
+    """The pair relabelled N00E179 + N00W180: ``tiles_plan``'s ranges are tile addresses
+    (columns on both sides of 180 degrees, none past the world's last) that hold every
+    tile written, and 3 shards with the reduce give the plain pyramid byte for byte."""
+    if not all((SHARED / p).is_file() for p in PAIR):
+        pytest.skip(f"the shared data ({SHARED}) is not there")
+    e179, w180 = tmp_path / "N00E179.hgt", tmp_path / "N00W180.hgt.zip"
+    for src, dst in zip(PAIR, (e179, w180)):
+        shutil.copy(SHARED / src, dst)
+    settings = {"max_zoom": 7}
+    plain = tmp_path / "plain"
+    cota.tiles([e179, w180], plain, **settings)
+    want = files(plain)
+    plan = cota.tiles_plan([e179, w180], 3, **settings)
+    ranges = [r for p in plan for r in p["ranges"]]
+    assert all(x0 <= x1 < 2 << z and y0 <= y1 < 1 << z for z, x0, x1, y0, y1 in ranges), ranges
+    named = {Path(str(z), str(x), f"{y}.terrain")
+             for z, x0, x1, y0, y1 in ranges for x in range(x0, x1 + 1) for y in range(y0, y1 + 1)}
+    tiles = {k for k in want if k.suffix == ".terrain"}
+    assert tiles <= named and sum(p["tiles"] for p in plan) == len(tiles)
+    columns = {int(k.parts[1]) for k in tiles if k.parts[0] == "7"}
+    assert 0 in columns and (2 << 7) - 1 in columns, sorted(columns)
+    out = tmp_path / "sharded"
+    for i in range(3):
+        cota.tiles([e179, w180], out, shard=(i, 3), **settings)
+    cota.tiles_reduce(out, 3)
+    assert same(files(out), want)

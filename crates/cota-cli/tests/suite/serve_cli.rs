@@ -206,7 +206,8 @@ fn the_texture_and_the_inputs_warnings_are_served() {
 
 /// Two SRTM tiles across the antimeridian (the real N00E010 and N00E011
 /// relabelled N00E179 and N00W180) are served as one grid: the stream, and
-/// on-demand tiles on both sides of 180° (`available` in two ranges).
+/// on-demand tiles and relief imagery on both sides of 180° (`available` in
+/// two ranges).
 #[test]
 fn a_pair_across_the_antimeridian_is_served_as_one_grid() {
     let (Some(a), Some(b)) = (
@@ -228,7 +229,24 @@ fn a_pair_across_the_antimeridian_is_served_as_one_grid() {
     // Zoom 9: 179°..180° is address column 1022, 180°..181° column 0.
     let east = get(&addr, "/tiles/9/1022/256.terrain");
     let west = get(&addr, "/tiles/9/0/256.terrain");
+    // The relief imagery on both sides too (zoom 8: columns 511 and 0).
+    let (_, imagery) = get(&addr, "/imagery.json");
+    let relief = [
+        get(&addr, "/imagery/8/511/128.png"),
+        get(&addr, "/imagery/8/0/128.png"),
+    ];
     stop(child);
+    let imagery: serde_json::Value = serde_json::from_slice(&imagery).unwrap();
+    let bounds: Vec<f64> = serde_json::from_value(imagery["bounds"].clone()).unwrap();
+    let want = [179.0, 0.0, -179.0, 1.0];
+    assert!(
+        bounds.iter().zip(want).all(|(b, w)| (b - w).abs() < 1e-9),
+        "{bounds:?}: west > east across 180 degrees"
+    );
+    for (status, png) in relief {
+        assert_eq!(status, 200);
+        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    }
     let meta: serde_json::Value = serde_json::from_slice(&meta).unwrap();
     assert_eq!(meta["width"], 2401, "{meta}");
     let layer: serde_json::Value = serde_json::from_slice(&layer).unwrap();

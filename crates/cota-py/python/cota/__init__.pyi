@@ -70,7 +70,8 @@ class PlanStepReport(TypedDict):
     """Each input's samples in the mosaic ``(c0, r0, c1, r1)``; empty: shards read every file."""
 
 class ShardPlan(TypedDict):
-    """One shard of ``tiles_plan``: its tiles as ``(zoom, x0, x1, y0, y1)``, TMS, inclusive."""
+    """One shard of ``tiles_plan``: its tiles as ``(zoom, x0, x1, y0, y1)``, tile addresses, TMS,
+    inclusive (a range across the antimeridian as its two parts)."""
     shard: int
     shards: int
     tiles: int

@@ -146,11 +146,14 @@ async function main() {
   const viewer = makeViewer(terrainProvider);
   report.viewer = viewer;
   viewer.scene.globe.baseColor = Cesium.Color.fromCssColorString('#8aa37b');
-  const b = (imagery && imagery.bounds) || layer.bounds || [-180, -90, 180, 90];
-  report.bounds = b;
+  const given = (imagery && imagery.bounds) || layer.bounds || [-180, -90, 180, 90];
+  // Across the antimeridian west > east; the page's centre, outline and
+  // extent take east a turn further on.
+  const b = given[2] < given[0] ? [given[0], given[1], given[2] + 360, given[3]] : given;
+  report.bounds = given;
   if (plain) {
     viewer.scene.globe.enableLighting = false;
-    viewer.camera.setView({ destination: Cesium.Rectangle.fromDegrees(b[0], b[1], b[2], b[3]) });
+    viewer.camera.setView({ destination: Cesium.Rectangle.fromDegrees(given[0], given[1], given[2], given[3]) });
     help.hidden = true;
   } else {
     dress(viewer, b, imagery);
