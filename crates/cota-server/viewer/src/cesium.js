@@ -69,16 +69,23 @@ function dress(viewer, b, imagery) {
   globe.dynamicAtmosphereLighting = false;
   viewer.scene.light = new Cesium.DirectionalLight({ direction: lightAt(lon, lat), intensity: 2.2 });
   if (imagery) {
-    viewer.imageryLayers.addImageryProvider(new Cesium.UrlTemplateImageryProvider({
-      url: '/imagery/{z}/{x}/{reverseY}.png',
-      tilingScheme: new Cesium.GeographicTilingScheme(),
-      rectangle: Cesium.Rectangle.fromDegrees(...imagery.bounds),
-      minimumLevel: 0,
-      maximumLevel: imagery.maxzoom,
-      tileWidth: imagery.tileSize,
-      tileHeight: imagery.tileSize,
-      credit: 'shaded relief drawn by cota from the DEM',
-    }));
+    // Bounds across the antimeridian (west > east) as two layers, one each
+    // side of 180°: CesiumJS does not draw a provider's rectangle that
+    // crosses it on its east side.
+    const [w, s, e, n] = imagery.bounds;
+    const parts = e < w ? [[w, s, 180, n], [-180, s, e, n]] : [[w, s, e, n]];
+    for (const r of parts) {
+      viewer.imageryLayers.addImageryProvider(new Cesium.UrlTemplateImageryProvider({
+        url: '/imagery/{z}/{x}/{reverseY}.png',
+        tilingScheme: new Cesium.GeographicTilingScheme(),
+        rectangle: Cesium.Rectangle.fromDegrees(...r),
+        minimumLevel: 0,
+        maximumLevel: imagery.maxzoom,
+        tileWidth: imagery.tileSize,
+        tileHeight: imagery.tileSize,
+        credit: 'shaded relief drawn by cota from the DEM',
+      }));
+    }
     report.imagery = true;
   }
   viewer.entities.add({

@@ -28,7 +28,7 @@
 // Writes target/viewer-tests/results.json and screenshots beside it.
 import { chromium } from 'playwright-core';
 import { spawn, spawnSync } from 'node:child_process';
-import { existsSync, mkdirSync, mkdtempSync, readFileSync, writeFileSync, rmSync } from 'node:fs';
+import { copyFileSync, existsSync, mkdirSync, mkdtempSync, readFileSync, writeFileSync, rmSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { dirname, join, resolve } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -418,6 +418,60 @@ async function warningsTest(browser) {
   }
 }
 
+/**
+ * The CesiumJS page over the 2-tile mosaic relabelled N00E179 + N00W180
+ * (copies in a scratch folder): terrain and relief imagery on both sides of
+ * 180° (requests for the first and the last column of a zoom, all 200), no
+ * tile or console error, the view centred on the data (not on 0°).
+ */
+async function antimeridianTest(browser) {
+  const a = join(shared, 'srtm/N00E010.hgt'), b = join(shared, 'srtm/N00E011.hgt.zip');
+  if (!existsSync(a) || !existsSync(b)) {
+    console.log('SKIPPED: the antimeridian case (shared srtm tiles absent)');
+    return;
+  }
+  const dir = mkdtempSync(join(tmpdir(), 'cota-am-'));
+  const [e179, w180] = [join(dir, 'N00E179.hgt'), join(dir, 'N00W180.hgt.zip')];
+  copyFileSync(a, e179);
+  copyFileSync(b, w180);
+  const s = await serve([e179, w180]);
+  const page = await browser.newPage({ viewport: CESIUM_VIEW });
+  const errors = collectErrors(page);
+  const asked = { terrain: [], imagery: [] };
+  page.on('response', (r) => {
+    const m = new URL(r.url()).pathname.match(/^\/(tiles|imagery)\/(\d+)\/(\d+)\/(\d+)\./);
+    if (m) asked[m[1] === 'tiles' ? 'terrain' : 'imagery'].push({ z: +m[2], x: +m[3], status: r.status() });
+  });
+  try {
+    await whenReady(s.url);
+    await page.goto(`${s.url}/cesium`);
+    await settle(page);
+    const r = await page.evaluate(() => {
+      const c = window.cotaCesium;
+      const p = window.Cesium.Cartographic.fromCartesian(c.viewer.camera.pickEllipsoid(
+        new window.Cesium.Cartesian2(c.viewer.canvas.clientWidth / 2, c.viewer.canvas.clientHeight / 2)) || c.viewer.camera.position);
+      return { error: c.error, tileErrors: c.tileErrors, bounds: c.bounds, lon: window.Cesium.Math.toDegrees(p.longitude) };
+    });
+    await page.screenshot({ path: join(out, 'cesium-antimeridian.png') });
+    // Both sides of 180°: a zoom's first (x = 0) and last (x = 2^(z+1) − 1) columns.
+    const sides = (list) => {
+      const ok = list.filter((t) => t.status === 200);
+      return { east: ok.some((t) => t.x === 0 && t.z > 0), west: ok.some((t) => t.x === (2 << t.z) - 1 && t.z > 0), not200: list.length - ok.length };
+    };
+    const [t, i] = [sides(asked.terrain), sides(asked.imagery)];
+    check('CesiumJS across the antimeridian: terrain and relief imagery on both sides of 180°, view centred on the data',
+      !r.error && r.tileErrors === 0 && errors.length === 0 && t.west && t.east && i.west && i.east && i.not200 === 0
+      && Math.abs(Math.abs(r.lon) - 180) < 2,
+      `terrain ${asked.terrain.length} (west side ${t.west}, east side ${t.east}), imagery ${asked.imagery.length} (west ${i.west}, east ${i.east}, ${i.not200} not 200), `
+      + `bounds ${JSON.stringify(r.bounds)}, view centre lon ${r.lon.toFixed(2)}, ${errors.length} console errors; cesium-antimeridian.png`);
+    results.antimeridian = { terrain: asked.terrain.length, imagery: asked.imagery.length, lon: r.lon };
+  } finally {
+    await page.close();
+    await stop(s);
+    rmSync(dir, { recursive: true, force: true });
+  }
+}
+
 /** Small screenshots for the docs (640×360). */
 async function docShots(browser, url, path) {
   mkdirSync(docs, { recursive: true });
@@ -588,6 +642,7 @@ async function main() {
   try {
     tiles = makeTiles(input.files);
     for (const mode of ['directory', 'on demand']) await cesiumTest(browser, input, tiles, mode);
+    await antimeridianTest(browser);
   } catch (e) {
     check('CesiumJS page', false, String(e.message || e));
   } finally {
