@@ -1014,12 +1014,15 @@ pub struct TilesArgs {
     pub input: InputArgs,
     /// Output directory: OUT/layer.json and OUT/{z}/{x}/{y}.terrain; or, for
     /// a name ending in .mbtiles, one MBTiles archive of the same tiles
-    /// (built as OUT.partial, renamed when complete).
+    /// (built as OUT.partial, renamed when complete). With --format 3dtiles,
+    /// a name ending in .3tz (or .3dtiles.zip) is one 3D Tiles Archive: the
+    /// pyramid made in OUT.parts (resumed from there), packed into
+    /// OUT.partial, renamed when complete.
     #[arg(short, long, value_name = "OUT")]
     pub output: PathBuf,
     /// Tile format: quantized-mesh, or 3dtiles (GLB tiles with
     /// CESIUM_tile_edges, implicit tiling, float32 positions unless
-    /// --meshopt; directory output only, from zoom 0).
+    /// --meshopt; a directory or a .3tz archive, from zoom 0).
     #[arg(long, value_enum, default_value_t = TileFormatArg::QuantizedMesh,
         conflicts_with_all = ["gzip", "watermask", "metadata", "imagery", "plan", "shard", "reduce"])]
     pub format: TileFormatArg,

@@ -15,9 +15,9 @@ use cota_core::tiles::{
 use cota_core::{HeightGrid, LonLat};
 use cota_io::tiles::drawn::{Against, SourceGrid};
 use cota_io::tiles::{
-    is_mbtiles, plan_layout_path, plan_part_path, read_shard_frame, reduce_shards,
-    shard_frame_path, write_mbtiles, write_plan, write_pyramid, write_shard, write_tiles3d,
-    PyramidOptions, PyramidReport, ShardFrame, TileExtensions, TileFormat,
+    is_3tz, is_mbtiles, plan_layout_path, plan_part_path, read_shard_frame, reduce_shards,
+    shard_frame_path, write_3tz, write_mbtiles, write_plan, write_pyramid, write_shard,
+    write_tiles3d, PyramidOptions, PyramidReport, ShardFrame, TileExtensions, TileFormat,
 };
 use serde_json::json;
 
@@ -122,17 +122,24 @@ fn refuse_archive_mismatch(a: &TilesArgs) -> anyhow::Result<()> {
     }
     if is_mbtiles(&a.output) && a.format == TileFormatArg::Tiles3d {
         anyhow::bail!(
-            "{}: expected a directory for --format 3dtiles, found an .mbtiles name; 3D Tiles archives are not written yet",
+            "{}: expected a directory or a .3tz archive for --format 3dtiles, found an .mbtiles name",
             a.output.display()
         );
     }
-    if is_mbtiles(&a.output) && (a.plan || a.shard.is_some() || a.imagery) {
+    if is_3tz(&a.output) && a.format != TileFormatArg::Tiles3d {
         anyhow::bail!(
-            "{}: expected a directory for --plan, --shard and --imagery, found an .mbtiles archive; write the archive in one run",
+            "{}: a .3tz archive holds 3D Tiles: expected --format 3dtiles with it (quantized-mesh archives: .mbtiles)",
             a.output.display()
         );
     }
-    crate::output::check_output_dir(&a.output, is_mbtiles(&a.output))
+    let archive = is_mbtiles(&a.output) || is_3tz(&a.output);
+    if archive && (a.plan || a.shard.is_some() || a.imagery) {
+        anyhow::bail!(
+            "{}: expected a directory for --plan, --shard and --imagery, found an archive name; write the archive in one run",
+            a.output.display()
+        );
+    }
+    crate::output::check_output_dir(&a.output, archive)
 }
 
 /// The one input when it is a single grid in WGS 84 longitude/latitude
@@ -550,6 +557,11 @@ fn write(
         Some(s) => write_shard(prepared, &a.output, &pyramid, s, frame, &|n| {
             pb.set_position(n)
         }),
+        None if a.format == TileFormatArg::Tiles3d && is_3tz(&a.output) => {
+            write_3tz(prepared, &a.output, &pyramid, against, &|n| {
+                pb.set_position(n)
+            })
+        }
         None if a.format == TileFormatArg::Tiles3d => {
             write_tiles3d(prepared, &a.output, &pyramid, against, &|n| {
                 pb.set_position(n)

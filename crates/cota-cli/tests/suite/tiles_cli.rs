@@ -601,6 +601,76 @@ fn mbtiles_archive_output_checked_and_refused_for_shards() {
     );
 }
 
+/// `--format 3dtiles -o OUT.3tz`: one 3D Tiles Archive holding exactly the
+/// directory pyramid's files (read back through its index), no staging or
+/// partial file left; a quantized-mesh run into a .3tz name is refused.
+#[test]
+fn three_d_tiles_archive_holds_the_directory_pyramid() {
+    let dir = tempfile::tempdir().unwrap();
+    let (plain, packed) = (dir.path().join("t3d"), dir.path().join("t.3tz"));
+    let args = [
+        "tiles",
+        "--format",
+        "3dtiles",
+        "--meshopt",
+        "--max-zoom",
+        "7",
+    ];
+    for out in [&plain, &packed] {
+        let r = cota(&[&args[..], &["-o", out.to_str().unwrap()]].concat());
+        assert!(r.status.success(), "{}", stderr(&r));
+    }
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}: staging or partial files left");
+    let reader = cota_io::tiles::Tz3Reader::open(&packed).unwrap();
+    let mut files = Vec::new();
+    let mut stack = vec![plain.clone()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(d).unwrap() {
+            let p = e.unwrap().path();
+            if p.file_name().unwrap().to_string_lossy().starts_with('.') {
+                continue;
+            }
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                files.push(p);
+            }
+        }
+    }
+    assert!(files.len() > 20, "{} files", files.len());
+    assert_eq!(reader.len(), files.len());
+    for f in &files {
+        let rel = f
+            .strip_prefix(&plain)
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        let got = reader.get(&rel).unwrap();
+        assert_eq!(
+            got.as_deref(),
+            Some(&std::fs::read(f).unwrap()[..]),
+            "{rel}"
+        );
+    }
+    assert_eq!(reader.get("0/no.glb").unwrap(), None);
+    let r = cota(&[
+        "tiles",
+        "--max-zoom",
+        "7",
+        "-o",
+        dir.path().join("q.3tz").to_str().unwrap(),
+    ]);
+    assert!(
+        !r.status.success() && stderr(&r).contains("--format 3dtiles"),
+        "{}",
+        stderr(&r)
+    );
+}
+
 /// `--format 3dtiles` (issue 30): tileset.json, subtrees and GLBs, checked as
 /// drawn; what it cannot write is refused in words.
 #[test]

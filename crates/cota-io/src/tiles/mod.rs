@@ -34,6 +34,7 @@
 //! # }
 //! ```
 
+pub mod archive3tz;
 pub mod coarse;
 pub mod decode;
 pub mod drawn;
@@ -54,6 +55,7 @@ pub mod seams;
 pub mod shard;
 pub mod tileset3d;
 
+pub use archive3tz::{is_3tz, pack_3tz, staging_path, write_3tz, Tz3Reader};
 pub use coarse::{
     corners_path, partial_path, read_band_corners, read_partial, write_band_corners, write_partial,
     write_reduced_coarse, write_shard_partial, PartialHeader,
