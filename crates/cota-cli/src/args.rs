@@ -1132,7 +1132,10 @@ pub struct ServeArgs {
     /// A tile directory written by `cota tiles` (layer.json and
     /// {z}/{x}/{y}.terrain), or an .mbtiles archive it wrote, served at
     /// /tiles/. Without it, tiles are made on demand from the input and
-    /// kept.
+    /// kept. A 3D Tiles pyramid (`--format 3dtiles`: a directory with
+    /// tileset.json, or a .3tz archive) is served at /3dtiles/ instead, the
+    /// CesiumJS page showing it at /cesium?3dtiles; quantized-mesh tiles
+    /// are then made on demand.
     #[arg(long, value_name = "DIR")]
     pub tiles: Option<PathBuf>,
     /// Address and port to listen on: an IP address (`127.0.0.1:8080`,

@@ -19,6 +19,7 @@ use cota_core::HeightGrid;
 use cota_io::stream_file::MAGIC;
 use cota_io::tiles::{PyramidOptions, TileExtensions};
 use cota_server::texture::{PAIR_URL, TEXTURE_URL};
+use cota_server::tiles3d::{is_tiles3d, Tiles3dFiles};
 use cota_server::{
     DemandTileSource, DirTileSource, Imagery, MbtilesTileSource, ServeError, ServeOptions,
     ServerState, StreamAsset, TextureLevel, Textures, TileSource,
@@ -342,11 +343,22 @@ pub fn run(a: &ServeArgs) -> anyhow::Result<ExitCode> {
     if let Some(textures) = make_textures(&a.texture, &source)? {
         state = state.with_textures(textures);
     }
-    if let Some(dir) = &a.tiles {
+    let three_d = a.tiles.as_deref().filter(|d| is_tiles3d(d));
+    if let Some(path) = three_d {
+        let files = Tiles3dFiles::open(path)
+            .map_err(|e| anyhow::anyhow!(e))
+            .with_context(|| format!("--tiles {}", path.display()))?;
+        println!(
+            "3D Tiles    {} at /3dtiles/tileset.json (/cesium?3dtiles)",
+            path.display()
+        );
+        state = state.with_tiles3d(files);
+    } else if let Some(dir) = &a.tiles {
         state.set_tiles(Ok(Some(open_tiles(dir)?)));
     }
     let holes = matches!(a.voids, Voids::Hole);
-    start_background(&state, source, a.tiles.is_some(), holes);
+    let given = a.tiles.is_some() && three_d.is_none();
+    start_background(&state, source, given, holes);
     cota_server::run(&addrs, state, |bound| {
         let urls: Vec<String> = bound.iter().map(|b| format!("http://{b}/")).collect();
         println!(

@@ -16,6 +16,8 @@
 //!   hierarchy ([`DemandTileSource`]); see [`tiles`] for the URL layout.
 //! * `/imagery.json`, `/imagery/{z}/{x}/{y}.png`: shaded-relief imagery
 //!   drawn from the DEM ([`Imagery`]), in the terrain tiles' geographic tiling.
+//! * `/3dtiles/…`: a `cota tiles --format 3dtiles` pyramid (a directory or
+//!   a `.3tz` archive) served as its files ([`tiles3d`]).
 //! * `/texture.png`, `/texture-pair.png`: an image draped on the terrain by
 //!   the viewer, and paper 004's chosen texture level ([`Textures`]).
 //! * `/health`: liveness, what is served or still being made, the work counters.
@@ -57,6 +59,7 @@ mod routes;
 pub mod stream;
 pub mod texture;
 pub mod tiles;
+pub mod tiles3d;
 mod work;
 
 use std::future::Future;
@@ -87,6 +90,7 @@ pub struct ServerState {
     tiles: Arc<Later<Option<Tiles>>>,
     imagery: Arc<Later<Option<Arc<Imagery>>>>,
     textures: Option<Arc<Textures>>,
+    tiles3d: Option<Arc<tiles3d::Tiles3dFiles>>,
     warnings: Arc<Vec<String>>,
     work: Arc<Work>,
     options: ServeOptions,
@@ -141,6 +145,7 @@ impl ServerState {
             tiles: Later::pending("the tiles"),
             imagery: Later::pending("the imagery"),
             textures: None,
+            tiles3d: None,
             warnings: Arc::new(Vec::new()),
             work: Arc::new(Work::new(&options)),
             options,
@@ -172,6 +177,13 @@ impl ServerState {
     /// `/texture-pair.png`, described in `/meta.json`).
     pub fn with_textures(mut self, textures: Textures) -> Self {
         self.textures = Some(Arc::new(textures));
+        self
+    }
+
+    /// Adds a 3D Tiles terrain pyramid served as files at `/3dtiles/…`
+    /// ([`tiles3d`]).
+    pub fn with_tiles3d(mut self, files: tiles3d::Tiles3dFiles) -> Self {
+        self.tiles3d = Some(Arc::new(files));
         self
     }
 

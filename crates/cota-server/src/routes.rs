@@ -53,6 +53,7 @@ pub fn router(state: ServerState) -> Router {
         .route("/layer.json", get(root_layer))
         .route("/tiles/layer.json", get(layer))
         .route("/tiles/{z}/{x}/{y}", get(tile))
+        .route("/3dtiles/{*path}", get(tiles3d_file))
         .route("/imagery.json", get(imagery_json))
         .route("/imagery/{z}/{x}/{y}", get(imagery_tile))
         .route(crate::texture::TEXTURE_URL, get(texture_image))
@@ -194,6 +195,7 @@ async fn health(State(s): State<ServerState>) -> Response {
         "steps": stream.map(|a| a.meta().steps.len()),
         "tiles": served(&s.tiles),
         "imagery": served(&s.imagery),
+        "tiles3d": if s.tiles3d.is_some() { "yes" } else { "no" },
         "texture": s.textures.as_ref().map_or("no", |t| if t.pair.is_some() { "yes, and a pair" } else { "yes" }),
         "warnings": s.warnings.len(),
         "work": s.work.summary(),
@@ -370,6 +372,32 @@ async fn tile(
     let plain = gunzip(&t.bytes)?;
     let etag = format!("{}-identity\"", t.etag.trim_end_matches('"'));
     Ok(tile_response(&headers, plain, &etag, TILE_TYPE, &vary))
+}
+
+/// `/3dtiles/{path}`: a file of the 3D Tiles pyramid given with `--tiles`.
+async fn tiles3d_file(
+    State(s): State<ServerState>,
+    Path(path): Path<String>,
+    headers: HeaderMap,
+) -> Result<Response> {
+    let files = s.tiles3d.clone().ok_or_else(|| {
+        ServeError::NotFound("no 3D Tiles: serve them with --tiles DIR or OUT.3tz".into())
+    })?;
+    let rel = path.clone();
+    let bytes = tokio::task::spawn_blocking(move || files.get(&rel))
+        .await
+        .map_err(|e| ServeError::Internal(format!("3D Tiles: {e}")))?
+        .map_err(|e| ServeError::Internal(format!("3D Tiles {path}: {e}")))?
+        .ok_or_else(|| ServeError::NotFound(format!("/3dtiles/{path}")))?;
+    let etag = crate::tiles::etag_of(&bytes);
+    let kind = crate::tiles3d::content_type(&path);
+    Ok(tile_response(
+        &headers,
+        Bytes::from(bytes),
+        &etag,
+        kind,
+        &[],
+    ))
 }
 
 async fn imagery_tile(

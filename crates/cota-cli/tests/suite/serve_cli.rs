@@ -130,6 +130,12 @@ fn listening(child: &mut std::process::Child) -> String {
 /// `GET path` from `addr` (HTTP/1.1, one connection): status and body,
 /// waiting out 503 answers (the stream still being made).
 fn get(addr: &str, path: &str) -> (u16, Vec<u8>) {
+    let (status, _, body) = get_with_headers(addr, path);
+    (status, body)
+}
+
+/// [`get`], with the response's header block (lower-cased).
+fn get_with_headers(addr: &str, path: &str) -> (u16, String, Vec<u8>) {
     use std::io::{Read, Write};
     for _ in 0..600 {
         let mut c = std::net::TcpStream::connect(addr).unwrap();
@@ -140,7 +146,8 @@ fn get(addr: &str, path: &str) -> (u16, Vec<u8>) {
         let end = all.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
         let status: u16 = String::from_utf8_lossy(&all[9..12]).parse().unwrap();
         if status != 503 {
-            return (status, all[end + 4..].to_vec());
+            let head = String::from_utf8_lossy(&all[..end]).to_ascii_lowercase();
+            return (status, head, all[end + 4..].to_vec());
         }
         std::thread::sleep(std::time::Duration::from_millis(100));
     }
@@ -259,5 +266,57 @@ fn a_pair_across_the_antimeridian_is_served_as_one_grid() {
         assert_eq!(status, 200);
         let tile = cota_io::tiles::decode(&body).unwrap();
         assert!(tile.u.len() > 4, "{} vertices", tile.u.len());
+    }
+}
+
+/// `cota serve --tiles OUT.3tz` (and the same pyramid as a directory): the
+/// 3D Tiles files at /3dtiles/ with their media types, the run's hidden
+/// manifest and missing files 404, quantized-mesh tiles still made on
+/// demand, `/health` saying both.
+#[test]
+fn three_d_tiles_from_an_archive_or_a_directory_are_served_as_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = common::fixture("S29W072.hgt.zip");
+    let (archive, plain) = (dir.path().join("t.3tz"), dir.path().join("t3d"));
+    for out in [&archive, &plain] {
+        let r = std::process::Command::new(env!("CARGO_BIN_EXE_cota"))
+            .args([
+                "tiles",
+                s(&dem),
+                "--format",
+                "3dtiles",
+                "--meshopt",
+                "--max-zoom",
+                "6",
+                "-o",
+            ])
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    }
+    let glb = "0/6/38/21.glb";
+    let want = std::fs::read(plain.join(glb)).unwrap();
+    for given in [&archive, &plain] {
+        let (child, addr) = serving(&[s(&dem), "--tiles", s(given)]);
+        let (status, head, tileset) = get_with_headers(&addr, "/3dtiles/tileset.json");
+        let (glb_status, glb_head, body) = get_with_headers(&addr, &format!("/3dtiles/{glb}"));
+        let hidden = get(&addr, "/3dtiles/.cota-tiles.json").0;
+        let missing = get(&addr, "/3dtiles/0/6/0/0.glb").0;
+        let (_, health) = get(&addr, "/health");
+        let qm = get(&addr, "/tiles/0/0/0.terrain").0;
+        stop(child);
+        assert_eq!(status, 200, "{}", given.display());
+        assert!(head.contains("content-type: application/json"), "{head}");
+        assert_eq!(tileset, std::fs::read(plain.join("tileset.json")).unwrap());
+        assert_eq!(glb_status, 200);
+        assert!(
+            glb_head.contains("content-type: model/gltf-binary"),
+            "{glb_head}"
+        );
+        assert_eq!(body, want, "{glb} from {}", given.display());
+        assert_eq!((hidden, missing, qm), (404, 404, 200));
+        let health: serde_json::Value = serde_json::from_slice(&health).unwrap();
+        assert_eq!(health["tiles3d"], "yes", "{health}");
     }
 }

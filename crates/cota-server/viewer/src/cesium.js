@@ -16,6 +16,10 @@ const Cesium = window.Cesium;
 const status = document.getElementById('status');
 const help = document.getElementById('help');
 const plain = new URLSearchParams(location.search).has('plain');
+// `?3dtiles`: the 3D Tiles terrain given to `cota serve --tiles` (a
+// `cota tiles --format 3dtiles` directory or .3tz), through CesiumJS's
+// Cesium3DTilesTerrainProvider, instead of the quantized-mesh tiles.
+const threeD = new URLSearchParams(location.search).has('3dtiles');
 const report = { ready: false, tileErrors: 0, tilesLoaded: false, error: null, plain, imagery: false };
 window.cotaCesium = report;
 
@@ -141,12 +145,16 @@ report.pixels = () => {
 async function main() {
   Cesium.Ion.defaultAccessToken = '';
   const h = await health();
-  if (h.tiles !== 'yes') throw new Error(`this server has no tiles (${h.tiles}): run cota serve on a geographic DEM, or with --tiles DIR`);
-  const layer = await (await fetch('/tiles/layer.json')).json();
+  if (threeD && h.tiles3d !== 'yes') throw new Error('this server has no 3D Tiles: run cota serve with --tiles DIR (or OUT.3tz) written by cota tiles --format 3dtiles');
+  if (!threeD && h.tiles !== 'yes') throw new Error(`this server has no tiles (${h.tiles}): run cota serve on a geographic DEM, or with --tiles DIR`);
+  const layer = h.tiles === 'yes' ? await (await fetch('/tiles/layer.json')).json() : {};
   const imagery = !plain && h.imagery === 'yes' ? await (await fetch('/imagery.json')).json() : null;
-  const terrainProvider = await Cesium.CesiumTerrainProvider.fromUrl('/tiles/', { requestVertexNormals: !plain, requestWaterMask: false, requestMetadata: true });
+  const terrainProvider = threeD
+    ? await Cesium.Cesium3DTilesTerrainProvider.fromUrl('/3dtiles/tileset.json', { requestVertexNormals: !plain })
+    : await Cesium.CesiumTerrainProvider.fromUrl('/tiles/', { requestVertexNormals: !plain, requestWaterMask: false, requestMetadata: true });
+  report.threeD = threeD;
   report.terrainProvider = terrainProvider;
-  terrainProvider.errorEvent.addEventListener((e) => {
+  terrainProvider.errorEvent?.addEventListener((e) => {
     report.tileErrors++;
     report.lastError = String(e.message || e);
   });
@@ -169,7 +177,7 @@ async function main() {
   viewer.scene.globe.tileLoadProgressEvent.addEventListener((n) => {
     report.pending = n;
     if (n === 0) report.tilesLoaded = true;
-    status.textContent = `quantized-mesh tiles${imagery ? ' and shaded relief' : ''} from this server\npending tiles ${n}  errors ${report.tileErrors}`;
+    status.textContent = `${threeD ? '3D Tiles terrain' : 'quantized-mesh tiles'}${imagery ? ' and shaded relief' : ''} from this server\npending tiles ${n}  errors ${report.tileErrors}`;
   });
   document.addEventListener('keydown', (e) => {
     if (e.key === 'h' || e.key === 'H') help.hidden = !help.hidden;

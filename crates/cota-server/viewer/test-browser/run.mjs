@@ -472,6 +472,52 @@ async function antimeridianTest(browser) {
   }
 }
 
+/**
+ * The CesiumJS page's `?3dtiles` view over `cota serve FIXTURE --tiles
+ * OUT.3tz`: CesiumJS's Cesium3DTilesTerrainProvider loads the archive's
+ * tileset, subtrees and GLBs from /3dtiles/ (all 200, at least two GLBs),
+ * with no tile or console error, and draws relief. The archive is
+ * $COTA_BROWSER_TILES3D (CI's, of the bundled fixture) or made here.
+ */
+async function tiles3dServeTest(browser) {
+  const fixture = join(repo, 'fixtures/S29W072.hgt.zip');
+  let archive = process.env.COTA_BROWSER_TILES3D;
+  const dir = archive ? null : mkdtempSync(join(tmpdir(), 'cota-3tz-'));
+  if (!archive) {
+    archive = join(dir, 't.3tz');
+    const r = spawnSync(bin, ['tiles', fixture, '--format', '3dtiles', '--meshopt', '--normals', '-o', archive], { encoding: 'utf8' });
+    if (r.status !== 0) throw new Error(`cota tiles --format 3dtiles failed (${r.status}): ${r.stderr}`);
+  }
+  const s = await serve([fixture, '--tiles', archive]);
+  const page = await browser.newPage({ viewport: CESIUM_VIEW });
+  const errors = collectErrors(page);
+  const got = [];
+  page.on('response', (r) => {
+    const p = new URL(r.url()).pathname;
+    if (p.startsWith('/3dtiles/')) got.push({ p, status: r.status(), type: r.headers()['content-type'] });
+  });
+  try {
+    await whenReady(s.url);
+    await page.goto(`${s.url}/cesium?3dtiles`);
+    await settle(page);
+    const r = await page.evaluate(() => ({ error: window.cotaCesium.error, threeD: window.cotaCesium.threeD,
+      tileErrors: window.cotaCesium.tileErrors, px: window.cotaCesium.pixels() }));
+    await page.screenshot({ path: join(out, 'cesium-3dtiles.png') });
+    const glbs = got.filter((t) => t.p.endsWith('.glb'));
+    const bad = got.filter((t) => t.status !== 200);
+    check('CesiumJS page over cota serve --tiles OUT.3tz: 3D Tiles terrain loaded from /3dtiles/, relief drawn',
+      !r.error && r.threeD && r.tileErrors === 0 && errors.length === 0 && glbs.length >= 2 && bad.length === 0
+      && got.some((t) => t.p.endsWith('.subtree')) && glbs.every((t) => t.type === 'model/gltf-binary') && r.px.std > 5,
+      `${got.length} files (${glbs.length} GLBs, ${bad.length} not 200), ${r.tileErrors} tile errors, ${errors.length} console errors${r.error ? `, ${r.error}` : ''}, `
+      + `luminance std ${r.px.std.toFixed(1)}; cesium-3dtiles.png`);
+    results.tiles3d_served = { files: got.length, glbs: glbs.length, std: r.px.std };
+  } finally {
+    await page.close();
+    await stop(s);
+    if (dir) rmSync(dir, { recursive: true, force: true });
+  }
+}
+
 /** Small screenshots for the docs (640×360). */
 async function docShots(browser, url, path) {
   mkdirSync(docs, { recursive: true });
@@ -643,6 +689,7 @@ async function main() {
     tiles = makeTiles(input.files);
     for (const mode of ['directory', 'on demand']) await cesiumTest(browser, input, tiles, mode);
     await antimeridianTest(browser);
+    await tiles3dServeTest(browser);
   } catch (e) {
     check('CesiumJS page', false, String(e.message || e));
   } finally {
