@@ -16,8 +16,8 @@ use cota_core::{HeightGrid, LonLat};
 use cota_io::tiles::drawn::{Against, SourceGrid};
 use cota_io::tiles::{
     is_3tz, is_mbtiles, plan_layout_path, plan_part_path, read_shard_frame, reduce_shards,
-    shard_frame_path, write_3tz, write_mbtiles, write_plan, write_pyramid, write_shard,
-    write_tiles3d, PyramidOptions, PyramidReport, ShardFrame, TileExtensions, TileFormat,
+    shard_frame_path, write_output, write_plan, write_shard, PyramidOptions, PyramidReport,
+    ShardFrame, TileExtensions, TileFormat,
 };
 use serde_json::json;
 
@@ -557,22 +557,7 @@ fn write(
         Some(s) => write_shard(prepared, &a.output, &pyramid, s, frame, &|n| {
             pb.set_position(n)
         }),
-        None if a.format == TileFormatArg::Tiles3d && is_3tz(&a.output) => {
-            write_3tz(prepared, &a.output, &pyramid, against, &|n| {
-                pb.set_position(n)
-            })
-        }
-        None if a.format == TileFormatArg::Tiles3d => {
-            write_tiles3d(prepared, &a.output, &pyramid, against, &|n| {
-                pb.set_position(n)
-            })
-        }
-        None if is_mbtiles(&a.output) => {
-            write_mbtiles(prepared, &a.output, &pyramid, against, &|n| {
-                pb.set_position(n)
-            })
-        }
-        None => write_pyramid(prepared, &a.output, &pyramid, against, &|n| {
+        None => write_output(prepared, &a.output, &pyramid, against, &|n| {
             pb.set_position(n)
         }),
     }

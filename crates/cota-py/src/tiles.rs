@@ -13,10 +13,11 @@ use cota_core::tiles::{
 };
 use cota_core::{FillOptions, HeightGrid};
 use cota_io::tiles::{
-    file_extents, finish_plan, frame_of, load_part, mosaic_frame, plan_layout, plan_layout_or,
-    read_part_files, read_part_files_in_turn, read_shard_frame, reduce_shards, run_plan_part,
-    shard_frame_path, shard_record_path, summarize_files, write_plan, write_pyramid, write_shard,
-    PartError, PlanPartReport, PyramidOptions, PyramidReport, ShardFrame, TileExtensions,
+    check_output, file_extents, finish_plan, frame_of, load_part, mosaic_frame, plan_layout,
+    plan_layout_or, read_part_files, read_part_files_in_turn, read_shard_frame, reduce_shards,
+    run_plan_part, shard_frame_path, shard_record_path, summarize_files, write_output, write_plan,
+    write_shard, PartError, PlanPartReport, PyramidOptions, PyramidReport, ShardFrame,
+    TileExtensions, TileFormat,
 };
 use cota_io::{read_region, RegionOptions};
 use pyo3::prelude::*;
@@ -149,6 +150,17 @@ fn write_part(
     Ok((part.shard.tile_count(), report, part.files_read))
 }
 
+/// The tile format named `name`: "quantized-mesh" or "3dtiles".
+fn format_of(name: &str) -> PyResult<TileFormat> {
+    match name {
+        "quantized-mesh" => Ok(TileFormat::QuantizedMesh),
+        "3dtiles" => Ok(TileFormat::Tiles3d),
+        other => Err(errors::value(format!(
+            "expected format \"quantized-mesh\" or \"3dtiles\", found {other:?}"
+        ))),
+    }
+}
+
 fn tiler(s: &Settings) -> TilerOptions {
     TilerOptions::DEFAULT
         .with_min_zoom(s.min_zoom)
@@ -157,14 +169,17 @@ fn tiler(s: &Settings) -> TilerOptions {
 
 /// Writes a pyramid of the DEM file(s) `paths` under `out`
 /// (`out/layer.json`, `out/{z}/{x}/{y}.terrain`), byte for byte as
-/// `cota tiles` with the same settings. With `shard=(i, n)` only shard `i`
+/// `cota tiles` with the same settings: into one MBTiles archive when `out`
+/// ends in `.mbtiles`; with `format="3dtiles"` (`meshopt`, `skirts`) as 3D
+/// Tiles terrain, into one 3D Tiles Archive when `out` ends in `.3tz`. With `shard=(i, n)` only shard `i`
 /// of `n` (see `tiles_plan`) and its record; `tiles_reduce(out, n)` then
 /// writes `layer.json`. Returns a dict: `tiles`, `written`, `skipped`,
 /// `bytes`. Raises `ReadError`, `MeshError` or `WriteError`.
 #[pyfunction]
 #[pyo3(signature = (paths, out, *, min_zoom = 0, max_zoom = None, tile_cells = 64,
     error_factor = None, max_error_m_at_max_zoom = None, normals = false, watermask = false,
-    metadata = false, gzip = false, force = false, check = false, shard = None))]
+    metadata = false, gzip = false, force = false, check = false, shard = None,
+    format = "quantized-mesh", meshopt = false, skirts = true))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn tiles<'py>(
     py: Python<'py>,
@@ -182,6 +197,9 @@ pub(crate) fn tiles<'py>(
     force: bool,
     check: bool,
     shard: Option<(u32, u32)>,
+    format: &str,
+    meshopt: bool,
+    skirts: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let paths = paths_of(paths)?;
     let s = settings(
@@ -195,8 +213,17 @@ pub(crate) fn tiles<'py>(
         .with_extensions(TileExtensions::with(normals, watermask, metadata))
         .with_gzip(gzip)
         .with_force(force)
-        .with_check(check);
+        .with_check(check)
+        .with_meshopt(meshopt)
+        .with_skirts(skirts)
+        .with_format(format_of(format)?);
+    check_output(&out, &opts).map_err(errors::value)?;
     if let Some((i, n)) = shard {
+        if opts.format == TileFormat::Tiles3d {
+            return Err(errors::value(
+                "shards write quantized-mesh pyramids: expected format=\"quantized-mesh\" with shard",
+            ));
+        }
         if i >= n {
             return Err(errors::value(format!(
                 "expected shard (i, n) with 0 <= i < n, found ({i}, {n})"
@@ -219,7 +246,7 @@ pub(crate) fn tiles<'py>(
                     .swap_remove(i as usize);
                 write_shard(&prep, &out, &opts, &part, None, &|_| {})
             }
-            None => write_pyramid(&prep, &out, &opts, None, &|_| {}),
+            None => write_output(&prep, &out, &opts, None, &|_| {}),
         }
         .map_err(errors::write)?;
         Ok((prep.tile_count(), report, None))

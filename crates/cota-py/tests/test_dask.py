@@ -34,6 +34,12 @@ def same(got: dict, want: dict) -> bool:
     return True
 
 
+def cli_exe():
+    """The ``cota`` binary built last (release or debug), or None."""
+    built = [p for p in (ROOT / "target/release/cota", ROOT / "target/debug/cota") if p.is_file()]
+    return max(built, key=lambda p: p.stat().st_mtime, default=None)
+
+
 @pytest.fixture(scope="module")
 def plain(tmp_path_factory):
     out = tmp_path_factory.mktemp("plain") / "t"
@@ -43,7 +49,7 @@ def plain(tmp_path_factory):
 
 
 def test_plain_equals_cli(plain, tmp_path):
-    exe = next((p for p in (ROOT / "target/release/cota", ROOT / "target/debug/cota") if p.is_file()), None)
+    exe = cli_exe()
     if exe is None:
         pytest.skip("the cota binary is not built")
     out = tmp_path / "cli"
@@ -259,3 +265,46 @@ def test_shards_across_the_antimeridian_name_tile_addresses(tmp_path):
         cota.tiles([e179, w180], out, shard=(i, 3), **settings)
     cota.tiles_reduce(out, 3)
     assert same(files(out), want)
+
+
+def test_archives_and_3d_tiles_from_python(tmp_path):
+    """``cota.tiles`` writes what ``cota tiles`` does through the same writer: an
+    ``.mbtiles`` holding the directory's tiles, 3D Tiles terrain, and a ``.3tz``
+    holding the 3D Tiles directory's files (the CLI's archive byte for byte when the
+    binary is built); settings a format cannot hold raise ValueError before any work."""
+    import sqlite3
+    import zipfile
+
+    opts = {"max_zoom": 6}
+    plain, mb = tmp_path / "qm", tmp_path / "t.mbtiles"
+    r = cota.tiles(TILE, plain, **opts)
+    assert cota.tiles(TILE, mb, **opts)["written"] == r["written"] > 5
+    with sqlite3.connect(mb) as db:
+        rows = {(z, x, y): bytes(d)
+                for z, x, y, d in db.execute("select zoom_level, tile_column, tile_row, tile_data from tiles")}
+    tiles = {p.relative_to(plain) for p in plain.rglob("*.terrain")}
+    assert len(rows) == len(tiles)
+    for (z, x, y), d in rows.items():
+        assert (plain / str(z) / str(x) / f"{y}.terrain").read_bytes() == d
+    t3d, tz = tmp_path / "t3d", tmp_path / "t.3tz"
+    cota.tiles(TILE, t3d, format="3dtiles", meshopt=True, **opts)
+    cota.tiles(TILE, tz, format="3dtiles", meshopt=True, **opts)
+    assert (t3d / "tileset.json").is_file() and not (tmp_path / "t.3tz.parts").exists()
+    with zipfile.ZipFile(tz) as z:
+        names = z.namelist()
+        assert names[0] == "tileset.json" and names[-1] == "@3dtilesIndex1@"
+        want = {str(p.relative_to(t3d)) for p in t3d.rglob("*") if p.is_file() and not p.name.startswith(".")}
+        assert set(names[:-1]) == want
+        assert all(z.read(n) == (t3d / n).read_bytes() for n in want)
+    exe = cli_exe()
+    if exe is not None:
+        cli = tmp_path / "cli.3tz"
+        subprocess.run([exe, "tiles", TILE, "--format", "3dtiles", "--meshopt", "--max-zoom", "6", "-o", cli],
+                       check=True, capture_output=True)
+        assert cli.read_bytes() == tz.read_bytes()
+    for bad in ({"format": "3dtiles", "gzip": True}, {"format": "x"}, {"meshopt": True},
+                {"format": "3dtiles", "out": tmp_path / "a.mbtiles"}, {"out": tmp_path / "a.3tz"}):
+        out = bad.pop("out", tmp_path / "refused")
+        with pytest.raises(ValueError):
+            cota.tiles(TILE, out, **opts, **bad)
+        assert not out.exists()

@@ -390,7 +390,8 @@ async fn tiles3d_file(
         .map_err(|e| ServeError::Internal(format!("3D Tiles {path}: {e}")))?
         .ok_or_else(|| ServeError::NotFound(format!("/3dtiles/{path}")))?;
     let etag = crate::tiles::etag_of(&bytes);
-    let kind = crate::tiles3d::content_type(&path);
+    // tileset.json, GLBs and subtrees: the embedded files' media types.
+    let kind = crate::assets::mime(&path);
     Ok(tile_response(
         &headers,
         Bytes::from(bytes),

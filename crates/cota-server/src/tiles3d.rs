@@ -87,14 +87,3 @@ impl Tiles3dFiles {
         }
     }
 }
-
-/// The media type of a pyramid file, by its name.
-pub fn content_type(rel: &str) -> &'static str {
-    if rel.ends_with(".json") {
-        "application/json"
-    } else if rel.ends_with(".glb") {
-        "model/gltf-binary"
-    } else {
-        "application/octet-stream"
-    }
-}

@@ -45,6 +45,7 @@ pub mod glb_tile;
 pub mod journal;
 pub mod layer;
 pub mod mbtiles;
+pub mod output;
 pub mod part;
 pub mod plan_frame;
 pub mod plan_parts;
@@ -68,6 +69,7 @@ pub use frame::{
 pub use journal::JOURNAL_DIR;
 pub use layer::layer_json;
 pub use mbtiles::{is_mbtiles, write_mbtiles, MbtilesReader};
+pub use output::{check_output, write_output};
 pub use part::{
     file_extents, frame_of, load_part, read_part_files, read_part_files_in_turn, Part, PartError,
 };

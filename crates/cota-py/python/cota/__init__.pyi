@@ -93,8 +93,16 @@ def tiles(
     force: bool = False,
     check: bool = False,
     shard: tuple[int, int] | None = None,
+    format: Literal["quantized-mesh", "3dtiles"] = "quantized-mesh",
+    meshopt: bool = False,
+    skirts: bool = True,
 ) -> TilesReport:
     """Write a quantized-mesh pyramid under ``out``, byte for byte as ``cota tiles``.
+
+    ``out`` ending in ``.mbtiles``: one MBTiles archive. ``format="3dtiles"``: 3D Tiles
+    terrain (``meshopt``: EXT_meshopt_compression; ``skirts``: a skirt primitive per
+    GLB), into one 3D Tiles Archive when ``out`` ends in ``.3tz``. Settings a format
+    cannot hold raise ValueError before any work.
 
     ``shard=(i, n)``: only shard ``i`` of ``n`` and its record; ``tiles_reduce``
     then writes ``layer.json``. After ``tiles_plan_step`` (its frame under ``out``)
