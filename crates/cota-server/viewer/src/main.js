@@ -448,13 +448,16 @@ renderer.domElement.addEventListener('pointermove', (e) => {
   furniture.moved = true;
 });
 
+/** A longitude within ±180° (a grid laid out across the antimeridian runs past 180°). */
+const wrapLon = (lon) => (lon > 180 ? lon - 360 : lon < -180 ? lon + 360 : lon);
+
 /** Longitude/latitude of local (x, y), or null for a grid without them. */
 function lonLat(x, y) {
   const b = meta.lon_lat_bounds;
   if (!b) return null;
   const col = x / meta.cell_size_m[0] + (meta.width - 1) / 2;
   const row = (meta.height - 1) / 2 - y / meta.cell_size_m[1];
-  return [b[0] + (col / (meta.width - 1)) * (b[2] - b[0]), b[1] + (row / (meta.height - 1)) * (b[3] - b[1])];
+  return [wrapLon(b[0] + (col / (meta.width - 1)) * (b[2] - b[0])), b[1] + (row / (meta.height - 1)) * (b[3] - b[1])];
 }
 
 /** Where the ray through screen pixel (sx, sy) first meets the ground, marching along it. */
@@ -505,7 +508,7 @@ function setupFurniture() {
   document.getElementById('legend-ticks').innerHTML = ticks;
   const wkm = (meta.width * meta.cell_size_m[0]) / 1000, hkm = (meta.height * meta.cell_size_m[1]) / 1000;
   const b = meta.lon_lat_bounds;
-  const ext = b ? `\n${deg(b[0], 'E', 'W', 3)} … ${deg(b[2], 'E', 'W', 3)}, ${deg(b[3], 'N', 'S', 3)} … ${deg(b[1], 'N', 'S', 3)}` : '';
+  const ext = b ? `\n${deg(wrapLon(b[0]), 'E', 'W', 3)} … ${deg(wrapLon(b[2]), 'E', 'W', 3)}, ${deg(b[3], 'N', 'S', 3)} … ${deg(b[1], 'N', 'S', 3)}` : '';
   const names = meta.name.split(' + ').map((f) => f.split(/[\\/]/).pop()).join(' + ');
   document.getElementById('dataset').textContent =
     `${names}\n${meta.width} × ${meta.height} samples, ${wkm.toFixed(1)} × ${hkm.toFixed(1)} km, ${Math.round(lo)}…${Math.round(hi)} m${ext}`;
