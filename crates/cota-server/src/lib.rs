@@ -17,7 +17,9 @@
 //! * `/imagery.json`, `/imagery/{z}/{x}/{y}.png`: shaded-relief imagery
 //!   drawn from the DEM ([`Imagery`]), in the terrain tiles' geographic tiling.
 //! * `/3dtiles/…`: a `cota tiles --format 3dtiles` pyramid (a directory or
-//!   a `.3tz` archive) served as its files ([`tiles3d`]).
+//!   a `.3tz` archive) served as its files, or, without one, the same
+//!   pyramid made from the on-demand tiles' hierarchy on the first request
+//!   ([`tiles3d`]).
 //! * `/texture.png`, `/texture-pair.png`: an image draped on the terrain by
 //!   the viewer, and paper 004's chosen texture level ([`Textures`]).
 //! * `/health`: liveness, what is served or still being made, the work counters.
@@ -91,6 +93,7 @@ pub struct ServerState {
     imagery: Arc<Later<Option<Arc<Imagery>>>>,
     textures: Option<Arc<Textures>>,
     tiles3d: Option<Arc<tiles3d::Tiles3dFiles>>,
+    tiles3d_made: Arc<std::sync::OnceLock<std::result::Result<Arc<tiles3d::Tiles3dFiles>, String>>>,
     warnings: Arc<Vec<String>>,
     work: Arc<Work>,
     options: ServeOptions,
@@ -146,6 +149,7 @@ impl ServerState {
             imagery: Later::pending("the imagery"),
             textures: None,
             tiles3d: None,
+            tiles3d_made: Arc::default(),
             warnings: Arc::new(Vec::new()),
             work: Arc::new(Work::new(&options)),
             options,

@@ -195,7 +195,7 @@ async fn health(State(s): State<ServerState>) -> Response {
         "steps": stream.map(|a| a.meta().steps.len()),
         "tiles": served(&s.tiles),
         "imagery": served(&s.imagery),
-        "tiles3d": if s.tiles3d.is_some() { "yes" } else { "no" },
+        "tiles3d": tiles3d_word(&s),
         "texture": s.textures.as_ref().map_or("no", |t| if t.pair.is_some() { "yes, and a pair" } else { "yes" }),
         "warnings": s.warnings.len(),
         "work": s.work.summary(),
@@ -204,6 +204,20 @@ async fn health(State(s): State<ServerState>) -> Response {
     r.headers_mut()
         .insert(header::CACHE_CONTROL, HeaderValue::from_static("no-store"));
     r
+}
+
+/// `/health`'s word for the 3D Tiles: "yes" (given with --tiles, or made),
+/// "on request" (the tiles' source makes them on the first request),
+/// "pending" (the tiles are still being prepared), "no".
+fn tiles3d_word(s: &ServerState) -> &'static str {
+    if s.tiles3d.is_some() || matches!(s.tiles3d_made.get(), Some(Ok(_))) {
+        return "yes";
+    }
+    match s.tiles.get() {
+        Some(Some(t)) if t.source.makes_tiles3d() => "on request",
+        None if s.tiles.word() == "pending" => "pending",
+        _ => "no",
+    }
 }
 
 async fn meta(State(s): State<ServerState>, headers: HeaderMap) -> Result<Response> {
@@ -374,15 +388,42 @@ async fn tile(
     Ok(tile_response(&headers, plain, &etag, TILE_TYPE, &vary))
 }
 
+/// The 3D Tiles pyramid made in memory from the tiles' source, on the
+/// first request (later ones wait for it, then share it).
+async fn made_tiles3d(s: &ServerState) -> Result<std::sync::Arc<crate::tiles3d::Tiles3dFiles>> {
+    let source = tiles_of(s)?.source.clone();
+    if !source.makes_tiles3d() {
+        return Err(ServeError::NotFound(
+            "no 3D Tiles: serve a cota tiles --format 3dtiles pyramid with --tiles DIR or OUT.3tz"
+                .into(),
+        ));
+    }
+    let once = s.tiles3d_made.clone();
+    let made = tokio::task::spawn_blocking(move || {
+        once.get_or_init(|| match source.tiles3d() {
+            Some(Ok(files)) => Ok(std::sync::Arc::new(crate::tiles3d::Tiles3dFiles::Memory(
+                files.into_iter().collect(),
+            ))),
+            Some(Err(e)) => Err(e),
+            None => Err("the tiles' source makes no 3D Tiles".into()),
+        })
+        .clone()
+    })
+    .await
+    .map_err(|e| ServeError::Internal(format!("3D Tiles: {e}")))?;
+    made.map_err(|e| ServeError::Internal(format!("3D Tiles: {e}")))
+}
+
 /// `/3dtiles/{path}`: a file of the 3D Tiles pyramid given with `--tiles`.
 async fn tiles3d_file(
     State(s): State<ServerState>,
     Path(path): Path<String>,
     headers: HeaderMap,
 ) -> Result<Response> {
-    let files = s.tiles3d.clone().ok_or_else(|| {
-        ServeError::NotFound("no 3D Tiles: serve them with --tiles DIR or OUT.3tz".into())
-    })?;
+    let files = match s.tiles3d.clone() {
+        Some(f) => f,
+        None => made_tiles3d(&s).await?,
+    };
     let rel = path.clone();
     let bytes = tokio::task::spawn_blocking(move || files.get(&rel))
         .await

@@ -3,7 +3,9 @@
 //! from the pyramid's directory, or from a 3D Tiles Archive (`.3tz`) read
 //! through its index ([`cota_io::tiles::Tz3Reader`]), for CesiumJS's
 //! `Cesium3DTilesTerrainProvider` (`/cesium?3dtiles`), 3DTilesRendererJS or
-//! loaders.gl. Names starting with a dot (the run's manifest and journals)
+//! loaders.gl; or, without such a pyramid, made in memory from the
+//! on-demand tiles' hierarchy on the first request and kept
+//! ([`Tiles3dFiles::Memory`]). Names starting with a dot (the run's manifest and journals)
 //! are not served; paths with `..` are refused before any route.
 
 use std::path::{Path, PathBuf};
@@ -16,6 +18,9 @@ pub enum Tiles3dFiles {
     Dir(PathBuf),
     /// A 3D Tiles Archive.
     Archive(Tz3Reader),
+    /// Made in memory from the tiles' hierarchy on the first request
+    /// ([`crate::TileSource::tiles3d`]).
+    Memory(std::collections::HashMap<String, Vec<u8>>),
 }
 
 impl std::fmt::Debug for Tiles3dFiles {
@@ -23,6 +28,7 @@ impl std::fmt::Debug for Tiles3dFiles {
         match self {
             Tiles3dFiles::Dir(d) => write!(f, "Dir({})", d.display()),
             Tiles3dFiles::Archive(a) => write!(f, "Archive({} files)", a.len()),
+            Tiles3dFiles::Memory(m) => write!(f, "Memory({} files)", m.len()),
         }
     }
 }
@@ -72,6 +78,7 @@ impl Tiles3dFiles {
         }
         match self {
             Tiles3dFiles::Archive(a) => a.get(rel),
+            Tiles3dFiles::Memory(m) => Ok(m.get(rel).cloned()),
             Tiles3dFiles::Dir(d) => match std::fs::read(d.join(rel)) {
                 Ok(b) => Ok(Some(b)),
                 Err(e)

@@ -320,3 +320,55 @@ fn three_d_tiles_from_an_archive_or_a_directory_are_served_as_files() {
         assert_eq!(health["tiles3d"], "yes", "{health}");
     }
 }
+
+/// `cota serve DEM` without `--tiles`: the 3D Tiles pyramid made from the
+/// on-demand tiles' hierarchy on the first request, byte for byte the
+/// files `cota tiles --format 3dtiles --meshopt --normals` writes.
+#[test]
+fn three_d_tiles_are_made_on_request_as_cota_tiles_writes_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let dem = common::fixture("S29W072.hgt.zip");
+    let plain = dir.path().join("t3d");
+    let r = std::process::Command::new(env!("CARGO_BIN_EXE_cota"))
+        .args([
+            "tiles",
+            s(&dem),
+            "--format",
+            "3dtiles",
+            "--meshopt",
+            "--normals",
+            "-o",
+        ])
+        .arg(&plain)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let (child, addr) = serving(&[s(&dem)]);
+    // Once the tiles are prepared (the layer answers), before any 3D tile.
+    assert_eq!(get(&addr, "/tiles/layer.json").0, 200);
+    let (_, before) = get(&addr, "/health");
+    let files = [
+        "tileset.json",
+        "0/subtrees/0/0/0.subtree",
+        "0/6/38/21.glb",
+        "0/12/2456/1400.glb",
+    ];
+    let got: Vec<_> = files
+        .iter()
+        .map(|f| get(&addr, &format!("/3dtiles/{f}")))
+        .collect();
+    let (_, after) = get(&addr, "/health");
+    let missing = get(&addr, "/3dtiles/0/6/0/0.glb").0;
+    stop(child);
+    let word =
+        |b: &[u8]| serde_json::from_slice::<serde_json::Value>(b).unwrap()["tiles3d"].clone();
+    assert_eq!(
+        (word(&before), word(&after)),
+        ("on request".into(), "yes".into())
+    );
+    for (f, (status, body)) in files.iter().zip(got) {
+        assert_eq!(status, 200, "{f}");
+        assert_eq!(body, std::fs::read(plain.join(f)).unwrap(), "{f}");
+    }
+    assert_eq!(missing, 404);
+}

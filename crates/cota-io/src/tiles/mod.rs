@@ -82,7 +82,7 @@ pub use pyramid::{
     finish_tile, make_tile, tile_path, write_file_atomically, write_pyramid, MadeTile,
     PyramidError, PyramidOptions, PyramidReport, TileFormat, ZoomReport,
 };
-pub use pyramid3d::{make_glb_tile, tiles3d, write_tiles3d};
+pub use pyramid3d::{make_glb_tile, make_tiles3d, tiles3d, write_tiles3d};
 pub use quantized_mesh::{encode, encode_tile, EncodeError, Extensions, TileExtensions, TileFrame};
 pub use seams::{compare_border, edge_lists_match, BorderCheck, Neighbour};
 pub use shard::{reduce_shards, shard_record_path, write_plan, write_shard, ReduceReport};

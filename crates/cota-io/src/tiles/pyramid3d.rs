@@ -171,6 +171,55 @@ pub fn tiles3d(prep: &Prepared<'_>) -> Vec<TileId> {
     prep.tiles().chain(prep.fills()).collect()
 }
 
+/// The subtree files and, last, `tileset.json` of a pyramid whose tiles
+/// have `metas`: (path relative to the output, bytes).
+fn index_files(prep: &Prepared<'_>, metas: &HashMap<TileId, TileMeta>) -> Vec<(String, Vec<u8>)> {
+    let (first, last) = (prep.zooms().first(), prep.zooms().last());
+    let (e0, max_zoom) = (
+        first.map_or(0.0, |p| p.max_error_m),
+        last.map_or(0, |p| p.zoom),
+    );
+    let levels = subtree_levels(max_zoom);
+    let mut files: Vec<(String, Vec<u8>)> = subtrees(metas, levels)
+        .into_iter()
+        .map(|s| (s.rel_path(), subtree_bytes(s, levels, metas)))
+        .collect();
+    let lo = metas.values().map(|m| m.min_height_m).fold(0.0, f64::min);
+    let hi = metas.values().map(|m| m.max_height_m).fold(0.0, f64::max);
+    let tileset = tileset_json(max_zoom, e0, lo, hi);
+    files.push(("tileset.json".into(), format!("{tileset:#}\n").into_bytes()));
+    files
+}
+
+/// The whole 3D Tiles pyramid of `prep` in memory, as [`write_tiles3d`]
+/// would write it with `opts` (no check against the source): every GLB
+/// ([`tiles3d`]), the subtrees and `tileset.json`, each with its path
+/// relative to the output. For `cota serve`'s 3D Tiles made on request.
+///
+/// # Errors
+/// As [`write_tiles3d`], but nothing is written.
+pub fn make_tiles3d(
+    prep: &Prepared<'_>,
+    opts: &PyramidOptions,
+) -> Result<Vec<(String, Vec<u8>)>, PyramidError> {
+    if prep.zooms().first().is_none_or(|p| p.zoom != 0) {
+        return Err(PyramidError::Tiles(TilesError::BadOptions(
+            "3D Tiles terrain starts at the two zoom-0 roots (implicit tiling): expected a first zoom of 0".into(),
+        )));
+    }
+    let made: Vec<(TileId, Vec<u8>, TileMeta)> = tiles3d(prep)
+        .par_iter()
+        .map(|&t| make_glb_tile(prep, t, opts, None).map(|(m, meta)| (t, m.bytes, meta)))
+        .collect::<Result<_, _>>()?;
+    let metas: HashMap<TileId, TileMeta> = made.iter().map(|m| (m.0, m.2)).collect();
+    let index = index_files(prep, &metas);
+    Ok(made
+        .into_iter()
+        .map(|(t, bytes, _)| (glb_rel_path(t), bytes))
+        .chain(index)
+        .collect())
+}
+
 /// Writes every tile of `prep` and the fill tiles ([`tiles3d`]) under `out`
 /// as a 3D Tiles terrain pyramid, then its subtrees and `tileset.json`;
 /// `progress(done)` after each tile.
@@ -187,7 +236,7 @@ pub fn write_tiles3d(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<PyramidReport, PyramidError> {
     let t0 = Instant::now();
-    let (Some(first), Some(last)) = (prep.zooms().first(), prep.zooms().last()) else {
+    let (Some(first), Some(_)) = (prep.zooms().first(), prep.zooms().last()) else {
         return Err(PyramidError::Tiles(TilesError::BadOptions(
             "no zoom to write".into(),
         )));
@@ -213,19 +262,9 @@ pub fn write_tiles3d(
         })
         .collect::<Result<_, _>>()?;
     let metas: HashMap<TileId, TileMeta> = results.iter().map(|r| (r.0, r.1)).collect();
-    let levels = subtree_levels(last.zoom);
-    for s in subtrees(&metas, levels) {
-        let bytes = subtree_bytes(s, levels, &metas);
-        write_file_atomically(&out.join(s.rel_path()), &bytes, opts.force)?;
+    for (rel, bytes) in index_files(prep, &metas) {
+        write_file_atomically(&out.join(rel), &bytes, opts.force)?;
     }
-    let lo = metas.values().map(|m| m.min_height_m).fold(0.0, f64::min);
-    let hi = metas.values().map(|m| m.max_height_m).fold(0.0, f64::max);
-    let tileset = tileset_json(last.zoom, first.max_error_m, lo, hi);
-    write_file_atomically(
-        &out.join("tileset.json"),
-        format!("{tileset:#}\n").as_bytes(),
-        opts.force,
-    )?;
     let outcomes: Vec<Outcome> = results.into_iter().map(|r| r.2).collect();
     Ok(PyramidReport {
         zooms: fold(prep, &outcomes),

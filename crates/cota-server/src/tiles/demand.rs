@@ -17,7 +17,9 @@
 use axum::body::Bytes;
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, Source, TilerOptions};
 use cota_core::{GeoTransform, HeightGrid};
-use cota_io::tiles::{layer_json, make_tile, PyramidOptions};
+use cota_io::tiles::{
+    layer_json, make_tile, make_tiles3d, PyramidOptions, TileExtensions, TileFormat,
+};
 
 use super::{check_in_world, etag_of, Tile, TileId, TileSource};
 use crate::error::{Result, ServeError};
@@ -137,6 +139,22 @@ impl DemandTileSource {
 impl TileSource for DemandTileSource {
     fn layer_json(&self) -> &Bytes {
         &self.layer
+    }
+
+    /// `cota tiles --format 3dtiles --meshopt` of the same hierarchy (with
+    /// `--normals` when the quantized-mesh tiles carry normals), byte for
+    /// byte.
+    fn tiles3d(&self) -> Option<std::result::Result<super::Files, String>> {
+        let normals = self.options.extensions.normals;
+        let opts = PyramidOptions::DEFAULT
+            .with_extensions(TileExtensions::with(normals, false, false))
+            .with_meshopt(true)
+            .with_format(TileFormat::Tiles3d);
+        Some(make_tiles3d(self.prepared(), &opts).map_err(|e| e.to_string()))
+    }
+
+    fn makes_tiles3d(&self) -> bool {
+        true
     }
 
     fn has(&self, id: TileId) -> Result<()> {

@@ -112,6 +112,9 @@ pub struct Tile {
     pub etag: String,
 }
 
+/// Files of a pyramid: each path (relative to its root) and bytes.
+pub type Files = Vec<(String, Vec<u8>)>;
+
 /// Where tiles come from.
 pub trait TileSource: Send + Sync + 'static {
     /// The pyramid's `layer.json` as `cota tiles` writes it, served at
@@ -135,6 +138,20 @@ pub trait TileSource: Send + Sync + 'static {
     /// [`ServeError::CorruptTile`] / [`ServeError::Io`] for a stored tile
     /// that cannot be served.
     fn tile(&self, id: TileId) -> Result<Tile>;
+
+    /// The whole pyramid as 3D Tiles terrain, made in memory (path relative
+    /// to `/3dtiles/`, bytes), for a source that can make it; `None` (the
+    /// default) for one that cannot (a directory or an archive of
+    /// quantized-mesh tiles). May take long: the server calls it once, off
+    /// its async threads.
+    fn tiles3d(&self) -> Option<std::result::Result<Files, String>> {
+        None
+    }
+
+    /// True when [`TileSource::tiles3d`] can make them (cheap).
+    fn makes_tiles3d(&self) -> bool {
+        false
+    }
 }
 
 /// Checks that `b` can be a tile: gzip, or a quantized-mesh header followed

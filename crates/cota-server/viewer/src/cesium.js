@@ -16,9 +16,10 @@ const Cesium = window.Cesium;
 const status = document.getElementById('status');
 const help = document.getElementById('help');
 const plain = new URLSearchParams(location.search).has('plain');
-// `?3dtiles`: the 3D Tiles terrain given to `cota serve --tiles` (a
-// `cota tiles --format 3dtiles` directory or .3tz), through CesiumJS's
-// Cesium3DTilesTerrainProvider, instead of the quantized-mesh tiles.
+// `?3dtiles`: 3D Tiles terrain through CesiumJS's Cesium3DTilesTerrainProvider
+// instead of the quantized-mesh tiles: the pyramid given to `cota serve
+// --tiles` (a `cota tiles --format 3dtiles` directory or .3tz), or the one
+// the server makes from its tiles' hierarchy on the first request.
 const threeD = new URLSearchParams(location.search).has('3dtiles');
 const report = { ready: false, tileErrors: 0, tilesLoaded: false, error: null, plain, imagery: false };
 window.cotaCesium = report;
@@ -145,7 +146,7 @@ report.pixels = () => {
 async function main() {
   Cesium.Ion.defaultAccessToken = '';
   const h = await health();
-  if (threeD && h.tiles3d !== 'yes') throw new Error('this server has no 3D Tiles: run cota serve with --tiles DIR (or OUT.3tz) written by cota tiles --format 3dtiles');
+  if (threeD && !['yes', 'on request'].includes(h.tiles3d)) throw new Error('this server has no 3D Tiles: run cota serve on a geographic DEM, or with --tiles DIR (or OUT.3tz) written by cota tiles --format 3dtiles');
   if (!threeD && h.tiles !== 'yes') throw new Error(`this server has no tiles (${h.tiles}): run cota serve on a geographic DEM, or with --tiles DIR`);
   const layer = h.tiles === 'yes' ? await (await fetch('/tiles/layer.json')).json() : {};
   const imagery = !plain && h.imagery === 'yes' ? await (await fetch('/imagery.json')).json() : null;

@@ -474,9 +474,10 @@ async function antimeridianTest(browser) {
 
 /**
  * The CesiumJS page's `?3dtiles` view over `cota serve FIXTURE --tiles
- * OUT.3tz`: CesiumJS's Cesium3DTilesTerrainProvider loads the archive's
- * tileset, subtrees and GLBs from /3dtiles/ (all 200, at least two GLBs),
- * with no tile or console error, and draws relief. The archive is
+ * OUT.3tz`, then over `cota serve FIXTURE` (the pyramid made on the first
+ * request): CesiumJS's Cesium3DTilesTerrainProvider loads the tileset,
+ * subtrees and GLBs from /3dtiles/ (all 200, at least two GLBs), with no
+ * tile or console error, and draws relief. The archive is
  * $COTA_BROWSER_TILES3D (CI's, of the bundled fixture) or made here.
  */
 async function tiles3dServeTest(browser) {
@@ -488,7 +489,17 @@ async function tiles3dServeTest(browser) {
     const r = spawnSync(bin, ['tiles', fixture, '--format', '3dtiles', '--meshopt', '--normals', '-o', archive], { encoding: 'utf8' });
     if (r.status !== 0) throw new Error(`cota tiles --format 3dtiles failed (${r.status}): ${r.stderr}`);
   }
-  const s = await serve([fixture, '--tiles', archive]);
+  try {
+    await tiles3dPage(browser, [fixture, '--tiles', archive], 'cota serve --tiles OUT.3tz', 'cesium-3dtiles.png');
+    await tiles3dPage(browser, [fixture], 'cota serve (3D Tiles made on the first request)', 'cesium-3dtiles-on-request.png');
+  } finally {
+    if (dir) rmSync(dir, { recursive: true, force: true });
+  }
+}
+
+/** The `?3dtiles` page over `cota serve ARGS`, checked as [`tiles3dServeTest`] says; screenshot `shot`. */
+async function tiles3dPage(browser, args, what, shot) {
+  const s = await serve(args);
   const page = await browser.newPage({ viewport: CESIUM_VIEW });
   const errors = collectErrors(page);
   const got = [];
@@ -502,19 +513,18 @@ async function tiles3dServeTest(browser) {
     await settle(page);
     const r = await page.evaluate(() => ({ error: window.cotaCesium.error, threeD: window.cotaCesium.threeD,
       tileErrors: window.cotaCesium.tileErrors, px: window.cotaCesium.pixels() }));
-    await page.screenshot({ path: join(out, 'cesium-3dtiles.png') });
+    await page.screenshot({ path: join(out, shot) });
     const glbs = got.filter((t) => t.p.endsWith('.glb'));
     const bad = got.filter((t) => t.status !== 200);
-    check('CesiumJS page over cota serve --tiles OUT.3tz: 3D Tiles terrain loaded from /3dtiles/, relief drawn',
+    check(`CesiumJS page over ${what}: 3D Tiles terrain loaded from /3dtiles/, relief drawn`,
       !r.error && r.threeD && r.tileErrors === 0 && errors.length === 0 && glbs.length >= 2 && bad.length === 0
       && got.some((t) => t.p.endsWith('.subtree')) && glbs.every((t) => t.type === 'model/gltf-binary') && r.px.std > 5,
       `${got.length} files (${glbs.length} GLBs, ${bad.length} not 200), ${r.tileErrors} tile errors, ${errors.length} console errors${r.error ? `, ${r.error}` : ''}, `
-      + `luminance std ${r.px.std.toFixed(1)}; cesium-3dtiles.png`);
-    results.tiles3d_served = { files: got.length, glbs: glbs.length, std: r.px.std };
+      + `luminance std ${r.px.std.toFixed(1)}; ${shot}`);
+    results[shot] = { files: got.length, glbs: glbs.length, std: r.px.std };
   } finally {
     await page.close();
     await stop(s);
-    if (dir) rmSync(dir, { recursive: true, force: true });
   }
 }
 
