@@ -269,6 +269,18 @@ fn a_pair_across_the_antimeridian_is_served_as_one_grid() {
     }
 }
 
+/// `cota tiles DEM --format 3dtiles --meshopt EXTRA -o OUT`, which must succeed.
+fn tiles3d(dem: &std::path::Path, out: &std::path::Path, extra: &[&str]) {
+    let r = std::process::Command::new(env!("CARGO_BIN_EXE_cota"))
+        .args(["tiles", s(dem), "--format", "3dtiles", "--meshopt"])
+        .args(extra)
+        .arg("-o")
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+}
+
 /// `cota serve --tiles OUT.3tz` (and the same pyramid as a directory): the
 /// 3D Tiles files at /3dtiles/ with their media types, the run's hidden
 /// manifest and missing files 404, quantized-mesh tiles still made on
@@ -279,21 +291,7 @@ fn three_d_tiles_from_an_archive_or_a_directory_are_served_as_files() {
     let dem = common::fixture("S29W072.hgt.zip");
     let (archive, plain) = (dir.path().join("t.3tz"), dir.path().join("t3d"));
     for out in [&archive, &plain] {
-        let r = std::process::Command::new(env!("CARGO_BIN_EXE_cota"))
-            .args([
-                "tiles",
-                s(&dem),
-                "--format",
-                "3dtiles",
-                "--meshopt",
-                "--max-zoom",
-                "6",
-                "-o",
-            ])
-            .arg(out)
-            .output()
-            .unwrap();
-        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        tiles3d(&dem, out, &["--max-zoom", "6"]);
     }
     let glb = "0/6/38/21.glb";
     let want = std::fs::read(plain.join(glb)).unwrap();
@@ -329,20 +327,7 @@ fn three_d_tiles_are_made_on_request_as_cota_tiles_writes_them() {
     let dir = tempfile::tempdir().unwrap();
     let dem = common::fixture("S29W072.hgt.zip");
     let plain = dir.path().join("t3d");
-    let r = std::process::Command::new(env!("CARGO_BIN_EXE_cota"))
-        .args([
-            "tiles",
-            s(&dem),
-            "--format",
-            "3dtiles",
-            "--meshopt",
-            "--normals",
-            "-o",
-        ])
-        .arg(&plain)
-        .output()
-        .unwrap();
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    tiles3d(&dem, &plain, &["--normals"]);
     let (child, addr) = serving(&[s(&dem)]);
     // Once the tiles are prepared (the layer answers), before any 3D tile.
     assert_eq!(get(&addr, "/tiles/layer.json").0, 200);
