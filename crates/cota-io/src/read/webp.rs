@@ -5,7 +5,10 @@
 //! * A WebP file is a RIFF container: `RIFF`, a 32-bit size, `WEBP`, then a
 //!   `VP8 ` (lossy), `VP8L` (lossless) or `VP8X` (extended) chunk. The
 //!   dimensions are in the first chunk, at most 16 383 × 16 383, so they are
-//!   checked against the sample limit before the pixels are allocated.
+//!   checked against the sample limit before the pixels are allocated, and
+//!   against the file's size: lossless WebP codes a uniform image in no bits
+//!   per pixel, so a tiny file may claim a quarter of a billion pixels; more
+//!   than 1,024 pixels per byte of file (past 2²⁴) is refused as a bomb.
 //!   Decoding is `image-webp` (pure Rust).
 //! * Pixels are 8-bit RGB or RGBA and decoded with the encodings of `rgb`
 //!   ([`ReadOptions::png_encoding`]; without one, the plausible encoding).
@@ -76,6 +79,7 @@ fn decode_pixels(
     let mut dec = WebPDecoder::new(Cursor::new(bytes)).map_err(bad_webp)?;
     let (w, h) = dec.dimensions();
     crate::limits::check(u64::from(w), u64::from(h), opts)?;
+    check_ratio(u64::from(w) * u64::from(h), bytes.len())?;
     let channels = if dec.has_alpha() { 4 } else { 3 };
     let len = dec.output_buffer_size().ok_or(ReadErrorKind::TooLarge {
         width: u64::from(w),
@@ -85,6 +89,32 @@ fn decode_pixels(
     let mut buf = vec![0u8; len];
     dec.read_image(&mut buf).map_err(bad_webp)?;
     Ok((buf, w as usize, h as usize, channels))
+}
+
+/// Pixels a WebP file may hold whatever its size (a 4096 × 4096 tile).
+const FREE_PIXELS: u64 = 1 << 24;
+
+/// Pixels a WebP file may hold per byte of file beyond [`FREE_PIXELS`]:
+/// about zlib's bound (1,032 bytes out per byte in, so PNG and GeoTIFF
+/// bombs stay within it).
+const PIXELS_PER_BYTE: u64 = 1024;
+
+/// Refuses a decompression bomb before the pixels are allocated: lossless
+/// WebP codes a uniform image in no bits per pixel, so 34 bytes may claim
+/// 16 129 × 15 340 pixels (found by the fuzzer: 6 s and 2.7 GB to decode
+/// and refuse). Real terrain tiles hold a few pixels per byte; a flat one
+/// fits in [`FREE_PIXELS`].
+fn check_ratio(pixels: u64, file_bytes: usize) -> Result<(), ReadErrorKind> {
+    let allowed = FREE_PIXELS.max(PIXELS_PER_BYTE.saturating_mul(file_bytes as u64));
+    if pixels <= allowed {
+        return Ok(());
+    }
+    Err(malformed(
+        format!(
+            "at most {allowed} pixels in a WebP file of {file_bytes} bytes ({PIXELS_PER_BYTE} per byte, {FREE_PIXELS} at least)"
+        ),
+        format!("{pixels} pixels in its header: a decompression bomb"),
+    ))
 }
 
 /// Refuses a file shorter than its RIFF header says (a truncated download).

@@ -71,6 +71,26 @@ fn truncated_and_gray_webp_are_refused() {
     assert_contains(&msg, &["gray16", "terrarium"]);
 }
 
+/// A 34-byte lossless WebP whose header claims 16 129 × 15 340 pixels (found
+/// by `cargo fuzz run read_webp` without a sanitizer: it took 6 s and 2.7 GB
+/// to decode before its heights were refused) is refused as a bomb at once,
+/// and the bundled tile (512², 1,024 pixels per byte allowed) still reads.
+#[test]
+fn a_webp_bomb_is_refused_before_its_pixels_are_allocated() {
+    let bomb: [u8; 34] = [
+        0x52, 0x49, 0x46, 0x46, 0x1a, 0x00, 0x00, 0x00, 0x57, 0x45, 0x42, 0x50, 0x56, 0x50, 0x38,
+        0x4c, 0x0e, 0x00, 0x07, 0x00, 0x2f, 0x00, 0xff, 0xfa, 0x0e, 0xcd, 0x55, 0x20, 0x22, 0x02,
+        0x51, 0xc0, 0x88, 0x04,
+    ];
+    let dir = tmp();
+    let p = write_file(dir.path(), "bomb.webp", &bomb);
+    let t = std::time::Instant::now();
+    let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
+    assert_contains(&msg, &["bomb", "247418860 pixels", "34 bytes"]);
+    assert!(t.elapsed().as_secs_f64() < 1.0, "{:?}", t.elapsed());
+    read(&fixture("terrarium.webp"), &ReadOptions::DEFAULT);
+}
+
 /// The shared Mapzen GeoTIFF tile 14/10348/7801 (512², EPSG:3857) cut into
 /// its four zoom-15 tiles, each a lossless Terrarium WebP.
 fn zoom15_tiles() -> Option<(Dem, Vec<ArchiveTile>)> {
