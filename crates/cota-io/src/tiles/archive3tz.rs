@@ -216,16 +216,8 @@ fn check_offsets(partial: &Path, files: &[String]) -> Result<(), PyramidError> {
         std::io::Read::read_to_end(&mut e, &mut v).map_err(io_err(partial))?;
         v
     };
-    let offsets: std::collections::HashMap<[u8; 16], u64> = index
-        .chunks_exact(24)
-        .map(|r| {
-            let mut h = [0u8; 16];
-            h.copy_from_slice(&r[..16]);
-            let mut o = [0u8; 8];
-            o.copy_from_slice(&r[16..]);
-            (h, u64::from_le_bytes(o))
-        })
-        .collect();
+    let offsets: std::collections::HashMap<[u8; 16], u64> =
+        parse_index(&index).into_iter().collect();
     for i in 0..files.len() {
         let e = zip.by_index_raw(i).map_err(zip_err(partial))?;
         let name = e.name().map_err(zip_err(partial))?;
@@ -289,14 +281,7 @@ impl Tz3Reader {
         let mut raw = Vec::new();
         std::io::Read::read_to_end(&mut e, &mut raw).map_err(io_err(path))?;
         drop(e);
-        let index = raw
-            .chunks_exact(24)
-            .map(|r| {
-                let mut h = [0u8; 16];
-                h.copy_from_slice(&r[..16]);
-                (h, u64::from_le_bytes(r[16..].try_into().unwrap_or([0; 8])))
-            })
-            .collect();
+        let index = parse_index(&raw);
         Ok(Tz3Reader {
             file: std::sync::Mutex::new(file),
             index,
@@ -361,6 +346,17 @@ impl Tz3Reader {
         }
         Ok(None)
     }
+}
+
+/// The index's records: the MD5 of each path and its local header's offset.
+fn parse_index(raw: &[u8]) -> Vec<([u8; 16], u64)> {
+    raw.chunks_exact(24)
+        .map(|r| {
+            let mut h = [0u8; 16];
+            h.copy_from_slice(&r[..16]);
+            (h, u64::from_le_bytes(r[16..].try_into().unwrap_or([0; 8])))
+        })
+        .collect()
 }
 
 /// The index's order: the hash as two little-endian u64s, high half first.
