@@ -289,6 +289,7 @@ fn to_grid(
         .unwrap_or(1);
     let cols = profiles.len();
     crate::limits::check(cols as u64, rows, opts)?;
+    check_fill(profiles, cols as u64 * rows)?;
     let (rows, x0) = (rows as usize, profiles.first().map_or(0.0, |p| p.x));
     let mut heights = vec![f32::NAN; rows * cols];
     for (c, p) in profiles.iter().enumerate() {
@@ -313,6 +314,34 @@ fn to_grid(
         known: true,
     };
     Ok(HeightGrid::new(cols, rows, heights, georef)?)
+}
+
+/// Grid samples the profiles may leave void beyond [`FREE_SAMPLES`], per
+/// elevation they hold. A real DEM's profiles fill most of their bounding box
+/// (a 7.5-minute quad in UTM is skewed by a few degrees; a 1-degree DEM is
+/// full).
+const SAMPLES_PER_ELEVATION: u64 = 64;
+
+/// Samples any grid may have, however few elevations fill it.
+const FREE_SAMPLES: u64 = 1 << 24;
+
+/// Refuses profiles placed so far apart that a few elevations span a huge
+/// grid of voids (found by the fuzzer: a profile whose `y` lies millions of
+/// rows above the others made a small file allocate gigabytes).
+fn check_fill(profiles: &[Profile], samples: u64) -> Result<(), ReadErrorKind> {
+    let elevations: u64 = profiles.iter().map(|p| p.values.len() as u64).sum();
+    let allowed = FREE_SAMPLES.max(SAMPLES_PER_ELEVATION.saturating_mul(elevations));
+    if samples <= allowed {
+        return Ok(());
+    }
+    Err(malformed(
+        format!(
+            "profiles that fill their grid (at most {SAMPLES_PER_ELEVATION} grid samples per elevation, {FREE_SAMPLES} at least)"
+        ),
+        format!(
+            "{elevations} elevations spread over {samples} samples: the profiles' x and y are far apart"
+        ),
+    ))
 }
 
 #[cfg(test)]

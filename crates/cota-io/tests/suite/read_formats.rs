@@ -606,3 +606,24 @@ fn usgs_dem_with_a_wrong_profile_count() {
     let (msg, _) = error_of(&p, &ReadOptions::DEFAULT);
     assert_contains(&msg, &["999999 profiles"]);
 }
+
+#[test]
+fn usgs_dem_profiles_far_apart_are_refused_before_their_grid_is_allocated() {
+    // Two 2-sample profiles, the second 2^26 rows above the first: 2^27
+    // samples (512 MB) of voids around 4 elevations. Found by the fuzzer.
+    let s = cota_fixtures::bundled_tile().crop(0, 0, 2, 2);
+    let mut bytes = formats::usgs_dem(&s.heights, 2, -72.0, -29.0, 3.0, 2);
+    let y = -29.0 * 3600.0 + 3.0 * f64::from(1u32 << 26);
+    let field = format!("{:>24}", format!("{y:.15E}").replace('E', "D"));
+    // The second B record starts at 2048; its y follows 4 six-wide integers
+    // and its x.
+    bytes[2048 + 48..2048 + 72].copy_from_slice(field.as_bytes());
+    let dir = tmp();
+    let p = write_file(dir.path(), "apart.dem", &bytes);
+    let opts = ReadOptions::DEFAULT.with_max_samples(Some(1 << 30));
+    let (msg, _) = error_of(&p, &opts);
+    assert_contains(
+        &msg,
+        &["apart.dem", "4 elevations spread over 134217732 samples"],
+    );
+}
