@@ -1212,3 +1212,31 @@ impl Builder {
         out
     }
 }
+
+/// One empty strip (byte count 0) declaring 16384² samples: refused before
+/// 1 GiB of voids is allocated (the fuzzer's case was 292 bytes and 4 GB).
+#[test]
+fn a_sparse_bomb_is_refused_before_its_samples_are_allocated() {
+    let tiff = Builder::le()
+        .long(256, &[16384])
+        .long(257, &[16384])
+        .short(258, &[32])
+        .short(339, &[3])
+        .short(262, &[1])
+        .strips(vec![Vec::new()]);
+    let msg = err_bytes(&tiff, "sparse-bomb.tif");
+    assert!(
+        msg.contains("sparse-bomb.tif")
+            && msg.contains("268435456 samples in blocks with a byte count of 0"),
+        "{msg}"
+    );
+    // A small sparse grid is read (as voids or zeros).
+    let small = Builder::le()
+        .long(256, &[64])
+        .long(257, &[64])
+        .short(258, &[8])
+        .short(262, &[1])
+        .strips(vec![Vec::new()]);
+    let (got, _) = heights(&small);
+    assert_eq!(got.len(), 64 * 64);
+}

@@ -351,6 +351,7 @@ impl Layout {
             self.check_chunk(&chunk, file_len)?;
             plan.push(chunk);
         }
+        check_sparse(&plan, file_len)?;
         Ok(plan)
     }
 
@@ -419,6 +420,36 @@ impl Layout {
         }
         Ok(())
     }
+}
+
+/// Samples sparse chunks may hold whatever the file's size.
+const FREE_SPARSE_SAMPLES: u64 = 1 << 24;
+
+/// Samples sparse chunks may hold per byte of file beyond
+/// [`FREE_SPARSE_SAMPLES`]: a GDAL file with empty blocks holds its data
+/// somewhere, at most 1,024 samples per byte as a Deflate bomb would.
+const SPARSE_SAMPLES_PER_BYTE: u64 = 1024;
+
+/// Refuses sparse chunks (byte count 0) that make a small file a grid of
+/// voids of any size: 292 bytes declaring 16 391 × 64 258 samples, all in
+/// one empty strip, made the reader allocate and fill 4 GB (found by the
+/// fuzzer).
+fn check_sparse(plan: &[ChunkPlan], file_len: u64) -> Result<(), ReadErrorKind> {
+    let sparse: u64 = plan
+        .iter()
+        .filter(|c| c.sparse)
+        .map(|c| c.width as u64 * c.height as u64)
+        .sum();
+    let allowed = FREE_SPARSE_SAMPLES.max(SPARSE_SAMPLES_PER_BYTE.saturating_mul(file_len));
+    if sparse <= allowed {
+        return Ok(());
+    }
+    Err(malformed(
+        format!(
+            "at most {allowed} samples in empty (sparse) blocks of a file of {file_len} bytes ({SPARSE_SAMPLES_PER_BYTE} per byte, {FREE_SPARSE_SAMPLES} at least)"
+        ),
+        format!("{sparse} samples in blocks with a byte count of 0: a decompression bomb"),
+    ))
 }
 
 /// Fails with [`ReadErrorKind::TooLarge`] for dimensions over the grid limit.
