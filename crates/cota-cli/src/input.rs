@@ -97,7 +97,7 @@ pub fn fill(grid: &mut HeightGrid, voids: Voids) -> anyhow::Result<FillReport> {
     filled.context("void policy")
 }
 
-fn read_options(a: &ReadArgs) -> anyhow::Result<ReadOptions> {
+pub fn read_options(a: &ReadArgs) -> anyhow::Result<ReadOptions> {
     warn_old_zoom_flag();
     let enc = a.encoding.map(|e| match e {
         Encoding::TerrainRgb => PngEncoding::TerrainRgb,
@@ -219,11 +219,15 @@ pub fn assumed_cell_m(files: &[FileInfo]) -> Option<f64> {
 /// `--zoom` (the PMTiles input's zoom) is `--input-zoom` now: `cota tiles`
 /// has zooms of its own (`--min-zoom`, `--max-zoom`).
 fn warn_old_zoom_flag() {
-    if std::env::args().any(|s| s == "--zoom" || s.starts_with("--zoom=")) {
-        eprintln!(
-            "cota: warning: --zoom is deprecated: it is the PMTiles input's zoom, now --input-zoom \
-             (the output's zooms are --min-zoom/--max-zoom)"
-        );
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    let old = std::env::args().any(|s| s == "--zoom" || s.starts_with("--zoom="));
+    if old {
+        ONCE.call_once(|| {
+            eprintln!(
+                "cota: warning: --zoom is deprecated: it is the PMTiles input's zoom, now --input-zoom \
+                 (the output's zooms are --min-zoom/--max-zoom)"
+            );
+        });
     }
 }
 

@@ -14,10 +14,10 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::tiles::{LatticeOptions, TilerOptions, TilesError};
+use cota_core::tiles::TilesError;
 use cota_core::HeightGrid;
 use cota_io::stream_file::MAGIC;
-use cota_io::tiles::{PyramidOptions, TileExtensions};
+use cota_io::tiles::{PyramidOptions, TileExtensions, TileSettings};
 use cota_server::texture::{PAIR_URL, TEXTURE_URL};
 use cota_server::tiles3d::{is_tiles3d, Tiles3dFiles};
 use cota_server::{
@@ -320,7 +320,10 @@ fn start_background(state: &ServerState, source: Source, tiles_given: bool, hole
 /// longitude/latitude, through its projection otherwise (a grid whose CRS
 /// cannot be placed on the Earth gets none: said, not fatal).
 fn demand_source(grid: &HeightGrid) -> Result<DemandTileSource, ServeError> {
-    let (lattice, tiler) = (&LatticeOptions::DEFAULT, &TilerOptions::DEFAULT);
+    // `cota tiles`' default settings (the job's), so that its tiles are
+    // the ones `cota tiles` writes by default.
+    let settings = TileSettings::DEFAULT;
+    let (lattice, tiler) = (&settings.lattice_options(), &settings.tiler_options());
     let g = grid.georef();
     let transform = cota_io::crs::transform_for_grid(g, grid.width(), grid.height());
     match transform {

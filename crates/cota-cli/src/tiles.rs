@@ -5,19 +5,18 @@
 use std::time::Instant;
 
 use anyhow::Context;
-use cota_core::tiles::plan::{plan, plan_with};
+use cota_core::tiles::plan::plan_with;
 use cota_core::tiles::sources::deviation_of_with_progress;
 use cota_core::tiles::{
-    addressed, resampling_deviation_with_progress, shard_plan, BandCorners, Deviation,
-    GeographicScheme, Lattice, LatticeFrame, Prepared, Shard, Source, SourcePart, TileRange,
-    TilerOptions, ZoomPlan,
+    addressed, resampling_deviation_with_progress, shard_plan, Deviation, GeographicScheme,
+    Lattice, LatticeFrame, Prepared, Shard, Source, SourcePart, TileRange, TilerOptions, ZoomPlan,
 };
 use cota_core::{HeightGrid, LonLat};
 use cota_io::tiles::drawn::{Against, SourceGrid};
 use cota_io::tiles::{
     is_3tz, is_mbtiles, plan_layout_path, plan_part_path, read_shard_frame, reduce_shards,
-    shard_frame_path, write_output, write_plan, write_shard, PyramidOptions, PyramidReport,
-    ShardFrame, TileExtensions, TileFormat,
+    shard_frame_path, write_output, write_shard, PyramidOptions, PyramidReport, ShardFrame,
+    TileExtensions, TileFormat, TileJob,
 };
 use serde_json::json;
 
@@ -38,7 +37,7 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         let frame = read_shard_frame(&a.output, n)
             .with_context(|| format!("reading the plan step's frame in {}", a.output.display()))?;
         if let Some(f) = frame {
-            return run_part(a, &f, &opts, i);
+            return run_part(a, &f, i);
         }
     }
     if a.plan {
@@ -49,8 +48,10 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         }
         // Without the whole input where the files allow it (each file
         // alone, then each shard's part: in turn, or as --part processes).
-        if let Some(layout) = tiles_part::layout(a, &opts)? {
-            return plan_in_parts(a, &opts, layout);
+        let input = tiles_part::CliInput::new(a)?;
+        let job = tiles_part::job(a, &input);
+        if let Some(layout) = job.layout()? {
+            return plan_in_parts(a, &job, &opts, layout);
         }
         if a.layout || a.part.is_some() {
             return whole_input_plan(a);
@@ -357,14 +358,10 @@ fn finish(
 }
 
 /// `--shard I/N` after the plan step: only the shard's part of the lattice.
-fn run_part(
-    a: &TilesArgs,
-    f: &ShardFrame,
-    opts: &TilerOptions,
-    index: u32,
-) -> anyhow::Result<std::process::ExitCode> {
+fn run_part(a: &TilesArgs, f: &ShardFrame, index: u32) -> anyhow::Result<std::process::ExitCode> {
     let t0 = Instant::now();
-    let part = tiles_part::load_part(a, f, opts, index)?;
+    let input = tiles_part::CliInput::new(a)?;
+    let part = tiles_part::job(a, &input).load_part(f, index, a.normals)?;
     let name = part.files_read.join(" + ");
     let t_prep = Instant::now();
     let source = part.source_part();
@@ -399,18 +396,18 @@ fn plan_step(
     opts: &TilerOptions,
     files: Vec<(String, [usize; 4])>,
 ) -> anyhow::Result<std::process::ExitCode> {
-    let zooms = plan(lattice, opts)?;
-    let frame = tiles_part::frame_of(a, lattice, &zooms, files);
-    let mut corners =
-        BandCorners::new(lattice.window(), lattice.scheme().cells_at(frame.band_zoom));
-    corners.fill_from(lattice);
-    write_plan_step(a, opts, &frame, &corners)
+    let input = tiles_part::CliInput::new(a)?;
+    let frame = tiles_part::job(a, &input)
+        .plan_whole(lattice, files)
+        .with_context(|| format!("writing {}", a.output.display()))?;
+    print_plan_step(a, opts, &frame)
 }
 
 /// `--plan` with a layout: `--layout` alone, `--part I`, or the whole plan
 /// step from the parts already done and the others in turn.
 fn plan_in_parts(
     a: &TilesArgs,
+    job: &TileJob<'_, tiles_part::CliInput<'_>>,
     opts: &TilerOptions,
     layout: ShardFrame,
 ) -> anyhow::Result<std::process::ExitCode> {
@@ -432,7 +429,7 @@ fn plan_in_parts(
         return Ok(std::process::ExitCode::SUCCESS);
     }
     if let Some(i) = a.part {
-        let r = tiles_part::plan_part(a, &layout, opts, i)?;
+        let r = job.plan_part(&layout, i)?;
         let path = plan_part_path(&a.output, i, n);
         if a.json {
             let v = json!({"part": i, "shards": n, "skipped": r.skipped, "files_read": r.files_read, "wrote": path});
@@ -448,7 +445,8 @@ fn plan_in_parts(
         }
         return Ok(std::process::ExitCode::SUCCESS);
     }
-    let (frame, _, _) = tiles_part::finish(a, layout, opts)
+    let (frame, _, _) = job
+        .finish_plan(layout)
         .with_context(|| format!("writing the plan step in {}", a.output.display()))?;
     print_plan_step(a, opts, &frame)
 }
@@ -483,18 +481,6 @@ fn whole_input_plan(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         println!("plan        {why}");
     }
     Ok(std::process::ExitCode::SUCCESS)
-}
-
-/// Writes the plan step's frame and band corners, and prints the plan.
-fn write_plan_step(
-    a: &TilesArgs,
-    opts: &TilerOptions,
-    frame: &ShardFrame,
-    corners: &BandCorners,
-) -> anyhow::Result<std::process::ExitCode> {
-    write_plan(&a.output, frame, corners)
-        .with_context(|| format!("writing {}", a.output.display()))?;
-    print_plan_step(a, opts, frame)
 }
 
 /// Prints the plan of the plan step's frame.

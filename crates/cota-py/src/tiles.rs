@@ -6,34 +6,115 @@
 
 use std::path::{Path, PathBuf};
 
-use cota_core::tiles::plan::plan;
-use cota_core::tiles::{
-    addressed, shard_plan, BandCorners, ErrorSchedule, Lattice, LatticeOptions, Prepared,
-    TilerOptions,
-};
-use cota_core::{FillOptions, HeightGrid};
+use cota_core::tiles::{addressed, shard_plan, Lattice, Prepared};
+use cota_core::HeightGrid;
+use cota_io::read_region;
 use cota_io::tiles::{
-    check_output, file_extents, finish_plan, frame_of, load_part, mosaic_frame, plan_layout,
-    plan_layout_or, read_part_files, read_part_files_in_turn, read_shard_frame, reduce_shards,
-    run_plan_part, shard_frame_path, shard_record_path, summarize_files, write_output, write_plan,
-    write_shard, PartError, PlanPartReport, PyramidOptions, PyramidReport, ShardFrame,
-    TileExtensions, TileFormat,
+    check_output, file_extents, reduce_shards, shard_frame_path, shard_record_path, write_output,
+    write_shard, PartError, PathsInput, PlanPartReport, PyramidError, PyramidOptions,
+    PyramidReport, ShardFrame, TileExtensions, TileFormat, TileJob, TileSettings,
 };
-use cota_io::{read_region, RegionOptions};
+use pyo3::conversion::FromPyObjectOwned;
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use crate::errors;
 
-/// The settings that decide the tiles (as `cota tiles`' flags).
-#[derive(Clone, Copy)]
-struct Settings {
-    min_zoom: u8,
-    max_zoom: Option<u8>,
-    tile_cells: u32,
-    error: ErrorSchedule,
+/// The keyword arguments that decide the tiles (`cota tiles`' flags), with
+/// every tiling function; [`PYRAMID`]'s too with `tiles` and
+/// `tiles_plan_step`.
+const SETTINGS: [&str; 5] = [
+    "min_zoom",
+    "max_zoom",
+    "tile_cells",
+    "error_factor",
+    "max_error_m_at_max_zoom",
+];
+
+/// The keyword arguments of a pyramid's bytes.
+const PYRAMID: [&str; 9] = [
+    "normals",
+    "watermask",
+    "metadata",
+    "gzip",
+    "force",
+    "check",
+    "format",
+    "meshopt",
+    "skirts",
+];
+
+/// A tiling function's keyword arguments.
+struct Keywords<'a, 'py> {
+    func: &'static str,
+    given: Option<&'a Bound<'py, PyDict>>,
 }
 
+impl<'a, 'py> Keywords<'a, 'py> {
+    /// The keywords `given` to `func`; a keyword none of `allowed` names is
+    /// refused, as Python would.
+    fn of(
+        func: &'static str,
+        given: Option<&'a Bound<'py, PyDict>>,
+        allowed: &[&[&str]],
+    ) -> PyResult<Self> {
+        for k in given.iter().flat_map(|d| d.keys()) {
+            let k: String = k.extract()?;
+            if !allowed.iter().any(|names| names.contains(&k.as_str())) {
+                return Err(PyTypeError::new_err(format!(
+                    "{func}() got an unexpected keyword argument '{k}'"
+                )));
+            }
+        }
+        Ok(Self { func, given })
+    }
+
+    /// The value of `name`, or `default` when not given (or `None`).
+    fn get<T: FromPyObjectOwned<'py>>(&self, name: &str, default: T) -> PyResult<T> {
+        match self.given.map(|d| d.get_item(name)).transpose()?.flatten() {
+            Some(v) if !v.is_none() => v.extract::<T>().map_err(|e| {
+                let e: PyErr = e.into();
+                PyTypeError::new_err(format!("{}(): argument '{name}': {e}", self.func))
+            }),
+            _ => Ok(default),
+        }
+    }
+
+    /// The settings that decide the tiles.
+    fn settings(&self) -> PyResult<TileSettings> {
+        let d = TileSettings::DEFAULT;
+        Ok(TileSettings {
+            min_zoom: self.get("min_zoom", d.min_zoom)?,
+            max_zoom: self.get("max_zoom", None)?,
+            tile_cells: self.get("tile_cells", d.tile_cells)?,
+            error: TileSettings::schedule(
+                self.get("error_factor", None)?,
+                self.get("max_error_m_at_max_zoom", None)?,
+            ),
+        })
+    }
+
+    /// The options of the pyramid's bytes.
+    fn pyramid(&self) -> PyResult<PyramidOptions> {
+        let ext = TileExtensions::with(
+            self.get("normals", false)?,
+            self.get("watermask", false)?,
+            self.get("metadata", false)?,
+        );
+        let format: String = self.get("format", "quantized-mesh".to_string())?;
+        Ok(PyramidOptions::DEFAULT
+            .with_extensions(ext)
+            .with_gzip(self.get("gzip", false)?)
+            .with_force(self.get("force", false)?)
+            .with_check(self.get("check", false)?)
+            .with_meshopt(self.get("meshopt", false)?)
+            .with_skirts(self.get("skirts", true)?)
+            .with_format(format_of(&format)?))
+    }
+}
+
+/// One path or a list of them.
 fn paths_of(paths: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
     match paths.extract::<PathBuf>() {
         Ok(p) => Ok(vec![p]),
@@ -41,67 +122,34 @@ fn paths_of(paths: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
     }
 }
 
-fn schedule(factor: Option<f64>, at_max: Option<f64>) -> ErrorSchedule {
-    match (factor, at_max) {
-        (_, Some(e)) => ErrorSchedule::AtMaxZoom { max_error_m: e },
-        (q, None) => ErrorSchedule::Cesium {
-            factor: q.unwrap_or(1.0),
-        },
-    }
-}
-
-/// How the inputs are read: voids filled (harmonic, as `cota tiles`).
-fn region_options() -> RegionOptions {
-    RegionOptions::DEFAULT.with_fill(Some(FillOptions::DEFAULT))
+/// The input files `paths` (one path or a list of them).
+fn input_of(paths: &Bound<'_, PyAny>) -> PyResult<PathsInput> {
+    Ok(PathsInput {
+        paths: paths_of(paths)?,
+    })
 }
 
 /// Each input file and its samples in the mosaic (`file_extents`).
 type FileExtents = Vec<(String, [usize; 4])>;
 
-/// The lattice's options of the settings.
-fn lattice_options(s: &Settings) -> LatticeOptions {
-    LatticeOptions::DEFAULT
-        .with_max_zoom(s.max_zoom)
-        .with_tile_cells(s.tile_cells)
-        .with_error(s.error)
-}
-
-/// The plan step's layout under `out` (the frame before the statistics,
-/// from the files' shapes), made and written there when missing; `None`
-/// when a shard must read every file (one file, voids, holes).
-fn layout_of(
-    paths: &[PathBuf],
-    s: &Settings,
-    out: &Path,
-    shards: u32,
-) -> Result<Option<ShardFrame>, PartError> {
-    let key = frame_key(paths, s);
-    plan_layout_or(out, &key, shards, || {
-        let ro = region_options();
-        let files = summarize_files(paths, &ro.read)?;
-        let Some(m) = mosaic_frame(&files, &lattice_options(s), &ro.mosaic)? else {
-            return Ok(None);
-        };
-        Ok(Some(plan_layout(key.clone(), shards, &m, &tiler(s))?))
-    })
-}
-
 /// A part's error as Python's.
 fn part_error(e: PartError) -> PyErr {
     match e {
         PartError::Read(e) => errors::read(e),
+        PartError::Frame(PyramidError::Tiles(e)) => errors::mesh(e),
         PartError::Frame(e) => errors::write(e),
     }
 }
 
-/// Reads, fills the voids and resamples; with where each file lies in the
-/// mosaic (empty when a shard must read every file: one file, voids, holes).
+/// Reads, fills the voids and resamples: the source, its lattice, and
+/// where each file lies in the mosaic (empty when a shard must read every
+/// file: one file, voids, holes).
 fn lattice_and_files(
     paths: &[PathBuf],
-    s: &Settings,
+    s: &TileSettings,
 ) -> PyResult<(HeightGrid, Lattice, FileExtents)> {
-    let region = read_region(paths, &region_options()).map_err(errors::read)?;
-    let lat = Lattice::resample(&region.grid, &lattice_options(s)).map_err(errors::mesh)?;
+    let region = read_region(paths, &PathsInput::region_options()).map_err(errors::read)?;
+    let lat = Lattice::resample(&region.grid, &s.lattice_options()).map_err(errors::mesh)?;
     let files = if region.voids > 0 || region.hole_samples > 0 {
         Vec::new()
     } else {
@@ -110,33 +158,15 @@ fn lattice_and_files(
     Ok((region.grid, lat, files))
 }
 
-/// Reads, fills the voids and resamples: the source and its lattice.
-fn lattice(paths: &[PathBuf], s: &Settings) -> PyResult<(HeightGrid, Lattice)> {
-    lattice_and_files(paths, s).map(|(grid, lat, _)| (grid, lat))
-}
-
-/// What decides the lattice and the plan: a shard refuses a plan step's
-/// frame made with other settings (or by the `cota` CLI).
-fn frame_key(paths: &[PathBuf], s: &Settings) -> String {
-    format!(
-        "cota-py {:?}",
-        (paths, s.min_zoom, s.max_zoom, s.tile_cells, s.error)
-    )
-}
-
 /// Shard `i` after the plan step: reads only the files of its part.
 fn write_part(
-    paths: &[PathBuf],
-    s: &Settings,
-    out: &std::path::Path,
+    job: &TileJob<'_, PathsInput>,
     opts: &PyramidOptions,
     f: &ShardFrame,
     i: u32,
 ) -> PyResult<(u64, PyramidReport, Vec<String>)> {
-    let read = |files| read_part_files(paths, files, &region_options());
     let normals = opts.extensions.normals;
-    let part =
-        load_part(out, f, &frame_key(paths, s), &tiler(s), i, normals, read).map_err(part_error)?;
+    let part = job.load_part(f, i, normals).map_err(part_error)?;
     let prep = Prepared::new_part(
         &part.lattice,
         part.source_part(),
@@ -146,7 +176,7 @@ fn write_part(
     .map_err(errors::mesh)?;
     let frame = Some((f, part.source_part()));
     let report =
-        write_shard(&prep, out, opts, &part.shard, frame, &|_| {}).map_err(errors::write)?;
+        write_shard(&prep, job.out, opts, &part.shard, frame, &|_| {}).map_err(errors::write)?;
     Ok((part.shard.tile_count(), report, part.files_read))
 }
 
@@ -161,95 +191,97 @@ fn format_of(name: &str) -> PyResult<TileFormat> {
     }
 }
 
-fn tiler(s: &Settings) -> TilerOptions {
-    TilerOptions::DEFAULT
-        .with_min_zoom(s.min_zoom)
-        .with_error(s.error)
+/// Refuses a shard `(i, n)` of a 3D Tiles pyramid or past the shards.
+fn check_shard(shard: Option<(u32, u32)>, opts: &PyramidOptions) -> PyResult<()> {
+    let Some((i, n)) = shard else {
+        return Ok(());
+    };
+    if opts.format == TileFormat::Tiles3d {
+        return Err(errors::value(
+            "shards write quantized-mesh pyramids: expected format=\"quantized-mesh\" with shard",
+        ));
+    }
+    if i >= n {
+        return Err(errors::value(format!(
+            "expected shard (i, n) with 0 <= i < n, found ({i}, {n})"
+        )));
+    }
+    Ok(())
+}
+
+/// The job of `paths` into `out` with the keywords' settings.
+fn job<'a>(
+    input: &'a PathsInput,
+    out: &'a Path,
+    shards: u32,
+    kw: &Keywords<'_, '_>,
+) -> PyResult<TileJob<'a, PathsInput>> {
+    Ok(TileJob {
+        input,
+        settings: kw.settings()?,
+        out,
+        shards: at_least_one(shards)?,
+    })
+}
+
+/// The whole pyramid, or shard `(i, n)` of it without a plan step (every
+/// shard reads the whole input): tiles in it and the report.
+fn write_whole(
+    job: &TileJob<'_, PathsInput>,
+    opts: &PyramidOptions,
+    shard: Option<u32>,
+) -> PyResult<(u64, PyramidReport)> {
+    let (grid, lat, _) = lattice_and_files(&job.input.paths, &job.settings)?;
+    let prep = Prepared::new(&lat, &grid, &job.settings.tiler_options()).map_err(errors::mesh)?;
+    let report = match shard {
+        Some(i) => {
+            let part = shard_plan(prep.zooms(), job.shards)
+                .map_err(errors::value)?
+                .swap_remove(i as usize);
+            write_shard(&prep, job.out, opts, &part, None, &|_| {})
+        }
+        None => write_output(&prep, job.out, opts, None, &|_| {}),
+    }
+    .map_err(errors::write)?;
+    Ok((prep.tile_count(), report))
 }
 
 /// Writes a pyramid of the DEM file(s) `paths` under `out`
 /// (`out/layer.json`, `out/{z}/{x}/{y}.terrain`), byte for byte as
 /// `cota tiles` with the same settings: into one MBTiles archive when `out`
 /// ends in `.mbtiles`; with `format="3dtiles"` (`meshopt`, `skirts`) as 3D
-/// Tiles terrain, into one 3D Tiles Archive when `out` ends in `.3tz`. With `shard=(i, n)` only shard `i`
-/// of `n` (see `tiles_plan`) and its record; `tiles_reduce(out, n)` then
-/// writes `layer.json`. Returns a dict: `tiles`, `written`, `skipped`,
-/// `bytes`. Raises `ReadError`, `MeshError` or `WriteError`.
+/// Tiles terrain, into one 3D Tiles Archive when `out` ends in `.3tz`. With
+/// `shard=(i, n)` only shard `i` of `n` (see `tiles_plan`) and its record;
+/// `tiles_reduce(out, n)` then writes `layer.json`. Keywords: `min_zoom`,
+/// `max_zoom`, `tile_cells`, `error_factor`, `max_error_m_at_max_zoom`,
+/// `normals`, `watermask`, `metadata`, `gzip`, `force`, `check`, `shard`,
+/// `format`, `meshopt`, `skirts` (see `cota/__init__.pyi`). Returns a dict:
+/// `tiles`, `written`, `skipped`, `bytes`, `files_read`. Raises `ReadError`,
+/// `MeshError` or `WriteError`.
 #[pyfunction]
-#[pyo3(signature = (paths, out, *, min_zoom = 0, max_zoom = None, tile_cells = 64,
-    error_factor = None, max_error_m_at_max_zoom = None, normals = false, watermask = false,
-    metadata = false, gzip = false, force = false, check = false, shard = None,
-    format = "quantized-mesh", meshopt = false, skirts = true))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (paths, out, **keywords))]
 pub(crate) fn tiles<'py>(
     py: Python<'py>,
     paths: &Bound<'py, PyAny>,
     out: PathBuf,
-    min_zoom: u8,
-    max_zoom: Option<u8>,
-    tile_cells: u32,
-    error_factor: Option<f64>,
-    max_error_m_at_max_zoom: Option<f64>,
-    normals: bool,
-    watermask: bool,
-    metadata: bool,
-    gzip: bool,
-    force: bool,
-    check: bool,
-    shard: Option<(u32, u32)>,
-    format: &str,
-    meshopt: bool,
-    skirts: bool,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let paths = paths_of(paths)?;
-    let s = settings(
-        min_zoom,
-        max_zoom,
-        tile_cells,
-        error_factor,
-        max_error_m_at_max_zoom,
-    );
-    let opts = PyramidOptions::DEFAULT
-        .with_extensions(TileExtensions::with(normals, watermask, metadata))
-        .with_gzip(gzip)
-        .with_force(force)
-        .with_check(check)
-        .with_meshopt(meshopt)
-        .with_skirts(skirts)
-        .with_format(format_of(format)?);
+    let kw = Keywords::of("tiles", keywords, &[&SETTINGS, &PYRAMID, &["shard"]])?;
+    let input = input_of(paths)?;
+    let opts = kw.pyramid()?;
     check_output(&out, &opts).map_err(errors::value)?;
-    if let Some((i, n)) = shard {
-        if opts.format == TileFormat::Tiles3d {
-            return Err(errors::value(
-                "shards write quantized-mesh pyramids: expected format=\"quantized-mesh\" with shard",
-            ));
-        }
-        if i >= n {
-            return Err(errors::value(format!(
-                "expected shard (i, n) with 0 <= i < n, found ({i}, {n})"
-            )));
-        }
-    }
+    let shard: Option<(u32, u32)> = kw.get("shard", None)?;
+    check_shard(shard, &opts)?;
+    let job = job(&input, &out, shard.map_or(1, |s| s.1), &kw)?;
     let (total, report, files_read) = py.detach(|| -> PyResult<_> {
-        if let Some((i, n)) = shard {
-            if let Some(f) = read_shard_frame(&out, n).map_err(errors::write)? {
-                let (t, r, files) = write_part(&paths, &s, &out, &opts, &f, i)?;
+        if let Some((i, _)) = shard {
+            if let Some(f) = job.frame().map_err(part_error)? {
+                let (t, r, files) = write_part(&job, &opts, &f, i)?;
                 return Ok((t, r, Some(files)));
             }
         }
-        let (grid, lat) = lattice(&paths, &s)?;
-        let prep = Prepared::new(&lat, &grid, &tiler(&s)).map_err(errors::mesh)?;
-        let report = match shard {
-            Some((i, n)) => {
-                let part = shard_plan(prep.zooms(), n)
-                    .map_err(errors::value)?
-                    .swap_remove(i as usize);
-                write_shard(&prep, &out, &opts, &part, None, &|_| {})
-            }
-            None => write_output(&prep, &out, &opts, None, &|_| {}),
-        }
-        .map_err(errors::write)?;
-        Ok((prep.tile_count(), report, None))
+        let (t, r) = write_whole(&job, &opts, shard.map(|s| s.0))?;
+        Ok((t, r, None))
     })?;
     let d = PyDict::new(py);
     d.set_item("tiles", total)?;
@@ -265,65 +297,35 @@ pub(crate) fn tiles<'py>(
 /// read again; the whole input when every shard must read every file), and
 /// writes the frame `out/.cota-shards-n.json` and the band corners; each
 /// `tiles(..., shard=(i, n))` then reads only the files its part of the
-/// lattice needs. Writes no tile. Returns a dict: `band_zoom`,
+/// lattice needs. Writes no tile. Takes `tiles`' keywords (those of the
+/// tiles' bytes are the shards'). Returns a dict: `band_zoom`,
 /// `coarse_tiles`, `written`, `skipped` (both 0), `files` (each input's
 /// samples in the mosaic; empty when every shard must read every file: one
 /// file, voids or holes).
 #[pyfunction]
-#[pyo3(signature = (paths, out, shards, *, min_zoom = 0, max_zoom = None, tile_cells = 64,
-    error_factor = None, max_error_m_at_max_zoom = None, normals = false, watermask = false,
-    metadata = false, gzip = false, force = false, check = false))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (paths, out, shards, **keywords))]
 pub(crate) fn tiles_plan_step<'py>(
     py: Python<'py>,
     paths: &Bound<'py, PyAny>,
     out: PathBuf,
     shards: u32,
-    min_zoom: u8,
-    max_zoom: Option<u8>,
-    tile_cells: u32,
-    error_factor: Option<f64>,
-    max_error_m_at_max_zoom: Option<f64>,
-    normals: bool,
-    watermask: bool,
-    metadata: bool,
-    gzip: bool,
-    force: bool,
-    check: bool,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let paths = paths_of(paths)?;
-    let s = settings(
-        min_zoom,
-        max_zoom,
-        tile_cells,
-        error_factor,
-        max_error_m_at_max_zoom,
-    );
-    // The tiles' settings are the shards' (each records them with its
-    // partial maxima, and the reduce cuts the coarse tiles with them).
-    let _ = (normals, watermask, metadata, gzip, force, check);
-    let shards = at_least_one(shards)?;
-    let (frame, coarse) = py.detach(|| -> PyResult<_> {
+    let kw = Keywords::of("tiles_plan_step", keywords, &[&SETTINGS, &PYRAMID])?;
+    let input = input_of(paths)?;
+    let job = job(&input, &out, shards, &kw)?;
+    let frame = py.detach(|| -> PyResult<_> {
         // Without the whole input where the files allow it: the parts
         // `tiles_plan_part` already wrote, the others in turn.
-        if let Some(layout) = layout_of(&paths, &s, &out, shards).map_err(part_error)? {
-            let read = |files| read_part_files_in_turn(&paths, files, &region_options());
-            let (frame, _, _) = finish_plan(&out, layout, &tiler(&s), read).map_err(part_error)?;
-            let coarse = frame.coarse_tiles;
-            return Ok((frame, coarse));
+        if let Some(layout) = job.layout().map_err(part_error)? {
+            return Ok(job.finish_plan(layout).map_err(part_error)?.0);
         }
-        let (_, lat, files) = lattice_and_files(&paths, &s)?;
-        let zooms = plan(&lat, &tiler(&s)).map_err(errors::mesh)?;
-        let frame = frame_of(frame_key(&paths, &s), shards, &lat, &zooms, files);
-        let mut corners = BandCorners::new(lat.window(), lat.scheme().cells_at(frame.band_zoom));
-        corners.fill_from(&lat);
-        write_plan(&out, &frame, &corners).map_err(errors::write)?;
-        let coarse = frame.coarse_tiles;
-        Ok((frame, coarse))
+        let (_, lat, files) = lattice_and_files(&input.paths, &job.settings)?;
+        job.plan_whole(&lat, files).map_err(part_error)
     })?;
     let d = PyDict::new(py);
     d.set_item("band_zoom", frame.band_zoom)?;
-    d.set_item("coarse_tiles", coarse)?;
+    d.set_item("coarse_tiles", frame.coarse_tiles)?;
     d.set_item("written", 0)?;
     d.set_item("skipped", 0)?;
     d.set_item("files", frame.files)?;
@@ -332,33 +334,22 @@ pub(crate) fn tiles_plan_step<'py>(
 
 /// The plan step's layout (`cota tiles --plan --layout`): each input read
 /// alone for its shape, `out/.cota-layout-n.json` written (kept when there).
-/// Returns a dict: `streamed` (False when every shard must read every file:
-/// then the plan step reads the whole input and has no parts), `files`.
+/// Takes the keywords that decide the tiles. Returns a dict: `streamed`
+/// (False when every shard must read every file: then the plan step reads
+/// the whole input and has no parts), `files`.
 #[pyfunction]
-#[pyo3(signature = (paths, out, shards, *, min_zoom = 0, max_zoom = None, tile_cells = 64,
-    error_factor = None, max_error_m_at_max_zoom = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (paths, out, shards, **keywords))]
 pub(crate) fn tiles_plan_layout<'py>(
     py: Python<'py>,
     paths: &Bound<'py, PyAny>,
     out: PathBuf,
     shards: u32,
-    min_zoom: u8,
-    max_zoom: Option<u8>,
-    tile_cells: u32,
-    error_factor: Option<f64>,
-    max_error_m_at_max_zoom: Option<f64>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let paths = paths_of(paths)?;
-    let s = settings(
-        min_zoom,
-        max_zoom,
-        tile_cells,
-        error_factor,
-        max_error_m_at_max_zoom,
-    );
-    let shards = at_least_one(shards)?;
-    let layout = py.detach(|| layout_of(&paths, &s, &out, shards).map_err(part_error))?;
+    let kw = Keywords::of("tiles_plan_layout", keywords, &[&SETTINGS])?;
+    let input = input_of(paths)?;
+    let job = job(&input, &out, shards, &kw)?;
+    let layout = py.detach(|| job.layout().map_err(part_error))?;
     let d = PyDict::new(py);
     d.set_item("streamed", layout.is_some())?;
     d.set_item("files", layout.map_or(0, |l| l.files.len()))?;
@@ -368,36 +359,24 @@ pub(crate) fn tiles_plan_layout<'py>(
 /// Part `part` of the plan step (`cota tiles --plan --part i`): shard
 /// `part`'s files read and its part resampled for the statistics and band
 /// corners, into `out/.cota-plan-i-of-n.bin`, after the layout (made when
-/// missing). Idempotent; `tiles_plan_step` then merges the parts. Returns a
-/// dict: `streamed` (False: nothing to do, the plan step reads the whole
-/// input), `skipped` (its file, or the plan step's frame, was there),
-/// `files_read`.
+/// missing). Idempotent; `tiles_plan_step` then merges the parts. Takes the
+/// keywords that decide the tiles. Returns a dict: `streamed` (False:
+/// nothing to do, the plan step reads the whole input), `skipped` (its
+/// file, or the plan step's frame, was there), `files_read`.
 #[pyfunction]
-#[pyo3(signature = (paths, out, shards, part, *, min_zoom = 0, max_zoom = None,
-    tile_cells = 64, error_factor = None, max_error_m_at_max_zoom = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (paths, out, shards, part, **keywords))]
 pub(crate) fn tiles_plan_part<'py>(
     py: Python<'py>,
     paths: &Bound<'py, PyAny>,
     out: PathBuf,
     shards: u32,
     part: u32,
-    min_zoom: u8,
-    max_zoom: Option<u8>,
-    tile_cells: u32,
-    error_factor: Option<f64>,
-    max_error_m_at_max_zoom: Option<f64>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let paths = paths_of(paths)?;
-    let s = settings(
-        min_zoom,
-        max_zoom,
-        tile_cells,
-        error_factor,
-        max_error_m_at_max_zoom,
-    );
-    let shards = at_least_one(shards)?;
-    if part >= shards {
+    let kw = Keywords::of("tiles_plan_part", keywords, &[&SETTINGS])?;
+    let input = input_of(paths)?;
+    let job = job(&input, &out, shards, &kw)?;
+    if part >= job.shards {
         return Err(errors::value(format!(
             "expected a part 0 <= part < {shards}, found {part}"
         )));
@@ -410,11 +389,10 @@ pub(crate) fn tiles_plan_part<'py>(
                 files_read: Vec::new(),
             }));
         }
-        let Some(layout) = layout_of(&paths, &s, &out, shards)? else {
-            return Ok(None);
-        };
-        let read = |files| read_part_files(&paths, files, &region_options());
-        run_plan_part(&out, &layout, &tiler(&s), part, read).map(Some)
+        match job.layout()? {
+            Some(layout) => job.plan_part(&layout, part).map(Some),
+            None => Ok(None),
+        }
     });
     let report = report.map_err(part_error)?;
     let d = PyDict::new(py);
@@ -427,21 +405,6 @@ pub(crate) fn tiles_plan_part<'py>(
     Ok(d)
 }
 
-fn settings(
-    min_zoom: u8,
-    max_zoom: Option<u8>,
-    tile_cells: u32,
-    error_factor: Option<f64>,
-    at_max: Option<f64>,
-) -> Settings {
-    Settings {
-        min_zoom,
-        max_zoom,
-        tile_cells,
-        error: schedule(error_factor, at_max),
-    }
-}
-
 fn at_least_one(shards: u32) -> PyResult<u32> {
     if shards == 0 {
         return Err(errors::value("expected at least 1 shard, found 0"));
@@ -452,32 +415,23 @@ fn at_least_one(shards: u32) -> PyResult<u32> {
 /// The shard plan of `cota tiles --plan --shards n`: a list of `n` dicts
 /// (`shard`, `shards`, `tiles`, `ranges`: a list of `(zoom, x0, x1, y0, y1)`,
 /// tile addresses, TMS, inclusive; a range across the antimeridian is given
-/// as its two parts). Deterministic: every process computes the same.
+/// as its two parts). Takes the keywords that decide the tiles.
+/// Deterministic: every process computes the same.
 #[pyfunction]
-#[pyo3(signature = (paths, shards, *, min_zoom = 0, max_zoom = None, tile_cells = 64,
-    error_factor = None, max_error_m_at_max_zoom = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (paths, shards, **keywords))]
 pub(crate) fn tiles_plan<'py>(
     py: Python<'py>,
     paths: &Bound<'py, PyAny>,
     shards: u32,
-    min_zoom: u8,
-    max_zoom: Option<u8>,
-    tile_cells: u32,
-    error_factor: Option<f64>,
-    max_error_m_at_max_zoom: Option<f64>,
+    keywords: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyList>> {
+    let kw = Keywords::of("tiles_plan", keywords, &[&SETTINGS])?;
+    let settings = kw.settings()?;
     let paths = paths_of(paths)?;
-    let s = settings(
-        min_zoom,
-        max_zoom,
-        tile_cells,
-        error_factor,
-        max_error_m_at_max_zoom,
-    );
     let (parts, scheme) = py.detach(|| -> PyResult<_> {
-        let (_, lat) = lattice(&paths, &s)?;
-        let zooms = plan(&lat, &tiler(&s)).map_err(errors::mesh)?;
+        let (_, lat, _) = lattice_and_files(&paths, &settings)?;
+        let zooms =
+            cota_core::tiles::plan::plan(&lat, &settings.tiler_options()).map_err(errors::mesh)?;
         let parts = shard_plan(&zooms, shards).map_err(errors::value)?;
         Ok((parts, *lat.scheme()))
     })?;

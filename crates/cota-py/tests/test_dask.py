@@ -188,6 +188,32 @@ def test_shard_after_the_plan_step_reads_only_its_part(pair, tmp_path):
     assert same(files(out), plain)
 
 
+def test_the_cli_and_python_take_each_others_plan_and_shards(pair, tmp_path):
+    """One tiling job (``cota_io::tiles::job``) behind both: the plan step's layout
+    and a plan part written by Python, the merge by ``cota tiles --plan``, two shards by
+    Python and two by ``cota tiles --shard``, the reduce by Python: byte-identical to the
+    plain pyramid. A frame of other settings is refused by either."""
+    exe = cli_exe()
+    if exe is None:
+        pytest.skip("the cota binary is not built")
+    west, east, plain = pair
+    out = tmp_path / "mixed"
+    cli = [exe, "tiles", west, east, "-o", out, "--max-zoom", "10", "--quiet"]
+    assert cota.tiles_plan_layout([west, east], out, 4, **PAIR_SETTINGS)["streamed"]
+    cota.tiles_plan_part([west, east], out, 4, 1, **PAIR_SETTINGS)
+    subprocess.run(cli + ["--plan", "--shards", "4"], check=True, capture_output=True)
+    assert os.path.exists(cota.shard_frame(out, 4))
+    for i in (0, 2):
+        cota.tiles([west, east], out, shard=(i, 4), **PAIR_SETTINGS)
+    for i in (1, 3):
+        subprocess.run(cli + ["--shard", f"{i}/4"], check=True, capture_output=True)
+    other = subprocess.run([exe, "tiles", west, east, "-o", out, "--max-zoom", "9", "--shard", "1/4"],
+                           capture_output=True, text=True)
+    assert other.returncode != 0 and "other settings" in other.stderr, other.stderr
+    cota.tiles_reduce(out, 4)
+    assert same(files(out), plain)
+
+
 def test_dask_shards_read_only_their_part(pair, tmp_path):
     """Under Dask the plan step runs as the first task and each shard reads only the
     input files of its part: the westmost reads only the western file, the eastmost
@@ -308,3 +334,18 @@ def test_archives_and_3d_tiles_from_python(tmp_path):
         with pytest.raises(ValueError):
             cota.tiles(TILE, out, **opts, **bad)
         assert not out.exists()
+
+
+def test_tiling_keywords_are_checked_as_python_checks_them(tmp_path):
+    """The tiling functions share one parser of their keywords: a misspelt one is a
+    TypeError naming it, a keyword of another step is refused, a wrong type names the
+    argument; nothing is written."""
+    out = tmp_path / "t"
+    with pytest.raises(TypeError, match="tiles\\(\\) got an unexpected keyword argument 'maxzoom'"):
+        cota.tiles(TILE, out, maxzoom=6)
+    with pytest.raises(TypeError, match="tiles_plan_layout\\(\\) got an unexpected keyword argument 'gzip'"):
+        cota.tiles_plan_layout(TILE, out, 2, gzip=True)
+    with pytest.raises(TypeError, match="argument 'max_zoom'"):
+        cota.tiles(TILE, out, max_zoom="six")
+    assert not out.exists()
+    assert len(cota.tiles_plan(TILE, 2, max_zoom=None, min_zoom=0)) == 2

@@ -42,6 +42,7 @@ pub mod ellipsoid;
 pub mod frame;
 pub mod glb_decode;
 pub mod glb_tile;
+pub mod job;
 pub mod journal;
 pub mod layer;
 pub mod mbtiles;
@@ -66,6 +67,7 @@ pub use frame::{
     plan_layout_path, read_plan_layout, read_shard_frame, shard_frame_path, write_plan_layout,
     write_shard_frame, ShardFrame,
 };
+pub use job::{input_key, JobInput, PathsInput, ReadPart, TileJob, TileSettings};
 pub use journal::JOURNAL_DIR;
 pub use layer::layer_json;
 pub use mbtiles::{is_mbtiles, write_mbtiles, MbtilesReader};
