@@ -409,7 +409,7 @@ pub fn mosaic_options(a: &ReadArgs) -> MosaicOptions {
 pub fn summaries(a: &InputArgs) -> anyhow::Result<Vec<FileInfo>> {
     check_options(&a.read)?;
     let opts = read_options(&a.read)?;
-    let mut files = cota_io::tiles::summarize_files(&a.files, &opts)?;
+    let mut files = cota_tiles::summarize_files(&a.files, &opts)?;
     if let Some(flag) = &a.read.src_crs {
         for f in &mut files {
             f.georef.crs = cota_io::crs::src_crs_for(&f.path, &f.georef, f.width, f.height, flag)?;

@@ -17,13 +17,13 @@ use anyhow::Context;
 use cota_core::tiles::TilesError;
 use cota_core::HeightGrid;
 use cota_io::stream_file::MAGIC;
-use cota_io::tiles::{PyramidOptions, TileExtensions, TileSettings};
 use cota_server::texture::{PAIR_URL, TEXTURE_URL};
 use cota_server::tiles3d::{is_tiles3d, Tiles3dFiles};
 use cota_server::{
     DemandTileSource, DirTileSource, Imagery, MbtilesTileSource, ServeError, ServeOptions,
     ServerState, StreamAsset, TextureLevel, Textures, TileSource,
 };
+use cota_tiles::{PyramidOptions, TileExtensions, TileSettings};
 
 use crate::args::{ServeArgs, ServeTextureArgs, Voids};
 use crate::input::{fill, load, name};
@@ -226,7 +226,7 @@ fn make_stream(source: &Source) -> Result<StreamAsset, String> {
 /// unusable one stops the start).
 fn open_tiles(dir: &Path) -> anyhow::Result<Arc<dyn TileSource>> {
     let ctx = || format!("--tiles {}", dir.display());
-    let src: Arc<dyn TileSource> = if cota_io::tiles::is_mbtiles(dir) {
+    let src: Arc<dyn TileSource> = if cota_tiles::is_mbtiles(dir) {
         Arc::new(MbtilesTileSource::open(dir).with_context(ctx)?)
     } else {
         Arc::new(DirTileSource::open(dir).with_context(ctx)?)

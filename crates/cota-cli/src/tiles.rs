@@ -12,8 +12,8 @@ use cota_core::tiles::{
     Lattice, LatticeFrame, Prepared, Shard, Source, SourcePart, TileRange, TilerOptions, ZoomPlan,
 };
 use cota_core::{HeightGrid, LonLat};
-use cota_io::tiles::drawn::{Against, SourceGrid};
-use cota_io::tiles::{
+use cota_tiles::drawn::{Against, SourceGrid};
+use cota_tiles::{
     is_3tz, is_mbtiles, plan_layout_path, plan_part_path, read_shard_frame, reduce_shards,
     shard_frame_path, write_output, write_shard, PyramidOptions, PyramidReport, ShardFrame,
     TileExtensions, TileFormat, TileJob,

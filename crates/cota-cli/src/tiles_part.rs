@@ -1,13 +1,13 @@
 //! `cota tiles --plan` and `--shard I/N` over parts of the lattice: the
-//! arguments as a [`TileJob`] (`cota_io::tiles::job`): its settings, and its
+//! arguments as a [`TileJob`] (`cota_tiles::job`): its settings, and its
 //! input read as `cota tiles` reads it (the input flags, the void policy).
 
 use std::path::PathBuf;
 
 use cota_core::tiles::{ErrorSchedule, LatticeOptions};
 use cota_core::{FillMethod, FillOptions, MosaicOptions, VoidPolicy};
-use cota_io::tiles::{input_key, JobInput, ReadPart, TileJob, TileSettings};
 use cota_io::{DemSummary, RegionOptions};
+use cota_tiles::{input_key, JobInput, ReadPart, TileJob, TileSettings};
 
 use crate::args::{TilesArgs, Voids};
 use crate::input;
@@ -113,7 +113,7 @@ pub fn file_extents(a: &TilesArgs, inp: &input::Input, voids: usize) -> Vec<(Str
     if voids > 0 || inp.hole_samples > 0 || a.input.read.windowed() {
         return Vec::new();
     }
-    cota_io::tiles::file_extents(&inp.files, inp.grid.georef())
+    cota_tiles::file_extents(&inp.files, inp.grid.georef())
 }
 
 /// The lattice's options of the arguments.
@@ -133,7 +133,7 @@ mod tests {
     use crate::args::{Cli, Command};
     use clap::Parser;
     use cota_core::tiles::Lattice;
-    use cota_io::tiles::PathsInput;
+    use cota_tiles::PathsInput;
 
     fn tiles_args(args: &[&str]) -> TilesArgs {
         match Cli::try_parse_from([&["cota", "tiles"], args].concat())

@@ -12,8 +12,11 @@
 //!   with a world file or the DEM's extent, placed on a DEM in the same CRS.
 //! * Mesh writers (OBJ, PLY, STL, GLB, and a textured GLB), each written
 //!   atomically.
-//! * Cesium quantized-mesh-1.0 and 3D Tiles terrain pyramids ([`tiles`]),
-//!   the latter optionally with `EXT_meshopt_compression` ([`meshopt`]).
+//! * `EXT_meshopt_compression` codecs ([`meshopt`]), for 3D Tiles terrain
+//!   and glTF.
+//!
+//! The tile pyramids (quantized-mesh, 3D Tiles terrain, their archives and
+//! the sharded tiling job) are the `cota-tiles` crate, built on this one.
 //! * CRSs ([`crs`]): a grid's map to and from WGS 84 longitude/latitude
 //!   (proj4rs), `--src-crs`, footprints.
 //!
@@ -30,7 +33,6 @@ pub mod meshopt;
 pub mod read;
 pub mod relief;
 pub mod stream_file;
-pub mod tiles;
 
 pub use dem::{
     f32_storage_error_m, ArrayName, DataType, Dem, DemSummary, Format, PngEncoding, ReadOptions,

@@ -1,7 +1,7 @@
 //! `cota.tiles`, `cota.tiles_plan`, `cota.tiles_plan_step` and
-//! `cota.tiles_reduce`: a quantized-mesh pyramid (`cota_io::tiles`), whole or
+//! `cota.tiles_reduce`: a quantized-mesh pyramid (`cota_tiles`), whole or
 //! one shard of it, as `cota tiles` writes it (a shard after the plan step
-//! reads only the files of its part, `cota_io::tiles::part`); the GIL is
+//! reads only the files of its part, `cota_tiles::part`); the GIL is
 //! released while reading and tiling.
 
 use std::path::{Path, PathBuf};
@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use cota_core::tiles::{addressed, shard_plan, Lattice, Prepared};
 use cota_core::HeightGrid;
 use cota_io::read_region;
-use cota_io::tiles::{
+use cota_tiles::{
     check_output, file_extents, reduce_shards, shard_frame_path, shard_record_path, write_output,
     write_shard, PartError, PathsInput, PlanPartReport, PyramidError, PyramidOptions,
     PyramidReport, ShardFrame, TileExtensions, TileFormat, TileJob, TileSettings,

@@ -189,7 +189,7 @@ def test_shard_after_the_plan_step_reads_only_its_part(pair, tmp_path):
 
 
 def test_the_cli_and_python_take_each_others_plan_and_shards(pair, tmp_path):
-    """One tiling job (``cota_io::tiles::job``) behind both: the plan step's layout
+    """One tiling job (``cota_tiles::job``) behind both: the plan step's layout
     and a plan part written by Python, the merge by ``cota tiles --plan``, two shards by
     Python and two by ``cota tiles --shard``, the reduce by Python: byte-identical to the
     plain pyramid. A frame of other settings is refused by either."""

@@ -1,7 +1,7 @@
 //! 3D Tiles terrain written by `cota tiles --format 3dtiles`, served as the
 //! files they are at `/3dtiles/…` (`tileset.json`, the subtrees, the GLBs):
 //! from the pyramid's directory, or from a 3D Tiles Archive (`.3tz`) read
-//! through its index ([`cota_io::tiles::Tz3Reader`]), for CesiumJS's
+//! through its index ([`cota_tiles::Tz3Reader`]), for CesiumJS's
 //! `Cesium3DTilesTerrainProvider` (`/cesium?3dtiles`), 3DTilesRendererJS or
 //! loaders.gl; or, without such a pyramid, made in memory from the
 //! on-demand tiles' hierarchy on the first request and kept
@@ -10,7 +10,7 @@
 
 use std::path::{Path, PathBuf};
 
-use cota_io::tiles::{is_3tz, Tz3Reader};
+use cota_tiles::{is_3tz, Tz3Reader};
 
 /// Where the files come from.
 pub enum Tiles3dFiles {

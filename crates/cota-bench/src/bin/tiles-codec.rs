@@ -8,7 +8,7 @@
 //! encoder with gzip level 6 (`terrain::encode_terrain_from_fn`), rayon over
 //! the tiles, then `create_dir_all` and `fs::write` per tile. cota: the
 //! prepared hierarchy (its preparation timed apart), then
-//! [`cota_io::tiles::make_tile`] (gzip, no check) per tile, written by
+//! [`cota_tiles::make_tile`] (gzip, no check) per tile, written by
 //! [`write_pyramid`] (a temporary file and a rename per tile) or
 //! [`write_mbtiles`].
 //!
@@ -32,7 +32,7 @@ use anyhow::{bail, Context, Result};
 use cota_core::grid::PixelIs;
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
 use cota_core::HeightGrid;
-use cota_io::tiles::{
+use cota_tiles::{
     make_tile, tile_path, write_file_atomically, write_mbtiles, write_pyramid, PyramidOptions,
 };
 use rayon::prelude::*;

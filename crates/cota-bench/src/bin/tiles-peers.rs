@@ -21,7 +21,7 @@ use anyhow::{bail, Context, Result};
 use cota_core::mesh::check::check_placed_mesh;
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
 use cota_core::HeightGrid;
-use cota_io::tiles::{compare_border, decode, tile_path, DecodedTile, Neighbour};
+use cota_tiles::{compare_border, decode, tile_path, DecodedTile, Neighbour};
 use serde_json::json;
 
 fn export(dir: &Path, prep: &Prepared<'_>) -> Result<()> {

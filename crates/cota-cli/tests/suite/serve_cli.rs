@@ -264,7 +264,7 @@ fn a_pair_across_the_antimeridian_is_served_as_one_grid() {
     );
     for (status, body) in [east, west] {
         assert_eq!(status, 200);
-        let tile = cota_io::tiles::decode(&body).unwrap();
+        let tile = cota_tiles::decode(&body).unwrap();
         assert!(tile.u.len() > 4, "{} vertices", tile.u.len());
     }
 }

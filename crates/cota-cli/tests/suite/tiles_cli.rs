@@ -412,9 +412,9 @@ fn listed_and_written(out: &std::path::Path) -> (BTreeSet<[u32; 3]>, BTreeSet<[u
 }
 
 /// The tile `z/x/y` under `out`, decoded.
-fn decoded(out: &std::path::Path, [z, x, y]: [u32; 3]) -> cota_io::tiles::DecodedTile {
+fn decoded(out: &std::path::Path, [z, x, y]: [u32; 3]) -> cota_tiles::DecodedTile {
     let bytes = std::fs::read(out.join(format!("{z}/{x}/{y}.terrain"))).unwrap();
-    cota_io::tiles::decode(&bytes).unwrap()
+    cota_tiles::decode(&bytes).unwrap()
 }
 
 /// `cota tiles` of `files` to `out` at zooms up to 9, checked; its report.
@@ -491,7 +491,7 @@ fn a_footprint_across_the_antimeridian_is_tiled_on_both_sides_without_a_seam() {
         );
         for y in ys {
             let (a, b) = (decoded(&out, [z, last, y]), decoded(&out, [z, 0, y]));
-            let c = cota_io::tiles::compare_border(&a, &b, cota_io::tiles::Neighbour::East);
+            let c = cota_tiles::compare_border(&a, &b, cota_tiles::Neighbour::East);
             assert_eq!(c.mismatches(), 0, "{z}/{last}/{y} and {z}/0/{y}: {c:?}");
             seams += 1;
             on_land += (0..a.u.len())
@@ -587,7 +587,7 @@ fn mbtiles_archive_output_checked_and_refused_for_shards() {
     let v: serde_json::Value = serde_json::from_str(&stdout(&r)).unwrap();
     assert!(v["check"].as_str().unwrap().starts_with("passed"), "{v}");
     let tiles = v["tiles"].as_u64().unwrap();
-    let a = cota_io::tiles::MbtilesReader::open(&out).unwrap();
+    let a = cota_tiles::MbtilesReader::open(&out).unwrap();
     assert_eq!(a.tile_ids().unwrap().len() as u64, tiles);
     assert!(a.layer_json().unwrap().contains("quantized-mesh-1.0"));
     let again = cota(&["tiles", "--max-zoom", "8", "--gzip", "--json", "-o", o]);
@@ -625,7 +625,7 @@ fn three_d_tiles_archive_holds_the_directory_pyramid() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     assert_eq!(names.len(), 2, "{names:?}: staging or partial files left");
-    let reader = cota_io::tiles::Tz3Reader::open(&packed).unwrap();
+    let reader = cota_tiles::Tz3Reader::open(&packed).unwrap();
     let mut files = Vec::new();
     let mut stack = vec![plain.clone()];
     while let Some(d) = stack.pop() {

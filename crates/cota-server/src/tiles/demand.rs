@@ -17,9 +17,7 @@
 use axum::body::Bytes;
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, Source, TilerOptions};
 use cota_core::{GeoTransform, HeightGrid};
-use cota_io::tiles::{
-    layer_json, make_tile, make_tiles3d, PyramidOptions, TileExtensions, TileFormat,
-};
+use cota_tiles::{layer_json, make_tile, make_tiles3d, PyramidOptions, TileExtensions, TileFormat};
 
 use super::{check_in_world, etag_of, Tile, TileId, TileSource};
 use crate::error::{Result, ServeError};

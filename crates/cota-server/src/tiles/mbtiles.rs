@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use axum::body::Bytes;
-use cota_io::tiles::MbtilesReader;
+use cota_tiles::MbtilesReader;
 
 use super::dir::LayerIndex;
 use super::{check_tile_bytes, etag_of, is_gzip, Tile, TileId, TileSource, MAX_TILE_BYTES};

@@ -5,7 +5,7 @@
 //! * [`DirTileSource`]: the directory `cota tiles` writes (`OUT/layer.json`,
 //!   `OUT/{z}/{x}/{y}.terrain`, raw or gzipped);
 //! * [`DemandTileSource`]: tiles made on demand from a prepared hierarchy in
-//!   memory ([`cota_core::tiles::Prepared`], [`cota_io::tiles::make_tile`]).
+//!   memory ([`cota_core::tiles::Prepared`], [`cota_tiles::make_tile`]).
 //!
 //! Sources neither cache nor limit: the server calls [`TileSource::tile`]
 //! on its bounded worker pool, once per tile at a time, and keeps what it

@@ -15,8 +15,8 @@ use std::time::{Duration, Instant};
 
 use cota_core::tiles::{LatticeOptions, TilerOptions};
 use cota_core::HeightGrid;
-use cota_io::tiles::{PyramidOptions, TileExtensions};
 use cota_server::{serve, DemandTileSource, DirTileSource, ServeOptions, ServerState};
+use cota_tiles::{PyramidOptions, TileExtensions};
 use tokio::io::{AsyncReadExt, AsyncWriteExt, BufReader};
 use tokio::net::TcpStream;
 

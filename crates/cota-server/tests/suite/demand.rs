@@ -18,8 +18,8 @@ use axum::http::{header, Request, StatusCode};
 use axum::Router;
 use cota_core::mesh::check::check_placed_mesh;
 use cota_core::tiles::{LatticeOptions, TilerOptions};
-use cota_io::tiles::{decode, tile_path, write_pyramid, PyramidOptions, TileExtensions};
 use cota_server::{router, DemandTileSource, DirTileSource};
+use cota_tiles::{decode, tile_path, write_pyramid, PyramidOptions, TileExtensions};
 use tower::ServiceExt;
 
 async fn get(app: &Router, uri: &str) -> (StatusCode, axum::http::HeaderMap, Vec<u8>) {

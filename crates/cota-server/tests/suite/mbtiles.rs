@@ -13,8 +13,8 @@ use axum::http::{header, Request, StatusCode};
 use axum::Router;
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
 use cota_core::{fill_voids, FillOptions};
-use cota_io::tiles::{write_mbtiles, write_pyramid, PyramidOptions, TileExtensions};
 use cota_server::{router, DirTileSource, MbtilesTileSource, ServeError};
+use cota_tiles::{write_mbtiles, write_pyramid, PyramidOptions, TileExtensions};
 use tower::ServiceExt;
 
 async fn get(app: &Router, uri: &str, gzip: bool) -> (StatusCode, Option<String>, Vec<u8>) {

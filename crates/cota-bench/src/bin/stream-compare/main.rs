@@ -11,7 +11,7 @@
 //! 1. the mesh `M = Bitree::extract(E)`;
 //! 2. cota: the whole progressive stream from the coarse mesh down to `E`
 //!    (every step, framing and checksums included), quantum 1 m;
-//! 3. quantized-mesh-1.0 of `M` (`cota_io::tiles::encode`, the whole grid as
+//! 3. quantized-mesh-1.0 of `M` (`cota_tiles::encode`, the whole grid as
 //!    one tile over its sample rectangle), raw and gzipped (best);
 //! 4. meshopt: vertex-cache and vertex-fetch optimised, vertices as four
 //!    `u16` (column, row, height − min, 0), `encode_vertex_buffer` +
@@ -143,13 +143,13 @@ fn quantized_mesh(mesh: &Mesh, grid: &HeightGrid) -> Result<Vec<u8>, Box<dyn Err
     let g = grid.georef();
     let (x0, y0) = g.sample_xy(0.0, 0.0);
     let (x1, y1) = g.sample_xy(w, h);
-    let frame = cota_io::tiles::TileFrame {
+    let frame = cota_tiles::TileFrame {
         cells: [w as u64, h as u64],
         rect_deg: [x0.min(x1), y0.min(y1), x0.max(x1), y0.max(y1)],
     };
-    Ok(cota_io::tiles::encode(
+    Ok(cota_tiles::encode(
         mesh,
         &frame,
-        &cota_io::tiles::Extensions::default(),
+        &cota_tiles::Extensions::default(),
     )?)
 }

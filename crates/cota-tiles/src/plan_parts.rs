@@ -289,13 +289,13 @@ fn text(r: &mut Reader<'_>) -> Result<String, PyramidError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tiles::{
+    use crate::{
         mosaic_frame, plan_layout, read_band_corners, read_part_files, read_shard_frame,
         stream_frame, summarize_files,
     };
-    use crate::{ReadOptions, RegionOptions};
     use cota_core::grid::mosaic::MosaicOptions;
     use cota_core::tiles::LatticeOptions;
+    use cota_io::{ReadOptions, RegionOptions};
 
     /// The two-tile mosaic: the plan step run in parts, in any order and
     /// with a part run twice, writes the frame and corners of the plan step
@@ -340,8 +340,8 @@ mod tests {
         assert_eq!(f1, f0);
         let file = |d: &Path, p: PathBuf| std::fs::read(d.join(p.file_name().unwrap())).unwrap();
         for p in [
-            crate::tiles::shard_frame_path(whole.path(), n),
-            crate::tiles::corners_path(whole.path(), n),
+            crate::shard_frame_path(whole.path(), n),
+            crate::corners_path(whole.path(), n),
         ] {
             assert_eq!(file(out, p.clone()), file(whole.path(), p));
         }

@@ -1,19 +1,22 @@
-//! Cesium quantized-mesh-1.0 terrain pyramids: the encoder, an independent
-//! decoder, `layer.json`, and the writer of a whole pyramid as a directory
-//! tree `OUT/layer.json` + `OUT/{z}/{x}/{y}.terrain` or as one MBTiles
-//! archive ([`mbtiles`]).
+//! # cota-tiles
 //!
-//! The tiles themselves are cut by [`cota_core::tiles`]; this module turns
+//! Terrain tile pyramids, between `cota-io` (the readers) and the front ends
+//! (`cota tiles`, `cota serve`, `cota.tiles`): Cesium quantized-mesh-1.0 (the
+//! encoder, an independent decoder, `layer.json`) and 3D Tiles terrain
+//! ([`glb_tile`], [`tileset3d`], [`pyramid3d`]), written as a directory tree,
+//! one MBTiles archive ([`mbtiles`]) or one 3D Tiles Archive ([`archive3tz`]);
+//! the as-drawn checker ([`drawn`]); and the sharded tiling job ([`job`]).
+//!
+//! The tiles themselves are cut by [`cota_core::tiles`]; this crate turns
 //! them into bytes, decodes the bytes back, checks the decoded tile against
-//! its error bound at every sample of its lattice (after quantization), and
-//! writes it atomically.
+//! its error bound as the client draws it, and writes it atomically.
 //!
 //! ```
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
 //! use cota_core::{Crs, GeoRef, HeightGrid, LonLat, PixelIs};
-//! use cota_io::tiles::drawn::{Against, SourceGrid};
-//! use cota_io::tiles::{write_pyramid, PyramidOptions};
+//! use cota_tiles::drawn::{Against, SourceGrid};
+//! use cota_tiles::{write_pyramid, PyramidOptions};
 //! let n = 61;
 //! let heights = (0..n * n).map(|i| 300.0 + ((i % n) as f32 * 0.2).sin() * 40.0).collect();
 //! let georef = GeoRef { crs: Crs::WGS84, origin_x: 10.0, origin_y: 1.0, pixel_x: 0.01,
@@ -33,6 +36,8 @@
 //! # Ok(())
 //! # }
 //! ```
+
+#![warn(missing_docs)]
 
 pub mod archive3tz;
 pub mod coarse;

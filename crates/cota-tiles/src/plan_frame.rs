@@ -26,7 +26,7 @@ use cota_core::HeightGrid;
 use super::frame::{shard_frame_path, ShardFrame};
 use super::part::{file_extents, frame_with, read_span, PartError};
 use super::PyramidError;
-use crate::{read_dem, DemSummary, ReadOptions, RegionError};
+use cota_io::{read_dem, DemSummary, ReadOptions, RegionError};
 
 /// The mosaic of several files, framed from their shapes alone.
 #[derive(Debug, Clone, PartialEq)]
@@ -323,9 +323,9 @@ pub fn stream_frame<E: From<PyramidError>>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tiles::{frame_of, read_part_files_in_turn, write_shard_frame};
-    use crate::{read_region, RegionOptions};
+    use crate::{frame_of, read_part_files_in_turn, write_shard_frame};
     use cota_core::tiles::plan::plan;
+    use cota_io::{read_region, RegionOptions};
 
     /// The whole-input frame and the streamed one of `inputs`, as JSON text.
     fn both(inputs: &[PathBuf], lo: &LatticeOptions, shards: u32) -> (String, String) {

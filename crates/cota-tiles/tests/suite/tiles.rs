@@ -12,12 +12,12 @@ use std::path::Path;
 use cota_core::mesh::check::check_placed_mesh;
 use cota_core::tiles::{ErrorSchedule, Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
 use cota_core::{fill_voids, mosaic, FillOptions, HeightGrid, Mesh, MeshVertex, MosaicOptions};
-use cota_io::tiles::{
+use cota_io::{read_dem, ReadOptions};
+use cota_tiles::{
     compare_border, decode, edge_lists_match, encode, make_tile, tile_path, write_pyramid,
     DecodedTile, Extensions, Neighbour, PyramidError, PyramidOptions, TileExtensions, TileFrame,
     JOURNAL_DIR,
 };
-use cota_io::{read_dem, ReadOptions};
 
 fn load(paths: &[std::path::PathBuf]) -> HeightGrid {
     let grids = paths
@@ -341,14 +341,14 @@ fn header_spheres_hold_the_vertices() {
     let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
     for t in prep.tiles() {
         let tile = prep.cut(t, false, false).unwrap();
-        let bytes = cota_io::tiles::encode_tile(&tile, &TileExtensions::NONE).unwrap();
+        let bytes = cota_tiles::encode_tile(&tile, &TileExtensions::NONE).unwrap();
         let d = decode(&bytes).unwrap();
         let [w, s, e, n] = tile.rect_deg;
         let h = d.header;
         for i in 0..d.u.len() {
             let lon = w + f64::from(d.u[i]) / 32767.0 * (e - w);
             let lat = s + f64::from(d.v[i]) / 32767.0 * (n - s);
-            let p = cota_io::tiles::ellipsoid::ecef(lon, lat, d.height_m(i));
+            let p = cota_tiles::ellipsoid::ecef(lon, lat, d.height_m(i));
             let r = (0..3)
                 .map(|k| (p[k] - h.sphere_center[k]).powi(2))
                 .sum::<f64>()

@@ -3,7 +3,7 @@
 //! first primitive's `POSITION` (float32, or `KHR_mesh_quantization`'s
 //! normalized u16 as `q / 65535` in float32), indices and `CESIUM_tile_edges`,
 //! each buffer view plain or `EXT_meshopt_compression`-compressed (decoded
-//! by [`crate::meshopt::decode`], which shares no code with the encoders),
+//! by [`cota_io::meshopt::decode`], which shares no code with the encoders),
 //! and the first node's `matrix` followed by glTF's Y-up to Z-up turn, to
 //! ECEF positions in f64. It shares no code with the encoder, so the
 //! pyramid's check measures the bytes a client draws. A second primitive
@@ -15,7 +15,9 @@ use std::borrow::Cow;
 use serde_json::Value;
 
 use super::glb_tile::TileMeta;
-use crate::meshopt::{decode_index_sequence, decode_triangles, decode_vertex_buffer, MeshoptError};
+use cota_io::meshopt::{
+    decode_index_sequence, decode_triangles, decode_vertex_buffer, MeshoptError,
+};
 
 /// Why a GLB tile cannot be read.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]

@@ -20,7 +20,7 @@
 //!   numbers rounded to 9 significant digits, the translation to 1 mm, for
 //!   a shorter JSON chunk, and the positions quantized through the rounded
 //!   matrix's inverse),
-//!   compressed with `EXT_meshopt_compression` ([`crate::meshopt`]), and
+//!   compressed with `EXT_meshopt_compression` ([`cota_io::meshopt`]), and
 //!   the indices too (triangles mode); the views' stand-in is a fallback
 //!   buffer without data, both extensions required;
 //! * indices `UNSIGNED_SHORT` up to 65 535 vertices, else `UNSIGNED_INT`;
@@ -59,7 +59,7 @@ use serde_json::{json, Value};
 
 use super::decode::DecodedTile;
 use super::ellipsoid::{ecef, oct_decode};
-use crate::meshopt::{
+use cota_io::meshopt::{
     encode_index_sequence, encode_triangles_rotated, encode_vertex_buffer, MeshoptError,
 };
 

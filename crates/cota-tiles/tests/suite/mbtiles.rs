@@ -8,12 +8,12 @@ use crate::common;
 
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
 use cota_core::{fill_voids, FillOptions, HeightGrid};
-use cota_io::tiles::mbtiles::partial_path;
-use cota_io::tiles::{
+use cota_io::{read_dem, ReadOptions};
+use cota_tiles::mbtiles::partial_path;
+use cota_tiles::{
     decode, tile_path, write_mbtiles, write_pyramid, MbtilesReader, PyramidError, PyramidOptions,
     TileExtensions,
 };
-use cota_io::{read_dem, ReadOptions};
 
 /// The bundled SRTM tile, voids filled.
 fn fixture_grid() -> HeightGrid {

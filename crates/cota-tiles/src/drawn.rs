@@ -643,7 +643,7 @@ pub fn check_random(
 #[cfg(test)]
 mod test {
     use super::*;
-    use crate::tiles::decode::Header;
+    use crate::decode::Header;
     use cota_core::{Crs, GeoRef, LonLat};
 
     /// A tile of two flat triangles over 1° at the equator, every vertex at

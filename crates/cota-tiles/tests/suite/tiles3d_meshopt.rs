@@ -14,8 +14,8 @@ use cota_io::meshopt::{
     decode_index_sequence, decode_triangles, decode_vertex_buffer, encode_index_sequence,
     encode_triangles, encode_triangles_rotated, encode_vertex_buffer,
 };
-use cota_io::tiles::{decode, make_tile, PyramidOptions};
 use cota_io::{read_dem, ReadOptions};
+use cota_tiles::{decode, make_tile, PyramidOptions};
 use proptest::prelude::*;
 
 /// A named case: mode, count, stride, input bytes, encoded stream.

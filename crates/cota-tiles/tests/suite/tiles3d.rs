@@ -14,17 +14,17 @@ use std::collections::HashSet;
 
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
 use cota_core::{fill_voids, FillOptions, LonLat};
-use cota_io::tiles::drawn::{check_samples, Against, DrawnTile, SourceGrid};
-use cota_io::tiles::ellipsoid::geodetic;
-use cota_io::tiles::glb_decode::{decode_glb, same_triangles, DecodedGlb};
-use cota_io::tiles::glb_tile::{float32_budget_m, u16_budget_m, SKIRT_LEVELS};
-use cota_io::tiles::pyramid3d::skirt_depth;
-use cota_io::tiles::tileset3d::glb_rel_path;
-use cota_io::tiles::{
+use cota_io::{read_dem, ReadOptions};
+use cota_tiles::drawn::{check_samples, Against, DrawnTile, SourceGrid};
+use cota_tiles::ellipsoid::geodetic;
+use cota_tiles::glb_decode::{decode_glb, same_triangles, DecodedGlb};
+use cota_tiles::glb_tile::{float32_budget_m, u16_budget_m, SKIRT_LEVELS};
+use cota_tiles::pyramid3d::skirt_depth;
+use cota_tiles::tileset3d::glb_rel_path;
+use cota_tiles::{
     decode, make_glb_tile, make_tile, write_tiles3d, PyramidError, PyramidOptions, TileExtensions,
     TileFormat,
 };
-use cota_io::{read_dem, ReadOptions};
 
 fn opts() -> PyramidOptions {
     PyramidOptions::DEFAULT

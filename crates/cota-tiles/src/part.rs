@@ -14,7 +14,7 @@ use cota_core::{GeoRef, HeightGrid};
 
 use super::frame::{shard_frame_path, ShardFrame};
 use super::PyramidError;
-use crate::{read_region, read_region_in_turn, DemSummary, Region, RegionError, RegionOptions};
+use cota_io::{read_region, read_region_in_turn, DemSummary, Region, RegionError, RegionOptions};
 
 /// A shard's part could not be made: a frame that does not fit, or input
 /// files that could not be read.
@@ -283,7 +283,7 @@ fn named(region: Region) -> (HeightGrid, Vec<String>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tiles::write_shard_frame;
+    use crate::write_shard_frame;
     use cota_core::tiles::{LatticeOptions, Prepared};
 
     /// The two-tile mosaic: each file placed in it, the westmost of 4 shards

@@ -22,7 +22,7 @@ use super::plan_frame::{mosaic_frame, plan_layout, summarize_files};
 use super::plan_parts::{finish_plan, plan_layout_or, run_plan_part, PlanPartReport};
 use super::shard::write_plan;
 use super::PyramidError;
-use crate::{DemSummary, RegionOptions};
+use cota_io::{DemSummary, RegionOptions};
 
 /// The settings that decide the lattice, the plan and so every tile (the
 /// options of a pyramid's bytes, gzip or extensions, are
