@@ -46,11 +46,18 @@
 //! summed in the samples' row-major order, so its heights are the whole's
 //! bit for bit.
 //!
-//! # Runtime
+//! # Runtime and memory
 //! One pass over the region's samples for the residuals, then per round
-//! only the samples beyond `τ` and those next to the corners they moved.
+//! only the samples beyond `τ` and those next to the corners they moved,
+//! and a last pass for the largest residual. Only the residuals beyond `τ`
+//! and the corrections of the corners they move are held (before, 8 bytes
+//! per sample and 16 per lattice point: the largest share of a sharded
+//! part's peak while it was read and resampled).
+
+use std::collections::BTreeMap;
 
 use rayon::prelude::*;
+use rustc_hash::FxHashMap;
 
 use super::samples::SampleSet;
 use crate::progress::{Counter, Progress, Stages};
@@ -125,60 +132,75 @@ pub(crate) fn fit(
                 .map(|i| wt[i] * f64::from(heights[c[i]]))
                 .sum::<f64>()
     };
-    // The residuals, then the rounds: about half the time each.
+    // The residuals, then the rounds: about half the time each. Only the
+    // residuals beyond `tau_m` are kept (a few samples: the peaks and pits
+    // between lattice points), in sample order, and the corrections only
+    // for the corners they move: no array per sample or per point.
     let stages = Stages::new(progress, &[1, 1]);
     let chunks = at.len().div_ceil(CHUNK);
     let first = stages.stage(0);
     let done = Counter::new(&first, chunks);
     let shared: &[f32] = heights;
-    let mut r: Vec<f64> = (0..chunks)
+    let mut hot: BTreeMap<usize, f64> = (0..chunks)
         .into_par_iter()
         .flat_map_iter(|c| {
             done.add(1);
-            (c * CHUNK..((c + 1) * CHUNK).min(at.len())).map(|k| residual(shared, k))
+            (c * CHUNK..((c + 1) * CHUNK).min(at.len()))
+                .map(|k| (k, residual(shared, k)))
+                .filter(|&(_, r)| r.abs() > tau_m)
         })
+        .collect::<Vec<_>>()
+        .into_iter()
         .collect();
     stages.finish(0);
-    let mut corr = vec![0f64; w * h];
-    let mut weight = vec![0f64; w * h];
     for round in 0..ROUNDS {
         stages.report(1, round, ROUNDS);
-        let hot: Vec<usize> = (0..r.len()).filter(|&k| r[k].abs() > tau_m).collect();
         if hot.is_empty() {
             break;
         }
+        // Each corner's requests, summed in the samples' order.
+        let mut asked: FxHashMap<usize, (f64, f64)> = FxHashMap::default();
         let mut touched = Vec::with_capacity(3 * hot.len());
-        for &k in &hot {
+        for (&k, &r) in &hot {
             let (c, wt) = tri(k);
             let norm = wt.iter().map(|v| v * v).sum::<f64>();
             for i in 0..3 {
                 if wt[i] <= 0.0 {
                     continue;
                 }
-                if weight[c[i]] == 0.0 {
+                let (corr, weight) = asked.entry(c[i]).or_insert_with(|| {
                     touched.push(c[i]);
-                }
-                corr[c[i]] += r[k] * wt[i] * wt[i] / norm;
-                weight[c[i]] += wt[i];
+                    (0.0, 0.0)
+                });
+                *corr += r * wt[i] * wt[i] / norm;
+                *weight += wt[i];
             }
         }
         for &c in &touched {
-            heights[c] = (f64::from(heights[c]) + corr[c] / weight[c]) as f32;
-            corr[c] = 0.0;
-            weight[c] = 0.0;
+            let (corr, weight) = asked[&c];
+            heights[c] = (f64::from(heights[c]) + corr / weight) as f32;
         }
         for k in neighbours(at, &touched, w, origin) {
-            r[k] = residual(heights, k);
+            let r = residual(heights, k);
+            if r.abs() > tau_m {
+                hot.insert(k, r);
+            } else {
+                hot.remove(&k);
+            }
         }
     }
+    // Every sample's residual against the fitted heights (those the rounds
+    // did not reach are as they were).
     let inside = |v: f64, lo: u64, hi: u64| v >= lo as f64 && v <= hi as f64;
-    let residual_m = (0..r.len())
+    let shared: &[f32] = heights;
+    let residual_m = (0..at.len())
+        .into_par_iter()
         .filter(|&k| {
             let [x, y, _] = at.sample(k);
             inside(x, inner[0], inner[2]) && inside(y, inner[1], inner[3])
         })
-        .map(|k| r[k].abs())
-        .fold(0.0, f64::max);
+        .map(|k| residual(shared, k).abs())
+        .reduce(|| 0.0, f64::max);
     stages.finish(1);
     Fitted { residual_m }
 }

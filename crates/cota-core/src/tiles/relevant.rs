@@ -21,9 +21,11 @@
 //! error matters. After the fit ([`super::fit`]) residuals are small almost
 //! everywhere, so most squares of the finest levels are skipped.
 //!
-//! # Runtime
-//! One pass over the samples (each sample's residual into the unit cells
-//! that hold it), then `O(cells)` for the maxima of every larger square.
+//! # Runtime and memory
+//! One pass over the samples (each sample's residual into the squares of
+//! 2 × 2 cells that hold it), then `O(cells)` for the maxima of every larger
+//! square: about 1.3 bytes per lattice point (squares of one cell are never
+//! asked for, and not kept).
 
 use rayon::prelude::*;
 
@@ -73,8 +75,10 @@ impl Relevant {
         floor_m: f64,
         surface: &(impl Fn(f64, f64) -> f64 + Sync),
     ) -> Relevant {
-        let mut levels = vec![cells(s, region, surface)];
-        let mut size = 2;
+        // Squares of one cell are never asked for (a split point's square
+        // has at least 2 cells): the first level is the squares of 2.
+        let mut levels = vec![pairs(s, region, surface)];
+        let mut size = 4;
         while size <= top.max(2) {
             let next = coarser(&levels[levels.len() - 1]);
             levels.push(next);
@@ -88,7 +92,7 @@ impl Relevant {
     /// floor; `lattice_m(m)` bounds the lattice error of split point `m`.
     pub fn needed(&self, size: u64, i: u64, j: u64, lattice_m: &impl Fn(Pt) -> f64) -> bool {
         let k = size.trailing_zeros() as usize;
-        let Some(level) = self.levels.get(k) else {
+        let Some(level) = k.checked_sub(1).and_then(|k| self.levels.get(k)) else {
             return true;
         };
         let r = f64::from(level.get(i, j));
@@ -111,9 +115,14 @@ impl Relevant {
     }
 }
 
-/// The largest residual per unit cell of `region`; a sample on a cell's
-/// border counts in every cell that holds it.
-fn cells(
+/// Samples whose residuals are computed together.
+const CHUNK: usize = 1 << 20;
+
+/// The largest residual per square of 2 × 2 cells over the unit cells of
+/// `region`: a sample counts in every cell of `region` whose closed span
+/// holds it, and a square takes the maxima of its cells (as [`coarser`]
+/// would of a level of unit cells, which is not kept: 4 B a lattice point).
+fn pairs(
     s: &impl SampleSet,
     region: [u64; 4],
     surface: &(impl Fn(f64, f64) -> f64 + Sync),
@@ -123,28 +132,34 @@ fn cells(
         (region[2] - region[0]).max(1) as usize,
         (region[3] - region[1]).max(1) as usize,
     ];
-    // The residuals alone (4 B a sample): each sample's position is read
-    // again below rather than kept (24 B a sample, the largest transient of
-    // a tiling run; issue 29, item 6).
-    let residual: Vec<f32> = (0..s.len())
-        .into_par_iter()
-        .map(|k| {
-            let [x, y, h] = s.sample(k);
-            (surface(x, y) - h).abs() as f32
-        })
-        .collect();
-    let mut max = vec![0f32; dims[0] * dims[1]];
-    for (k, r) in residual.into_iter().enumerate() {
-        let [x, y, _] = s.sample(k);
-        for cx in touching(x, first[0], dims[0]) {
-            for cy in touching(y, first[1], dims[1]) {
-                let m = &mut max[cy * dims[0] + cx];
-                // Rounded up: an f32 below the f64 residual would not bound it.
-                *m = m.max(r.next_up());
+    let mut pairs = coarser_shape(first, dims);
+    let w2 = pairs.dims[0];
+    // The residuals a chunk at a time (4 B a sample of the chunk), each
+    // sample's position read again rather than kept (issue 29, item 6).
+    for c in 0..s.len().div_ceil(CHUNK) {
+        let range = c * CHUNK..((c + 1) * CHUNK).min(s.len());
+        let residual: Vec<f32> = range
+            .clone()
+            .into_par_iter()
+            .map(|k| {
+                let [x, y, h] = s.sample(k);
+                (surface(x, y) - h).abs() as f32
+            })
+            .collect();
+        for (k, r) in range.zip(residual) {
+            let [x, y, _] = s.sample(k);
+            for cx in touching(x, first[0], dims[0]) {
+                for cy in touching(y, first[1], dims[1]) {
+                    let a = (first[0] + cx as u64) / 2 - pairs.first[0];
+                    let b = (first[1] + cy as u64) / 2 - pairs.first[1];
+                    let m = &mut pairs.max[b as usize * w2 + a as usize];
+                    // Rounded up: an f32 below the f64 residual would not bound it.
+                    *m = m.max(r.next_up());
+                }
             }
         }
     }
-    Level { first, dims, max }
+    pairs
 }
 
 /// The cells (local indices) whose closed span holds coordinate `v`.
@@ -156,18 +171,32 @@ fn touching(v: f64, first: u64, n: usize) -> impl Iterator<Item = usize> {
     (lo as i64..=c as i64).filter_map(move |i| usize::try_from(i).ok().filter(|&i| i < n))
 }
 
-/// The maxima of squares twice as large (global indices halve).
-fn coarser(l: &Level) -> Level {
-    let first = [l.first[0] / 2, l.first[1] / 2];
+/// The level of squares twice as large as those of a level at `first`
+/// of `dims` squares (global indices halve), all maxima 0.
+fn coarser_shape(first: [u64; 2], dims: [usize; 2]) -> Level {
     let last = [
-        (l.first[0] + l.dims[0] as u64).saturating_sub(1) / 2,
-        (l.first[1] + l.dims[1] as u64).saturating_sub(1) / 2,
+        (first[0] + dims[0] as u64).saturating_sub(1) / 2,
+        (first[1] + dims[1] as u64).saturating_sub(1) / 2,
     ];
+    let first = [first[0] / 2, first[1] / 2];
     let dims = [
         (last[0] + 1 - first[0]) as usize,
         (last[1] + 1 - first[1]) as usize,
     ];
-    let mut max = vec![0f32; dims[0] * dims[1]];
+    Level {
+        first,
+        dims,
+        max: vec![0f32; dims[0] * dims[1]],
+    }
+}
+
+/// The maxima of squares twice as large (global indices halve).
+fn coarser(l: &Level) -> Level {
+    let Level {
+        first,
+        dims,
+        mut max,
+    } = coarser_shape(l.first, l.dims);
     for b in 0..l.dims[1] {
         for a in 0..l.dims[0] {
             let (gi, gj) = (l.first[0] + a as u64, l.first[1] + b as u64);
@@ -182,6 +211,44 @@ fn coarser(l: &Level) -> Level {
 mod test {
     use super::*;
     use crate::tiles::samples::Listed;
+
+    /// The squares of 2 cells, filled from the samples directly, are the
+    /// maxima of the unit cells' levels (the old first level), on a region
+    /// at an odd origin whose squares straddle its edges, samples on cell
+    /// borders and outside the region included.
+    #[test]
+    fn pairs_are_the_maxima_of_the_unit_cells() {
+        let region = [3, 5, 14, 12];
+        let mut pts = Vec::new();
+        for k in 0..600u32 {
+            let x = 1.0 + f64::from(k % 29) * 0.5 + f64::from(k % 7) * 0.01;
+            let y = 3.0 + f64::from(k / 29) * 0.5;
+            pts.push([x, y, f64::from((k * 37) % 101) * 0.1]);
+        }
+        let s = Listed::new(pts);
+        let surface = |x: f64, y: f64| 0.3 * x - 0.2 * y;
+        let got = pairs(&s, region, &surface);
+        let (first, dims) = ([3u64, 5u64], [11usize, 7usize]);
+        let mut cells = vec![0f32; dims[0] * dims[1]];
+        for k in 0..s.len() {
+            let [x, y, h] = s.sample(k);
+            let r = ((surface(x, y) - h).abs() as f32).next_up();
+            for cx in touching(x, first[0], dims[0]) {
+                for cy in touching(y, first[1], dims[1]) {
+                    let m = &mut cells[cy * dims[0] + cx];
+                    *m = m.max(r);
+                }
+            }
+        }
+        let want = coarser(&Level {
+            first,
+            dims,
+            max: cells,
+        });
+        assert_eq!((got.first, got.dims), (want.first, want.dims));
+        assert_eq!(got.max, want.max);
+        assert!(got.max.iter().any(|&m| m > 0.0));
+    }
 
     #[test]
     fn a_large_residual_marks_its_squares_and_only_them() {

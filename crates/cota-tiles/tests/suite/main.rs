@@ -1,6 +1,5 @@
 //! The cota-tiles integration tests, one binary (one link instead of one per file).
 
-mod common;
 mod mbtiles;
 mod tiles;
 mod tiles3d;

@@ -4,8 +4,6 @@
 //! interrupted one never under the final name.
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use crate::common;
-
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
 use cota_core::{fill_voids, FillOptions, HeightGrid};
 use cota_io::{read_dem, ReadOptions};
@@ -17,7 +15,7 @@ use cota_tiles::{
 
 /// The bundled SRTM tile, voids filled.
 fn fixture_grid() -> HeightGrid {
-    let path = common::fixture("S29W072.hgt.zip");
+    let path = cota_fixtures::fixture("S29W072.hgt.zip");
     let mut g = read_dem(&path, &ReadOptions::DEFAULT).unwrap().grid;
     fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
     g

@@ -4,8 +4,6 @@
 //! exactly (issue 17).
 #![allow(clippy::unwrap_used, clippy::panic)]
 
-use crate::common;
-
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -68,7 +66,7 @@ fn assert_no_seams(tiles: &HashMap<TileId, DecodedTile>) -> (usize, usize) {
 
 #[test]
 fn fixture_pyramid_decodes_within_bounds_without_seams() {
-    let g = load(&[common::fixture("S29W072.hgt.zip")]);
+    let g = load(&[cota_fixtures::fixture("S29W072.hgt.zip")]);
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT).unwrap();
     assert_eq!(lat.scheme().max_zoom, 12);
     let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
@@ -102,7 +100,7 @@ fn fixture_pyramid_decodes_within_bounds_without_seams() {
 
 #[test]
 fn two_tile_mosaic_small_bounds_and_seams() {
-    let Some(data) = common::shared_data() else {
+    let Some(data) = cota_fixtures::shared_data() else {
         return;
     };
     let g = load(&[
@@ -125,7 +123,7 @@ fn two_tile_mosaic_small_bounds_and_seams() {
 
 #[test]
 fn unchecked_tiles_are_the_checked_tiles() {
-    let g = load(&[common::fixture("S29W072.hgt.zip")]);
+    let g = load(&[cota_fixtures::fixture("S29W072.hgt.zip")]);
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(7))).unwrap();
     let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
     let opts = PyramidOptions::DEFAULT.with_gzip(true);
@@ -144,7 +142,7 @@ fn unchecked_tiles_are_the_checked_tiles() {
 
 #[test]
 fn resume_skips_force_redoes_and_changed_settings_are_refused() {
-    let g = load(&[common::fixture("S29W072.hgt.zip")]);
+    let g = load(&[cota_fixtures::fixture("S29W072.hgt.zip")]);
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(8))).unwrap();
     let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
     let out = tempfile::tempdir().unwrap();
@@ -175,7 +173,7 @@ fn resume_skips_force_redoes_and_changed_settings_are_refused() {
 
 #[test]
 fn an_interrupted_directory_run_redoes_the_tiles_its_journal_left_unfinished() {
-    let g = load(&[common::fixture("S29W072.hgt.zip")]);
+    let g = load(&[cota_fixtures::fixture("S29W072.hgt.zip")]);
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(8))).unwrap();
     let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
     let out = tempfile::tempdir().unwrap();
@@ -241,11 +239,12 @@ pub(crate) fn walk(dir: &Path) -> Vec<String> {
 
 #[test]
 fn unwritable_output_names_the_path() {
-    let g = load(&[common::fixture("S29W072.hgt.zip")]);
+    let g = load(&[cota_fixtures::fixture("S29W072.hgt.zip")]);
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(6))).unwrap();
     let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let file = common::write_file(dir.path(), "not-a-dir", b"x");
+    let file = dir.path().join("not-a-dir");
+    std::fs::write(&file, b"x").unwrap();
     let err = write_pyramid(&prep, &file, &PyramidOptions::DEFAULT, None, &|_| {}).unwrap_err();
     assert!(err.to_string().contains("not-a-dir"), "{err}");
 }
@@ -336,7 +335,7 @@ fn truncated_and_corrupt_tiles_give_errors() {
 
 #[test]
 fn header_spheres_hold_the_vertices() {
-    let g = load(&[common::fixture("S29W072.hgt.zip")]);
+    let g = load(&[cota_fixtures::fixture("S29W072.hgt.zip")]);
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(9))).unwrap();
     let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
     for t in prep.tiles() {

@@ -8,8 +8,6 @@
 #[path = "tiles3d_meshopt.rs"]
 mod meshopt;
 
-use crate::common;
-
 use std::collections::HashSet;
 
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TileId, TilerOptions};
@@ -57,9 +55,12 @@ fn fixture_pyramid_as_meshopt_glb_within_bounds_and_resumable() {
 }
 
 fn pyramid_within_bounds_and_resumable(opts: PyramidOptions) {
-    let mut g = read_dem(&common::fixture("S29W072.hgt.zip"), &ReadOptions::DEFAULT)
-        .unwrap()
-        .grid;
+    let mut g = read_dem(
+        &cota_fixtures::fixture("S29W072.hgt.zip"),
+        &ReadOptions::DEFAULT,
+    )
+    .unwrap()
+    .grid;
     fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(10))).unwrap();
     let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
@@ -276,9 +277,12 @@ fn fills_complete_the_tree(
 
 #[test]
 fn a_pyramid_not_from_zoom_0_is_refused() {
-    let mut g = read_dem(&common::fixture("S29W072.hgt.zip"), &ReadOptions::DEFAULT)
-        .unwrap()
-        .grid;
+    let mut g = read_dem(
+        &cota_fixtures::fixture("S29W072.hgt.zip"),
+        &ReadOptions::DEFAULT,
+    )
+    .unwrap()
+    .grid;
     fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(6))).unwrap();
     let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT.with_min_zoom(3)).unwrap();

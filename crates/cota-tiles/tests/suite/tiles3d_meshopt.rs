@@ -6,8 +6,6 @@
 
 use std::path::Path;
 
-use crate::common;
-
 use cota_core::tiles::{Lattice, LatticeOptions, Prepared, TilerOptions};
 use cota_core::{fill_voids, FillOptions};
 use cota_io::meshopt::{
@@ -113,9 +111,12 @@ fn cases_of(name: &str, vertices: &[u8], triangles: &[u32], sequence: &[u32]) ->
 /// Real tiles of the fixture's pyramid (zooms 0-9): u16 position-like
 /// vertices (u, v, height, 0), triangles, edges.
 fn fixture_cases() -> Vec<Case> {
-    let mut g = read_dem(&common::fixture("S29W072.hgt.zip"), &ReadOptions::DEFAULT)
-        .unwrap()
-        .grid;
+    let mut g = read_dem(
+        &cota_fixtures::fixture("S29W072.hgt.zip"),
+        &ReadOptions::DEFAULT,
+    )
+    .unwrap()
+    .grid;
     fill_voids(&mut g, &FillOptions::DEFAULT).unwrap();
     let lat = Lattice::resample(&g, &LatticeOptions::DEFAULT.with_max_zoom(Some(9))).unwrap();
     let prep = Prepared::new(&lat, &g, &TilerOptions::DEFAULT).unwrap();
