@@ -23,6 +23,9 @@ use serde_json::json;
 use crate::args::{TileFormatArg, TilesArgs, Voids};
 use crate::{input, progress, tiles_estimate, tiles_part};
 
+/// The job of `cota tiles`' arguments.
+type Job<'a> = TileJob<'a, tiles_part::CliInput<'a>>;
+
 /// Runs `cota tiles`.
 pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     if a.reduce {
@@ -32,12 +35,14 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         anyhow::bail!("{}", HOLES_REFUSED);
     }
     refuse_archive_mismatch(a)?;
-    let opts = tiler_options(a);
+    let input = tiles_part::CliInput::new(a)?;
+    let job = tiles_part::job(a, &input);
+    let opts = job.settings.tiler_options();
     if let Some((i, n)) = a.shard {
         let frame = read_shard_frame(&a.output, n)
             .with_context(|| format!("reading the plan step's frame in {}", a.output.display()))?;
         if let Some(f) = frame {
-            return run_part(a, &f, i);
+            return run_part(a, &job, &f, i);
         }
     }
     if a.plan {
@@ -48,8 +53,6 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
         }
         // Without the whole input where the files allow it (each file
         // alone, then each shard's part: in turn, or as --part processes).
-        let input = tiles_part::CliInput::new(a)?;
-        let job = tiles_part::job(a, &input);
         if let Some(layout) = job.layout()? {
             return plan_in_parts(a, &job, &opts, layout);
         }
@@ -80,7 +83,7 @@ pub fn run(a: &TilesArgs) -> anyhow::Result<std::process::ExitCode> {
     };
     if a.plan {
         drop(inp.grid);
-        return plan_step(a, &lattice, &opts, files);
+        return plan_step(a, &job, &lattice, files);
     }
     let t_prep = Instant::now();
     let pb = progress::bar(0, "preparing");
@@ -326,13 +329,6 @@ fn against<'a>(source: &'a HeightGrid, lattice: &Lattice) -> Against<'a> {
     against_on(s, vec![grid], vec![rect], margin)
 }
 
-/// The error schedule and zooms of the arguments.
-fn tiler_options(a: &TilesArgs) -> TilerOptions {
-    TilerOptions::DEFAULT
-        .with_min_zoom(a.min_zoom)
-        .with_error(tiles_part::error_schedule(a))
-}
-
 /// Prints the report (`part`: what a shard over a part read, or null).
 fn finish(
     a: &TilesArgs,
@@ -358,10 +354,14 @@ fn finish(
 }
 
 /// `--shard I/N` after the plan step: only the shard's part of the lattice.
-fn run_part(a: &TilesArgs, f: &ShardFrame, index: u32) -> anyhow::Result<std::process::ExitCode> {
+fn run_part(
+    a: &TilesArgs,
+    job: &Job<'_>,
+    f: &ShardFrame,
+    index: u32,
+) -> anyhow::Result<std::process::ExitCode> {
     let t0 = Instant::now();
-    let input = tiles_part::CliInput::new(a)?;
-    let part = tiles_part::job(a, &input).load_part(f, index, a.normals)?;
+    let part = job.load_part(f, index, a.normals)?;
     let name = part.files_read.join(" + ");
     let t_prep = Instant::now();
     let source = part.source_part();
@@ -392,22 +392,21 @@ fn run_part(a: &TilesArgs, f: &ShardFrame, index: u32) -> anyhow::Result<std::pr
 /// maxima), the plan.
 fn plan_step(
     a: &TilesArgs,
+    job: &Job<'_>,
     lattice: &Lattice,
-    opts: &TilerOptions,
     files: Vec<(String, [usize; 4])>,
 ) -> anyhow::Result<std::process::ExitCode> {
-    let input = tiles_part::CliInput::new(a)?;
-    let frame = tiles_part::job(a, &input)
+    let frame = job
         .plan_whole(lattice, files)
         .with_context(|| format!("writing {}", a.output.display()))?;
-    print_plan_step(a, opts, &frame)
+    print_plan_step(a, &job.settings.tiler_options(), &frame)
 }
 
 /// `--plan` with a layout: `--layout` alone, `--part I`, or the whole plan
 /// step from the parts already done and the others in turn.
 fn plan_in_parts(
     a: &TilesArgs,
-    job: &TileJob<'_, tiles_part::CliInput<'_>>,
+    job: &Job<'_>,
     opts: &TilerOptions,
     layout: ShardFrame,
 ) -> anyhow::Result<std::process::ExitCode> {
